@@ -1,0 +1,116 @@
+"""Trajectories and the fixed-length fragments (behaviours) cut from them.
+
+A fragment is exactly the window of L steps that one clip shows and one reward-model
+input covers (SPEC §1, §3.2): the prototype's clips were not aligned with the labelled
+window, which we do not repeat.
+"""
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from groupwise.types import FloatArray
+
+
+@dataclass(frozen=True)
+class Trajectory:
+    """One whole episode of a fixed-horizon env.
+
+    `reset_seed` reproduces the episode: reset the env with it and replay `actions`
+    (the raw env actions) to re-render any window of it.
+    """
+
+    obs: FloatArray  # (T, obs_dim) observation before each step
+    acts: FloatArray  # (T, act_dim) encoded action taken (one-hot for Discrete)
+    actions: np.ndarray  # (T, *action_shape) raw env actions, for replay
+    true_rewards: FloatArray  # (T,) the env's own reward (zeros for reward-free envs)
+    reset_seed: int
+    episode: int
+
+    def __post_init__(self) -> None:
+        t = self.obs.shape[0]
+        if not (self.acts.shape[0] == self.true_rewards.shape[0] == len(self.actions) == t):
+            raise ValueError(
+                f"trajectory arrays disagree on length: obs {self.obs.shape}, "
+                f"acts {self.acts.shape}, rewards {self.true_rewards.shape}"
+            )
+
+    def __len__(self) -> int:
+        return int(self.obs.shape[0])
+
+
+@dataclass(frozen=True)
+class Fragment:
+    """L consecutive steps of one trajectory: the unit the user judges."""
+
+    obs: FloatArray  # (L, obs_dim)
+    acts: FloatArray  # (L, act_dim) encoded actions
+    true_rewards: FloatArray  # (L,)
+    episode: int
+    start: int  # index of the first step within the episode
+    reset_seed: int
+
+    @property
+    def length(self) -> int:
+        return int(self.obs.shape[0])
+
+    @property
+    def true_return(self) -> float:
+        return float(self.true_rewards.sum())
+
+    @property
+    def key(self) -> str:
+        """Identifier unique within one pool (episode and start step)."""
+        return f"e{self.episode}-s{self.start}"
+
+
+def tile_fragments(trajectories: Sequence[Trajectory], length: int) -> list[Fragment]:
+    """Cut every trajectory into consecutive, non-overlapping windows of `length` steps.
+
+    A trailing remainder shorter than `length` is dropped, so every fragment has exactly
+    one clip of exactly `length` frames.
+    """
+    if length < 1:
+        raise ValueError(f"fragment length must be >= 1, got {length}")
+    fragments = []
+    for traj in trajectories:
+        for start in range(0, len(traj) - length + 1, length):
+            window = slice(start, start + length)
+            fragments.append(
+                Fragment(
+                    obs=traj.obs[window],
+                    acts=traj.acts[window],
+                    true_rewards=traj.true_rewards[window],
+                    episode=traj.episode,
+                    start=start,
+                    reset_seed=traj.reset_seed,
+                )
+            )
+    return fragments
+
+
+def stack_fragments(fragments: Sequence[Fragment]) -> tuple[FloatArray, FloatArray]:
+    """Stack equal-length fragments into (N, L, obs_dim) and (N, L, act_dim) arrays."""
+    if not fragments:
+        raise ValueError("no fragments to stack")
+    obs = np.stack([f.obs for f in fragments]).astype(np.float32)
+    acts = np.stack([f.acts for f in fragments]).astype(np.float32)
+    return obs, acts
+
+
+def select_most_uncertain(
+    fragments: Sequence[Fragment],
+    uncertainty: FloatArray,
+    n: int,
+) -> list[Fragment]:
+    """Keep the `n` fragments with the highest `uncertainty` (N,), in their original order.
+
+    With n >= len(fragments) every fragment is kept.
+    """
+    if len(uncertainty) != len(fragments):
+        raise ValueError(f"{len(uncertainty)} scores for {len(fragments)} fragments")
+    if n >= len(fragments):
+        return list(fragments)
+    keep = np.sort(np.argsort(-np.asarray(uncertainty), kind="stable")[:n])
+    return [fragments[i] for i in keep]

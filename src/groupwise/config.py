@@ -1,0 +1,132 @@
+"""Typed configuration, one dataclass per concern, composed into `RunConfig`.
+
+Every number is a default from SPEC §3 (the paper's study), not a constant. The resolved
+config is written as JSON beside every run.
+"""
+
+import dataclasses
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Literal
+
+
+@dataclass(frozen=True)
+class RewardConfig:
+    """The reward-model ensemble and its Bradley–Terry training (SPEC §3)."""
+
+    ensemble_size: int = 3
+    """K, the number of independently bootstrapped members."""
+    hidden_sizes: tuple[int, ...] = (64, 64)
+    """Hidden layer widths of each member's MLP (ReLU)."""
+    lr: float = 1e-3
+    """AdamW learning rate."""
+    batch_size: int = 4
+    """Preference pairs per minibatch."""
+    epochs: int = 3
+    """Passes over the (bootstrapped) dataset per fit after round 0."""
+    initial_epoch_multiplier: float = 10.0
+    """Round 0 trains this many times more epochs (its dataset is small and the net fresh)."""
+    initial_l2: float = 1e-4
+    """Starting weight of the L2 penalty; adapted during training (see `bradley_terry`)."""
+    l2_bounds: tuple[float, float] = (1.1, 1.5)
+    """Validation/training loss ratio band the adaptive L2 weight aims for (Christiano et al.)."""
+    validation_fraction: float = 0.2
+    """Share of pairs held out for validation, only when there are `min_pairs_for_validation`."""
+    min_pairs_for_validation: int = 10
+    """Below this many pairs there is no held-out split (tiny datasets must not crash)."""
+    bootstrap: bool = True
+    """Each member trains on its own resample with replacement of the training pairs."""
+
+
+@dataclass(frozen=True)
+class PPOConfig:
+    """Stable-Baselines3 PPO, the study's defaults (SPEC §3)."""
+
+    n_envs: int = 8
+    n_steps: int = 256
+    """Steps per env per rollout."""
+    batch_size: int = 64
+    n_epochs: int = 10
+    learning_rate: float = 2e-3
+    clip_range: float = 0.1
+    gamma: float = 0.97
+    gae_lambda: float = 0.95
+    ent_coef: float = 0.01
+    net_arch: tuple[int, ...] = (32, 32)
+    normalize_obs: bool = True
+    """Running observation normalisation (VecNormalize)."""
+    normalize_reward: bool = True
+    """Scale rewards by a running return std: the learned reward's scale drifts per round."""
+    tensorboard: bool = True
+    """Write TensorBoard logs under the run directory."""
+
+
+@dataclass(frozen=True)
+class LoopConfig:
+    """The RLHF rounds (SPEC §3)."""
+
+    env: str = "GridWorld"
+    """A groupwise env name (see `groupwise.envs.ENVS`) or any Gymnasium id."""
+    oracle: str = "pairwise"
+    """Who gives feedback: a simulated decision-maker from `groupwise.oracles.ORACLES`."""
+    comparisons: int = 100
+    """Total comparisons (queries) over the whole session."""
+    rounds: int = 5
+    """Number of rounds R; feedback is gathered R times."""
+    steps: int = 100_000
+    """Total PPO env steps over the RLHF phase, split evenly over the rounds."""
+    final_steps: int = 0
+    """Extra PPO steps on the frozen learned reward after the last round."""
+    schedule: Literal["constant", "hyperbolic", "inverse_quadratic"] = "constant"
+    """How comparisons after round 0 are spread over the rounds."""
+    initial_fraction: float = 0.1
+    """Share of all comparisons asked in round 0."""
+    fragment_length: int = 30
+    """L, steps per behaviour (and frames per clip)."""
+    exploration_fraction: float = 0.05
+    """Share of sampled steps that take random actions (0.25 in the interactive app)."""
+    pool_factor: float = 2.0
+    """Pool size N = pool_factor × comparisons this round ..."""
+    pool_cap: int = 200
+    """... capped at this many behaviours."""
+    candidate_pairs: int = 10
+    """Pairwise active learning: random candidate pairs scored per query."""
+    noise_sigma: float = 0.25
+    """Decision-maker noise per step (SPEC §7): ε ~ N(0, (L·σ)²) per behaviour per judgement."""
+    eval_episodes: int = 5
+    """Episodes of the true reward used to measure the policy after each round."""
+    seed: int = 0
+
+
+@dataclass(frozen=True)
+class RunConfig:
+    loop: LoopConfig = field(default_factory=LoopConfig)
+    reward: RewardConfig = field(default_factory=RewardConfig)
+    ppo: PPOConfig = field(default_factory=PPOConfig)
+
+    def to_json(self) -> str:
+        return json.dumps(dataclasses.asdict(self), indent=2)
+
+    def save(self, path: Path) -> None:
+        path.write_text(self.to_json() + "\n")
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "RunConfig":
+        def build(kind: type, values: dict[str, Any]) -> Any:
+            names = {f.name for f in dataclasses.fields(kind)}
+            unknown = set(values) - names
+            if unknown:
+                raise ValueError(f"unknown {kind.__name__} fields: {sorted(unknown)}")
+            fixed = {k: tuple(v) if isinstance(v, list) else v for k, v in values.items()}
+            return kind(**fixed)
+
+        return cls(
+            loop=build(LoopConfig, data.get("loop", {})),
+            reward=build(RewardConfig, data.get("reward", {})),
+            ppo=build(PPOConfig, data.get("ppo", {})),
+        )
+
+    @classmethod
+    def load(cls, path: Path) -> "RunConfig":
+        return cls.from_dict(json.loads(path.read_text()))
