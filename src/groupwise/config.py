@@ -98,6 +98,26 @@ class LoopConfig:
     """Episodes of the true reward used to measure the policy after each round."""
     seed: int = 0
 
+    def __post_init__(self) -> None:
+        checks = [
+            (self.comparisons >= 1, "comparisons must be >= 1"),
+            (self.rounds >= 1, "rounds must be >= 1"),
+            (self.steps >= 0, "steps must be >= 0"),
+            (self.final_steps >= 0, "final steps must be >= 0"),
+            (0.0 < self.initial_fraction <= 1.0, "initial fraction must be in (0, 1]"),
+            (self.fragment_length >= 1, "fragment length must be >= 1"),
+            (0.0 <= self.exploration_fraction < 1.0, "exploration fraction must be in [0, 1)"),
+            (self.pool_factor > 0, "pool factor must be > 0"),
+            (self.pool_cap >= 2, "pool cap must be >= 2"),
+            (self.candidate_pairs >= 1, "candidate pairs must be >= 1"),
+            (self.noise_sigma >= 0, "noise sigma must be >= 0"),
+            (self.eval_episodes >= 1, "eval episodes must be >= 1"),
+            (self.seed >= 0, "seed must be >= 0"),
+        ]
+        for ok, message in checks:
+            if not ok:
+                raise ValueError(message)
+
 
 @dataclass(frozen=True)
 class RunConfig:

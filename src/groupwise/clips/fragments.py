@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from groupwise.types import FloatArray
+from groupwise.types import FloatArray, IntArray
 
 
 @dataclass(frozen=True)
@@ -99,18 +99,12 @@ def stack_fragments(fragments: Sequence[Fragment]) -> tuple[FloatArray, FloatArr
     return obs, acts
 
 
-def select_most_uncertain(
-    fragments: Sequence[Fragment],
-    uncertainty: FloatArray,
-    n: int,
-) -> list[Fragment]:
-    """Keep the `n` fragments with the highest `uncertainty` (N,), in their original order.
+def most_uncertain(uncertainty: FloatArray, n: int) -> IntArray:
+    """Indices of the `n` highest `uncertainty` scores (N,), in ascending index order.
 
-    With n >= len(fragments) every fragment is kept.
+    With n >= N every index is kept. Ties keep the earlier fragment.
     """
-    if len(uncertainty) != len(fragments):
-        raise ValueError(f"{len(uncertainty)} scores for {len(fragments)} fragments")
-    if n >= len(fragments):
-        return list(fragments)
-    keep = np.sort(np.argsort(-np.asarray(uncertainty), kind="stable")[:n])
-    return [fragments[i] for i in keep]
+    uncertainty = np.asarray(uncertainty)
+    if n >= len(uncertainty):
+        return np.arange(len(uncertainty))
+    return np.sort(np.argsort(-uncertainty, kind="stable")[: max(n, 0)])

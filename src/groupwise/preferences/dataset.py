@@ -60,16 +60,12 @@ class PreferenceDataset:
         self.rounds = np.concatenate([self.rounds, np.full(len(pairs), round_index)])
 
     def label_error_rate(self) -> float:
-        """Share of labels that disagree with the true returns (ties count as 0.5 each way).
-
-        A label of 1.0 is correct when the first fragment's true return is higher, 0.0 when
-        it is lower; 0.5 is correct only for exactly equal returns. Returns nan when empty.
-        """
+        """Share of labels that disagree with the true returns (nan when empty)."""
         if len(self) == 0:
             return float("nan")
-        diff = self.true_returns[self.pairs[:, 0]] - self.true_returns[self.pairs[:, 1]]
-        truth = np.where(diff > 0, 1.0, np.where(diff < 0, 0.0, 0.5))
-        return float(np.mean(truth != self.labels))
+        returns = self.true_returns
+        wrong = wrong_labels(returns[self.pairs[:, 0]], returns[self.pairs[:, 1]], self.labels)
+        return float(wrong.mean())
 
     def save(self, path: Path) -> None:
         np.savez_compressed(
@@ -86,3 +82,14 @@ class PreferenceDataset:
     def load(cls, path: Path) -> "PreferenceDataset":
         with np.load(path, allow_pickle=False) as data:
             return cls(**{key: data[key] for key in data.files})
+
+
+def wrong_labels(return_a: FloatArray, return_b: FloatArray, labels: FloatArray) -> np.ndarray:
+    """(P,) bool: which labels disagree with the true returns of their pairs.
+
+    A label of 1.0 is right when a's true return is higher, 0.0 when it is lower, and 0.5
+    only when both are exactly equal.
+    """
+    diff = np.asarray(return_a) - np.asarray(return_b)
+    truth = np.where(diff > 0, 1.0, np.where(diff < 0, 0.0, 0.5))
+    return np.asarray(truth != np.asarray(labels))

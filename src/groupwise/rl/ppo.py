@@ -1,0 +1,157 @@
+"""The thin adapter over Stable-Baselines3 PPO (SPEC §3.5): build, learn, act, save, load.
+
+SB3 is used as it is (no subclassing). Its `set_random_seed` seeds global RNGs; that stays
+inside this adapter, and every round reseeds it from the loop's generator, so a resumed run
+repeats an uninterrupted one.
+"""
+
+import logging
+from pathlib import Path
+
+import numpy as np
+import torch
+from stable_baselines3 import PPO
+from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecMonitor, VecNormalize
+
+from groupwise.config import PPOConfig
+from groupwise.rl.callbacks import ProgressCallback, ProgressFn
+from groupwise.rl.learned_reward import LearnedRewardVecEnv, RewardFn
+from groupwise.rl.rollout import EnvFactory
+from groupwise.types import FloatArray
+
+log = logging.getLogger(__name__)
+
+POLICY_FILE = "policy.zip"
+NORMALISER_FILE = "vecnormalize.npz"
+
+
+class PPOAgent:
+    """A PPO learner on `n_envs` copies of an env, rewarded by `reward_fn` or the true reward.
+
+    With `reward_fn=None` PPO trains on the env's own reward (the upper-bound baseline).
+    """
+
+    def __init__(
+        self,
+        make_env: EnvFactory,
+        cfg: PPOConfig,
+        seed: int,
+        reward_fn: RewardFn | None = None,
+        log_dir: Path | None = None,
+    ) -> None:
+        self.cfg = cfg
+        self.venv = _training_env(make_env, cfg, reward_fn)
+        self.model = PPO(
+            "MlpPolicy",
+            self.venv,
+            learning_rate=cfg.learning_rate,
+            n_steps=cfg.n_steps,
+            batch_size=cfg.batch_size,
+            n_epochs=cfg.n_epochs,
+            gamma=cfg.gamma,
+            gae_lambda=cfg.gae_lambda,
+            clip_range=cfg.clip_range,
+            ent_coef=cfg.ent_coef,
+            policy_kwargs={"net_arch": list(cfg.net_arch)},
+            tensorboard_log=str(log_dir) if log_dir is not None and cfg.tensorboard else None,
+            seed=seed,
+            device="cpu",
+            verbose=0,
+        )
+
+    @property
+    def num_timesteps(self) -> int:
+        return int(self.model.num_timesteps)
+
+    def learn(
+        self,
+        steps: int,
+        seed: int,
+        show_progress: bool = False,
+        report: ProgressFn | None = None,
+    ) -> None:
+        """Train for at least `steps` env steps (whole rollouts), starting fresh episodes.
+
+        Every call reseeds SB3 and resets the training envs from `seed`, so the result
+        depends only on the saved state and `seed` (which makes `--resume` exact).
+        """
+        if steps <= 0:
+            return
+        self.model.set_random_seed(seed)
+        self.model.set_env(self.venv, force_reset=True)
+        self.model.learn(
+            total_timesteps=steps,
+            callback=ProgressCallback(steps, show_progress, report),
+            reset_num_timesteps=False,
+            tb_log_name="ppo",
+        )
+
+    def act(self, obs: FloatArray, rng: np.random.Generator, deterministic: bool) -> np.ndarray:
+        """Actions for raw observations (B, *obs_shape); stochastic draws come from `rng`."""
+        normalised = self._normaliser().normalize_obs(np.asarray(obs, dtype=np.float32))
+        with torch.random.fork_rng(devices=[]):
+            torch.manual_seed(int(rng.integers(2**31 - 1)))
+            actions, _ = self.model.predict(normalised, deterministic=deterministic)
+        return np.asarray(actions)
+
+    def policy(self, deterministic: bool = False) -> "AgentPolicy":
+        """This agent as a `Policy` (stochastic for sampling behaviours, greedy for evaluation)."""
+        return AgentPolicy(self, deterministic)
+
+    def save(self, directory: Path) -> None:
+        directory.mkdir(parents=True, exist_ok=True)
+        self.model.save(directory / POLICY_FILE)
+        norm = self._normaliser()
+        np.savez(
+            directory / NORMALISER_FILE,
+            obs_mean=norm.obs_rms.mean,
+            obs_var=norm.obs_rms.var,
+            obs_count=norm.obs_rms.count,
+            ret_mean=norm.ret_rms.mean,
+            ret_var=norm.ret_rms.var,
+            ret_count=norm.ret_rms.count,
+        )
+
+    def load(self, directory: Path) -> None:
+        """Restore the policy, its optimiser, step count and normaliser saved by `save`."""
+        tensorboard_log = self.model.tensorboard_log
+        self.model = PPO.load(directory / POLICY_FILE, env=self.venv, device="cpu")
+        self.model.tensorboard_log = tensorboard_log
+        norm = self._normaliser()
+        with np.load(directory / NORMALISER_FILE) as data:
+            norm.obs_rms.mean, norm.obs_rms.var = data["obs_mean"], data["obs_var"]
+            norm.obs_rms.count = float(data["obs_count"])
+            norm.ret_rms.mean, norm.ret_rms.var = data["ret_mean"], data["ret_var"]
+            norm.ret_rms.count = float(data["ret_count"])
+
+    def close(self) -> None:
+        self.venv.close()
+
+    def _normaliser(self) -> VecNormalize:
+        assert isinstance(self.venv, VecNormalize)
+        return self.venv
+
+
+class AgentPolicy:
+    """Adapts `PPOAgent.act` to the `Policy` interface."""
+
+    def __init__(self, agent: PPOAgent, deterministic: bool) -> None:
+        self.agent = agent
+        self.deterministic = deterministic
+
+    def act(self, obs: FloatArray, rng: np.random.Generator) -> np.ndarray:
+        return self.agent.act(obs, rng, self.deterministic)
+
+
+def _training_env(make_env: EnvFactory, cfg: PPOConfig, reward_fn: RewardFn | None) -> VecEnv:
+    # One process: on 2 cores the per-step IPC of SubprocVecEnv costs more than it saves
+    # for these small envs (see benchmarks/ppo_throughput.py).
+    venv: VecEnv = VecMonitor(DummyVecEnv([make_env] * cfg.n_envs))
+    if reward_fn is not None:
+        venv = LearnedRewardVecEnv(venv, reward_fn)
+    return VecNormalize(
+        venv,
+        norm_obs=cfg.normalize_obs,
+        norm_reward=cfg.normalize_reward,
+        gamma=cfg.gamma,
+    )

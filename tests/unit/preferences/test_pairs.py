@@ -1,0 +1,52 @@
+import numpy as np
+import pytest
+from hypothesis import given
+from hypothesis import strategies as st
+
+from groupwise.preferences.judgement import EQUAL, LEFT_BETTER, Judgement
+from groupwise.preferences.pairs import cartesian_pairs, covering_pairs
+
+
+@given(
+    m=st.integers(1, 12),
+    n=st.integers(1, 12),
+    label=st.sampled_from([0.0, 0.5, 1.0]),
+    seed=st.integers(0, 2**32 - 1),
+)
+def test_covering_pairs_use_every_member_and_max_m_n_pairs(m, n, label, seed):
+    left = tuple(range(m))
+    right = tuple(range(100, 100 + n))
+    pairs = covering_pairs(Judgement(left, right, label), np.random.default_rng(seed))
+    assert len(pairs) == max(m, n)
+    assert {p.a for p in pairs} == set(left)
+    assert {p.b for p in pairs} == set(right)
+    assert all(p.label == label for p in pairs)
+    # the larger group appears exactly once per member
+    larger = [p.a for p in pairs] if m >= n else [p.b for p in pairs]
+    assert len(set(larger)) == len(larger)
+
+
+def test_covering_pairs_are_reproducible_from_the_seed():
+    judgement = Judgement((1, 2, 3), (4, 5), LEFT_BETTER)
+    first = covering_pairs(judgement, np.random.default_rng(3))
+    again = covering_pairs(judgement, np.random.default_rng(3))
+    assert first == again
+
+
+def test_cartesian_pairs_are_all_m_times_n():
+    pairs = cartesian_pairs(Judgement((1, 2), (3, 4, 5), EQUAL), np.random.default_rng(0))
+    assert len(pairs) == 6 and all(p.label == 0.5 for p in pairs)
+
+
+@pytest.mark.parametrize(
+    ("left", "right", "label", "message"),
+    [
+        ((), (1,), 1.0, "at least one"),
+        ((1, 2), (2, 3), 1.0, "in both groups"),
+        ((1, 1), (2,), 1.0, "twice"),
+        ((1,), (2,), 0.7, "label"),
+    ],
+)
+def test_invalid_judgements_are_rejected(left, right, label, message):
+    with pytest.raises(ValueError, match=message):
+        Judgement(left, right, label)
