@@ -1,0 +1,183 @@
+"""The six groupwise envs, their Gymnasium registrations, and how to make any env by name.
+
+Every groupwise env has a fixed horizon and never terminates early (an episode's length must
+not leak reward information, SPEC §2): ``terminated`` is always False and ``truncated`` is
+True exactly at step `horizon`. The per-step true reward is the env's reward and is also in
+``info["true_reward"]``. Ids live under the ``groupwise/`` namespace, e.g.
+``groupwise/Hopper-v0``; `make_standard_env` gives the unmodified Gymnasium env for
+evaluating a trained policy the way the rest of the field does.
+"""
+
+from dataclasses import dataclass
+from typing import Any
+
+import gymnasium as gym
+from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
+
+from groupwise.envs.rendering import OFFSCREEN_MODES, FastMujocoRendering
+
+NAMESPACE = "groupwise"
+
+
+@dataclass(frozen=True)
+class EnvEntry:
+    """One groupwise env: how Gymnasium makes it and how it differs from the standard env."""
+
+    name: str
+    """Short name, e.g. "Hopper"; the Gymnasium id is ``groupwise/<name>-v0``."""
+    entry_point: str
+    """Gymnasium entry point, "module:callable"."""
+    horizon: int
+    """Steps per episode, always exactly this many."""
+    standard_id: str | None
+    """Gymnasium id of the unmodified env, or None when the env is our own."""
+    changes: str
+    """What differs from the standard env, for the docs."""
+
+    @property
+    def gym_id(self) -> str:
+        """The id registered with Gymnasium."""
+        return f"{NAMESPACE}/{self.name}-v0"
+
+    def make(self, render_mode: str | None = None, **kwargs: Any) -> gym.Env[Any, Any]:
+        """A fresh instance (`kwargs` go to the entry point, e.g. width, height)."""
+        return gym.make(self.gym_id, render_mode=render_mode, **kwargs)
+
+
+ENVS: dict[str, EnvEntry] = {
+    entry.name: entry
+    for entry in (
+        EnvEntry(
+            name="Hopper",
+            entry_point="groupwise.envs.mujoco:make_hopper",
+            horizon=1000,
+            standard_id="Hopper-v5",
+            changes="falling (unhealthy) does not terminate; 240×240 frames, torso-tracking camera",
+        ),
+        EnvEntry(
+            name="HalfCheetah",
+            entry_point="groupwise.envs.mujoco:make_half_cheetah",
+            horizon=1000,
+            standard_id="HalfCheetah-v5",
+            changes="none but rendering: 240×240 frames, torso-tracking camera",
+        ),
+        EnvEntry(
+            name="Walker2d",
+            entry_point="groupwise.envs.mujoco:make_walker2d",
+            horizon=1000,
+            standard_id="Walker2d-v5",
+            changes="falling (unhealthy) does not terminate; 240×240 frames, torso-tracking camera",
+        ),
+        EnvEntry(
+            name="Reacher",
+            entry_point="groupwise.envs.mujoco:make_reacher",
+            horizon=1000,
+            standard_id="Reacher-v5",
+            changes="horizon 1000 instead of 50; 240×240 frames",
+        ),
+        EnvEntry(
+            name="MountainCarContinuous",
+            entry_point="groupwise.envs.mountain_car:DenseMountainCarEnv",
+            horizon=250,
+            standard_id="MountainCarContinuous-v0",
+            changes=(
+                "dense reward; reaching the goal does not terminate; horizon 250 instead of 999; "
+                "240×240 frames"
+            ),
+        ),
+        EnvEntry(
+            name="GridWorld",
+            entry_point="groupwise.envs.gridworld:GridWorldEnv",
+            horizon=1000,
+            standard_id=None,
+            changes="our own env (5×5, dense distance reward)",
+        ),
+    )
+}
+"""The groupwise envs by short name."""
+
+
+def register_envs() -> None:
+    """Register every env in `ENVS` with Gymnasium; calling it again does nothing."""
+    for entry in ENVS.values():
+        if entry.gym_id not in gym.registry:
+            gym.register(
+                id=entry.gym_id,
+                entry_point=entry.entry_point,
+                max_episode_steps=entry.horizon,
+            )
+
+
+def resolve_id(name: str) -> str:
+    """The Gymnasium id for a short name in `ENVS` or for any registered Gymnasium id.
+
+    Raises:
+        ValueError: `name` is neither.
+    """
+    if name in ENVS:
+        return ENVS[name].gym_id
+    register_envs()
+    if name in gym.registry:
+        return name
+    raise ValueError(
+        f"unknown env {name!r}: use one of {', '.join(ENVS)} or a registered Gymnasium id"
+    )
+
+
+def make_env(name: str, render_mode: str | None = None, **kwargs: Any) -> gym.Env[Any, Any]:
+    """Make an env by short name (see `ENVS`) or by any registered Gymnasium id.
+
+    Gymnasium MuJoCo envs that are not ours also get `FastMujocoRendering` (fixed camera)
+    when rendered offscreen. `kwargs` go to the env's constructor (for ours: width, height).
+
+    Raises:
+        ValueError: unknown name (the message lists the known short names).
+    """
+    gym_id = resolve_id(name)
+    env = gym.make(gym_id, render_mode=render_mode, **kwargs)
+    return _with_fast_rendering(env)
+
+
+def make_standard_env(
+    name: str, render_mode: str | None = None, **kwargs: Any
+) -> gym.Env[Any, Any]:
+    """Make the standard Gymnasium env behind a short name, for evaluation as others report it.
+
+    Hopper → ``Hopper-v5`` (terminates on a fall), Reacher → ``Reacher-v5`` (50 steps),
+    MountainCarContinuous → ``MountainCarContinuous-v0`` (sparse reward, ends at the goal),
+    and so on; its reward is the standard one and it puts nothing in ``info["true_reward"]``.
+    GridWorld, being our own, is returned as in `make_env`; a Gymnasium id is made as is.
+
+    Raises:
+        ValueError: unknown name.
+    """
+    entry = ENVS.get(name)
+    if entry is None or entry.standard_id is None:
+        return make_env(name, render_mode=render_mode, **kwargs)
+    env = gym.make(entry.standard_id, render_mode=render_mode, **kwargs)
+    return _with_fast_rendering(env)
+
+
+def horizon(name: str) -> int | None:
+    """Episode length of an env, by short name or Gymnasium id.
+
+    Exact for the groupwise envs; for other ids it is the registered ``max_episode_steps``
+    (None when there is none), and those envs may also end earlier.
+
+    Raises:
+        ValueError: unknown name.
+    """
+    if name in ENVS:
+        return ENVS[name].horizon
+    return gym.spec(resolve_id(name)).max_episode_steps
+
+
+def _with_fast_rendering(env: gym.Env[Any, Any]) -> gym.Env[Any, Any]:
+    if env.render_mode not in OFFSCREEN_MODES or not isinstance(env.unwrapped, MujocoEnv):
+        return env
+    layer: Any = env
+    while isinstance(layer, gym.Wrapper):
+        if isinstance(layer, FastMujocoRendering):
+            return env
+        layer = layer.env
+    return FastMujocoRendering(env)
