@@ -1,0 +1,61 @@
+"""The behaviour space (SPEC §4): features, exact DTW distances, linkage, the n-ary tree.
+
+Pure numpy/scipy/numba; no torch, FastAPI or SB3. A round uses it as
+
+    features = pool_features(pool.fragments)         # N x (L_i, D), z-scored over the pool
+    distances = dtw_matrix(features, window=None)     # (N (N - 1) / 2,) condensed
+    tree = build_tree(distances, TreeConfig())        # levels, leaf order, unique ids
+    groups = group_candidates(tree)                   # level 1-2 nodes with 2..8 leaves
+    payload = to_json(tree, leaf_extra={i: {"clip": url_i} ...})
+"""
+
+from groupwise.behaviour.dtw import dtw_distance, dtw_matrix, warm_up
+from groupwise.behaviour.features import (
+    Standardiser,
+    fit_standardiser,
+    pool_features,
+    raw_sequences,
+    step_features,
+)
+from groupwise.behaviour.linkage import LINKAGE_METHODS, as_condensed, leaf_order, linkage_matrix
+from groupwise.behaviour.tree import (
+    BANDS,
+    BehaviourTree,
+    TreeConfig,
+    TreeNode,
+    assign_levels,
+    build_tree,
+    from_json,
+    geometric_thresholds,
+    group_candidates,
+    linear_thresholds,
+    medoids,
+    to_json,
+)
+
+__all__ = [
+    "BANDS",
+    "LINKAGE_METHODS",
+    "BehaviourTree",
+    "Standardiser",
+    "TreeConfig",
+    "TreeNode",
+    "as_condensed",
+    "assign_levels",
+    "build_tree",
+    "dtw_distance",
+    "dtw_matrix",
+    "fit_standardiser",
+    "from_json",
+    "geometric_thresholds",
+    "group_candidates",
+    "leaf_order",
+    "linear_thresholds",
+    "linkage_matrix",
+    "medoids",
+    "pool_features",
+    "raw_sequences",
+    "step_features",
+    "to_json",
+    "warm_up",
+]

@@ -1,0 +1,365 @@
+"""Exact multivariate dynamic time warping between behaviours (SPEC §4).
+
+Definition. For sequences x (n, D) and y (m, D) the local cost of aligning step i with
+step j is the Euclidean distance c(i, j) = ||x_i - y_j||_2. The DTW distance is the
+smallest sum of local costs along a warping path from (0, 0) to (n - 1, m - 1) with steps
+(1, 0), (0, 1) and (1, 1):
+
+    R(-1, -1) = 0,  R(i, -1) = R(-1, j) = inf,
+    R(i, j) = c(i, j) + min(R(i - 1, j - 1), R(i - 1, j), R(i, j - 1)),
+    dtw(x, y) = R(n - 1, m - 1).
+
+No square root is taken of the total and there is no length normalisation. This is
+dtaidistance's `dtw_ndim.distance(x, y, inner_dist="euclidean")`; its default
+("squared euclidean": squared local costs, square root of the total) is a different
+distance and is not what we compute.
+
+Sakoe–Chiba window. `window = r` (an int >= 0, in steps) allows cell (i, j) only when
+
+    -r - max(0, n - m) <= j - i <= r + max(0, m - n),
+
+a band of radius r around both the diagonal from (0, 0) and the one ending at
+(n - 1, m - 1), so a path exists for any lengths. With equal lengths this is |i - j| <= r
+(r = 0: lock-step alignment). dtaidistance counts the diagonal itself as 1: our r is its
+`window = r + 1`. `window=None` is unconstrained.
+
+Speed. All N (N - 1) / 2 distances are computed by one numba kernel, parallel over rows
+of the matrix. The local costs come from ||x||^2 + ||y||^2 - 2 x.y: the dot products are
+the only O(L^2 D) work per pair and run as dense vectorised loops; every cost whose
+squared value is within a relative `_EXACT_TOL` of cancellation is recomputed directly
+from the differences, so identical steps cost exactly 0 and every cost keeps a relative
+error below about D * 1e-12. The dynamic programme runs on 8 pairs at once (one vector
+lane per pair: row a against 8 sequences of equal length). No O((N L)^2) matrix is ever
+held: memory is O(N L D). See `benchmarks/dtw.py` for timings. The first call compiles
+the kernels (or loads them from numba's on-disk cache); `warm_up` does that explicitly.
+
+Processes. The kernel runs on numba's threading layer, OpenMP where available. numba
+terminates a child forked from a process that has used the OpenMP layer, so a process
+that computes distances should start its workers with "spawn" or "forkserver".
+"""
+
+import time
+from collections.abc import Sequence
+
+import numba
+import numpy as np
+from numba import njit, prange
+
+from groupwise.types import FloatArray, IntArray
+
+_LANES = 8
+"""Pairs per dynamic-programme step: one AVX-512 register, or two AVX2 registers, of float64."""
+_EXACT_TOL = 1e-4
+"""Squared costs below this fraction of ||x||^2 + ||y||^2 are recomputed from differences:
+cancellation in the dot-product form loses log10(1 / (relative cost)) digits."""
+
+
+def _as_sequences(sequences: Sequence[FloatArray]) -> list[np.ndarray]:
+    out = []
+    for i, s in enumerate(sequences):
+        seq = np.ascontiguousarray(s, dtype=np.float64)
+        if seq.ndim != 2 or seq.shape[0] == 0:
+            raise ValueError(f"sequence {i}: expected a non-empty array (L, D), got {seq.shape}")
+        if not np.isfinite(seq).all():
+            raise ValueError(f"sequence {i} has non-finite values")
+        out.append(seq)
+    if len({s.shape[1] for s in out}) > 1:
+        raise ValueError(f"sequences disagree on D: {sorted({s.shape[1] for s in out})}")
+    return out
+
+
+def _check_window(window: int | None) -> int:
+    """The window as the kernels take it: -1 for none."""
+    if window is None:
+        return -1
+    if int(window) != window or window < 0:
+        raise ValueError(f"window must be None or an int >= 0, got {window!r}")
+    return int(window)
+
+
+def dtw_distance(x: FloatArray, y: FloatArray, window: int | None = None) -> float:
+    """DTW distance (module docstring) between x (n, D) and y (m, D)."""
+    a, b = _as_sequences([x, y])
+    return float(_pair_distance(a, b, _check_window(window)))
+
+
+def dtw_matrix(sequences: Sequence[FloatArray], window: int | None = None) -> FloatArray:
+    """All pairwise DTW distances as a condensed vector.
+
+    sequences: N arrays (L_i, D); lengths may differ.
+    Returns (N (N - 1) / 2,) float64 in `scipy.spatial.distance.squareform` order:
+    entry N i - i (i + 1) / 2 + (j - i - 1) is dtw(sequences[i], sequences[j]) for i < j.
+    N < 2 gives an empty vector.
+    """
+    seqs = _as_sequences(sequences)
+    w = _check_window(window)
+    n = len(seqs)
+    out = np.zeros(n * (n - 1) // 2)
+    if n < 2:
+        return out
+    lengths = np.array([s.shape[0] for s in seqs], dtype=np.int64)
+    # sorted by length so that runs of equal length fill the vector lanes
+    perm = np.argsort(lengths, kind="stable").astype(np.int64)  # sorted position -> input index
+    ln = lengths[perm]
+    offsets = np.zeros(n + 1, dtype=np.int64)
+    offsets[1:] = np.cumsum(ln)
+    steps = np.concatenate([seqs[i] for i in perm], axis=0)  # (sum L, D)
+    sq = np.einsum("ij,ij->i", steps, steps)
+
+    members, batch_len = _batches(ln)
+    batch_col = np.zeros(len(batch_len) + 1, dtype=np.int64)
+    batch_col[1:] = np.cumsum(batch_len * _LANES)
+    # column j * LANES + k of a batch is step j of its k-th member: the lane layout
+    cols = np.concatenate(
+        [
+            (offsets[members[b]][None, :] + np.arange(batch_len[b])[:, None]).ravel()
+            for b in range(len(batch_len))
+        ]
+    )
+    lane_steps_t = np.ascontiguousarray(steps[cols].T)  # (D, batches * L * LANES)
+    lane_sq = np.ascontiguousarray(sq[cols])
+    # the first batch holding a member after a: rows only compute pairs (a, b > a)
+    first_batch = np.searchsorted(members[:, -1], np.arange(n), side="right").astype(np.int64)
+    # row a computes its pairs with b > a: heavy and light rows alternate, so every chunk of
+    # two rows is the same amount of work
+    order = np.empty(n, dtype=np.int64)
+    order[0::2] = np.arange((n + 1) // 2)
+    order[1::2] = n - 1 - np.arange(n // 2)
+    # small chunks handed out dynamically: a thread that loses its core to another process
+    # does not hold up the whole matrix (static halves did, on a shared 2-core machine)
+    with numba.parallel_chunksize(2):
+        _matrix_kernel(
+            steps,
+            sq,
+            offsets,
+            ln,
+            order,
+            lane_steps_t,
+            lane_sq,
+            batch_col,
+            batch_len,
+            members,
+            first_batch,
+            w,
+            perm,
+            out,
+        )
+    return out
+
+
+def warm_up() -> float:
+    """Compile (or load from numba's cache) every kernel; returns the seconds it took."""
+    start = time.perf_counter()
+    rng = np.random.default_rng(0)
+    seqs = [rng.normal(size=(length, 2)) for length in (3, 3, 4)]
+    dtw_matrix(seqs)
+    dtw_distance(seqs[0], seqs[2])
+    return time.perf_counter() - start
+
+
+def _batches(lengths: IntArray) -> tuple[IntArray, IntArray]:
+    """Group sorted positions into batches of up to LANES consecutive equal-length sequences.
+
+    Returns members (B, LANES), short batches padded by repeating their last member, and
+    the length (B,) of each batch.
+    """
+    members = []
+    batch_len = []
+    n = len(lengths)
+    i = 0
+    while i < n:
+        j = i
+        while j < n and j - i < _LANES and lengths[j] == lengths[i]:
+            j += 1
+        members.append(list(range(i, j)) + [j - 1] * (_LANES - (j - i)))
+        batch_len.append(lengths[i])
+        i = j
+    return np.array(members, dtype=np.int64), np.array(batch_len, dtype=np.int64)
+
+
+@njit(cache=True, fastmath=True)
+def _products(xa: np.ndarray, lane_t: np.ndarray, col: int, width: int, g: np.ndarray) -> None:
+    """g[i, c] = xa[i] . lane_t[:, col + c] for i < len(xa), c < width.
+
+    Two rows and four dimensions per pass keep the vector loop's loads per FMA low.
+    """
+    na = xa.shape[0]
+    dim = xa.shape[1]
+    i = 0
+    while i + 1 < na:
+        r0 = g[i]
+        r1 = g[i + 1]
+        for c in range(width):
+            r0[c] = 0.0
+            r1[c] = 0.0
+        d = 0
+        while d + 4 <= dim:
+            x0 = xa[i, d]
+            x1 = xa[i, d + 1]
+            x2 = xa[i, d + 2]
+            x3 = xa[i, d + 3]
+            z0 = xa[i + 1, d]
+            z1 = xa[i + 1, d + 1]
+            z2 = xa[i + 1, d + 2]
+            z3 = xa[i + 1, d + 3]
+            y0 = lane_t[d, col : col + width]
+            y1 = lane_t[d + 1, col : col + width]
+            y2 = lane_t[d + 2, col : col + width]
+            y3 = lane_t[d + 3, col : col + width]
+            for c in range(width):
+                a = y0[c]
+                b = y1[c]
+                e = y2[c]
+                f = y3[c]
+                r0[c] += x0 * a + x1 * b + x2 * e + x3 * f
+                r1[c] += z0 * a + z1 * b + z2 * e + z3 * f
+            d += 4
+        while d < dim:
+            x0 = xa[i, d]
+            z0 = xa[i + 1, d]
+            y0 = lane_t[d, col : col + width]
+            for c in range(width):
+                r0[c] += x0 * y0[c]
+                r1[c] += z0 * y0[c]
+            d += 1
+        i += 2
+    if i < na:
+        r0 = g[i]
+        for c in range(width):
+            r0[c] = 0.0
+        for d in range(dim):
+            x0 = xa[i, d]
+            y0 = lane_t[d, col : col + width]
+            for c in range(width):
+                r0[c] += x0 * y0[c]
+
+
+@njit(cache=True)
+def _costs(
+    xa: np.ndarray,
+    sqa: np.ndarray,
+    lane_t: np.ndarray,
+    lane_sq: np.ndarray,
+    col: int,
+    width: int,
+    g: np.ndarray,
+) -> None:
+    """Turn the dot products in g into Euclidean local costs, in place."""
+    na = xa.shape[0]
+    dim = xa.shape[1]
+    for i in range(na):
+        s = sqa[i]
+        row = g[i]
+        cancelled = False
+        for c in range(width):
+            t = s + lane_sq[col + c]
+            v = t - 2.0 * row[c]
+            row[c] = v
+            cancelled |= v <= _EXACT_TOL * t
+        if cancelled:
+            for c in range(width):
+                if row[c] <= _EXACT_TOL * (s + lane_sq[col + c]):
+                    v = 0.0
+                    for d in range(dim):
+                        diff = xa[i, d] - lane_t[d, col + c]
+                        v += diff * diff
+                    row[c] = v
+        for c in range(width):
+            row[c] = np.sqrt(row[c])
+
+
+@njit(parallel=True, cache=True)
+def _matrix_kernel(
+    steps: np.ndarray,
+    sq: np.ndarray,
+    offsets: np.ndarray,
+    ln: np.ndarray,
+    order: np.ndarray,
+    lane_t: np.ndarray,
+    lane_sq: np.ndarray,
+    batch_col: np.ndarray,
+    batch_len: np.ndarray,
+    members: np.ndarray,
+    first_batch: np.ndarray,
+    window: int,
+    perm: np.ndarray,
+    out: np.ndarray,
+) -> None:
+    n = ln.shape[0]
+    n_batches = batch_len.shape[0]
+    maxlen = 0
+    for s in range(n):
+        maxlen = max(maxlen, ln[s])
+    inf = np.inf
+    for t in prange(n):
+        a = order[t]
+        na = ln[a]
+        xa = steps[offsets[a] : offsets[a] + na]
+        sqa = sq[offsets[a] : offsets[a] + na]
+        prev = np.empty((maxlen + 1, _LANES))
+        cur = np.empty((maxlen + 1, _LANES))
+        g = np.empty((maxlen, maxlen * _LANES))
+        for b in range(first_batch[a], n_batches):
+            nb = batch_len[b]
+            width = nb * _LANES
+            col = batch_col[b]
+            _products(xa, lane_t, col, width, g)
+            _costs(xa, sqa, lane_t, lane_sq, col, width, g)
+            # R row -1: 0 before the first column, inf elsewhere
+            for j in range(nb + 1):
+                for k in range(_LANES):
+                    prev[j, k] = inf
+            for k in range(_LANES):
+                prev[0, k] = 0.0
+            for i in range(na):
+                lo = 0
+                hi = nb
+                if window >= 0:
+                    lo = max(0, i - window - max(0, na - nb))
+                    hi = min(nb, i + window + max(0, nb - na) + 1)
+                for j in range(lo + 1):
+                    for k in range(_LANES):
+                        cur[j, k] = inf
+                for j in range(lo, hi):
+                    for k in range(_LANES):
+                        m = min(prev[j, k], prev[j + 1, k], cur[j, k])
+                        cur[j + 1, k] = g[i, j * _LANES + k] + m
+                for j in range(hi, nb):
+                    for k in range(_LANES):
+                        cur[j + 1, k] = inf
+                prev, cur = cur, prev
+            for k in range(_LANES):
+                other = members[b, k]
+                if other > a and (k == 0 or other != members[b, k - 1]):
+                    p = perm[a]
+                    q = perm[other]
+                    if p > q:
+                        p, q = q, p
+                    out[n * p - (p * (p + 1)) // 2 + q - p - 1] = prev[nb, k]
+
+
+@njit(cache=True)
+def _pair_distance(x: np.ndarray, y: np.ndarray, window: int) -> float:
+    """One DTW distance, local costs from differences (the matrix kernel's reference)."""
+    n = x.shape[0]
+    m = y.shape[0]
+    dim = x.shape[1]
+    inf = np.inf
+    prev = np.full(m + 1, inf)
+    cur = np.full(m + 1, inf)
+    prev[0] = 0.0
+    for i in range(n):
+        lo = 0
+        hi = m
+        if window >= 0:
+            lo = max(0, i - window - max(0, n - m))
+            hi = min(m, i + window + max(0, m - n) + 1)
+        cur[:] = inf
+        for j in range(lo, hi):
+            v = 0.0
+            for d in range(dim):
+                diff = x[i, d] - y[j, d]
+                v += diff * diff
+            cur[j + 1] = np.sqrt(v) + min(prev[j], prev[j + 1], cur[j])
+        prev, cur = cur, prev
+    return float(prev[m])

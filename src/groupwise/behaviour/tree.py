@@ -1,0 +1,377 @@
+"""The n-ary behaviour tree of the exploration view and of group candidates (SPEC §4).
+
+Construction, from condensed DTW distances of N behaviours:
+
+1. SciPy agglomerative clustering (`linkage.py`) gives a binary dendrogram with merge
+   heights; D is the root's height.
+2. Level bands. `levels` thresholds t_1 < ... < t_levels = D:
+   - "linear" (default): t_k = D k / levels (SPEC §4);
+   - "geometric": t_k = D 2^(k - levels), i.e. D/8, D/4, D/2, D for 4 levels: the lower
+     levels get the narrower bands, so close behaviours are split into finer groups.
+   A merge of height h gets the first level k whose threshold exceeds h (t_k > h); a merge
+   that no threshold exceeds (the root, and any merge as high as the root) gets the top
+   level. So a merge exactly at t_k goes to level k + 1. Leaves are level 0.
+3. n-ary tree. A merge with the same level as its parent is dissolved: its children take
+   its place in the parent's child list, at the same position. Heights are monotone for
+   every offered linkage, so a child's level never exceeds its parent's.
+4. Padding. Where an edge skips levels (a level-3 node with a leaf child), single-child
+   padding nodes are inserted at every level in between, so every leaf is at depth
+   `levels` below the root and every node at level l is at depth levels - l. We chose
+   uniform depth over variable-depth trees because the radial view then draws each level
+   as one ring.
+5. Order. Children keep the dendrogram's left-to-right order, so in-order leaves equal
+   `scipy.cluster.hierarchy.leaves_list` and siblings that came from one dissolved merge
+   stay adjacent.
+
+Node ids (unique; the prototype's padding ids collided):
+- "root" for the root (the last merge, or for N = 1 the padding above the only leaf);
+- "b{i}" for the leaf of behaviour i;
+- "m{c}" for the merge that SciPy numbers cluster c (N <= c < 2N - 1);
+- "{id}@{l}" for the padding node at level l above the real node `id`; each real node has
+  at most one padding node per level, so these never collide.
+
+JSON (`to_json`, read back by `from_json`):
+
+    {
+      "format": "groupwise.behaviour-tree/1",
+      "levels": 4, "method": "complete", "bands": "linear",
+      "thresholds": [t_1, ..., t_levels],       # floats, t_levels = root height
+      "leaf_order": [i, ...],                   # behaviour indices, left to right
+      "root": NODE
+    }
+    NODE = {
+      "id": "m17", "kind": "merge" | "padding" | "leaf", "level": 2,
+      "height": 1.25,                           # merge height; a padding node repeats its
+                                                # child's, a leaf has 0
+      "size": 3, "leaves": [4, 0, 9],           # behaviour indices under it, in order
+      "children": [NODE, ...]                   # ordered; [] for a leaf
+    }
+    a leaf NODE also has "behaviour": i and "extra": {...}, the per-leaf slot (clip URL,
+    poster URL, ...) filled by `to_json`'s `leaf_extra` argument ({} without it).
+"""
+
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any, Literal
+
+import numpy as np
+
+from groupwise.behaviour.linkage import (
+    LINKAGE_METHODS,
+    as_condensed,
+    linkage_matrix,
+    pool_size,
+)
+from groupwise.types import FloatArray
+
+NodeKind = Literal["leaf", "merge", "padding"]
+JSON_FORMAT = "groupwise.behaviour-tree/1"
+
+
+def linear_thresholds(root_height: float, levels: int) -> tuple[float, ...]:
+    """t_k = D k / levels for k = 1..levels (SPEC §4)."""
+    out = [root_height * k / levels for k in range(1, levels)]
+    return (*out, root_height)
+
+
+def geometric_thresholds(root_height: float, levels: int) -> tuple[float, ...]:
+    """t_k = D 2^(k - levels) for k = 1..levels: D/8, D/4, D/2, D for 4 levels."""
+    out = [root_height * 2.0 ** (k - levels) for k in range(1, levels)]
+    return (*out, root_height)
+
+
+BANDS: dict[str, Callable[[float, int], tuple[float, ...]]] = {
+    "linear": linear_thresholds,
+    "geometric": geometric_thresholds,
+}
+"""Band name -> thresholds (levels,) from the root height D and the number of levels."""
+
+
+@dataclass(frozen=True)
+class TreeConfig:
+    """How the behaviour tree is cut (SPEC §4)."""
+
+    levels: int = 4
+    """Number of level bands; the root is at this level, leaves at 0."""
+    method: str = "complete"
+    """Linkage, a key of `LINKAGE_METHODS` ("complete", "average", "ward")."""
+    bands: str = "linear"
+    """Threshold spacing, a key of `BANDS` ("linear" or "geometric")."""
+
+    def __post_init__(self) -> None:
+        if self.levels < 1:
+            raise ValueError(f"levels must be >= 1, got {self.levels}")
+        if self.method not in LINKAGE_METHODS:
+            choices = sorted(LINKAGE_METHODS)
+            raise ValueError(f"unknown linkage {self.method!r}; choose from {choices}")
+        if self.bands not in BANDS:
+            raise ValueError(f"unknown bands {self.bands!r}; choose from {sorted(BANDS)}")
+
+
+@dataclass(frozen=True)
+class TreeNode:
+    """One node of the n-ary tree."""
+
+    id: str
+    level: int
+    kind: NodeKind
+    children: tuple["TreeNode", ...]  # left to right; () for a leaf
+    leaves: tuple[int, ...]  # behaviour indices under this node, left to right
+    height: float  # merge height; padding repeats its child's; 0 for a leaf
+
+    @property
+    def size(self) -> int:
+        return len(self.leaves)
+
+    @property
+    def behaviour(self) -> int:
+        """The behaviour index of a leaf."""
+        if self.kind != "leaf":
+            raise ValueError(f"node {self.id} is a {self.kind}, not a leaf")
+        return self.leaves[0]
+
+
+@dataclass(frozen=True)
+class BehaviourTree:
+    """The n-ary tree of one pool, every leaf at depth `levels`."""
+
+    root: TreeNode
+    levels: int
+    thresholds: tuple[float, ...]  # (levels,) t_1..t_levels, t_levels = root height
+    method: str
+    bands: str
+
+    @property
+    def leaf_order(self) -> tuple[int, ...]:
+        """Behaviour indices left to right (equal to SciPy's `leaves_list`)."""
+        return self.root.leaves
+
+    def nodes(self) -> Iterator[TreeNode]:
+        """Every node, pre-order (parent first, children left to right)."""
+        stack = [self.root]
+        while stack:
+            node = stack.pop()
+            yield node
+            stack.extend(reversed(node.children))
+
+    @cached_property
+    def _by_id(self) -> dict[str, TreeNode]:
+        return {n.id: n for n in self.nodes()}
+
+    @cached_property
+    def _parents(self) -> dict[str, TreeNode]:
+        return {c.id: n for n in self.nodes() for c in n.children}
+
+    def node(self, node_id: str) -> TreeNode:
+        """The node with this id; raises KeyError."""
+        return self._by_id[node_id]
+
+    def parent(self, node_id: str) -> TreeNode | None:
+        """The parent of a node, None for the root; raises KeyError for an unknown id."""
+        if node_id not in self._by_id:
+            raise KeyError(node_id)
+        return self._parents.get(node_id)
+
+    def at_level(self, level: int) -> list[TreeNode]:
+        """The nodes at one level, left to right (padding included)."""
+        return [n for n in self.nodes() if n.level == level]
+
+
+def assign_levels(heights: FloatArray, thresholds: Sequence[float]) -> np.ndarray:
+    """(M,) level of each merge height: the first k with t_k > h, else the top level."""
+    t = np.asarray(thresholds, dtype=np.float64)
+    first_above = np.searchsorted(t, np.asarray(heights, dtype=np.float64), side="right")
+    return np.minimum(first_above + 1, len(t)).astype(np.int64)
+
+
+def _leaf(i: int) -> TreeNode:
+    return TreeNode(id=f"b{i}", level=0, kind="leaf", children=(), leaves=(i,), height=0.0)
+
+
+def _pad(node: TreeNode, parent_level: int) -> TreeNode:
+    """Wrap a node in padding nodes for every level strictly between it and its parent."""
+    base = node.id
+    for level in range(node.level + 1, parent_level):
+        node = TreeNode(
+            id=f"{base}@{level}",
+            level=level,
+            kind="padding",
+            children=(node,),
+            leaves=node.leaves,
+            height=node.height,
+        )
+    return node
+
+
+def _merge(node_id: str, level: int, children: list[TreeNode], height: float) -> TreeNode:
+    leaves = tuple(i for c in children for i in c.leaves)
+    return TreeNode(node_id, level, "merge", tuple(children), leaves, height)
+
+
+def build_tree(distances: FloatArray, config: TreeConfig | None = None) -> BehaviourTree:
+    """The n-ary behaviour tree (module docstring) of condensed (N (N - 1) / 2,) or square
+    (N, N) distances; N >= 1. Root height 0 (all behaviours identical) is valid: every merge
+    then belongs to the root.
+    """
+    cfg = config or TreeConfig()
+    d = as_condensed(distances)
+    n = pool_size(d.shape[0])
+    if n == 1:
+        thresholds = BANDS[cfg.bands](0.0, cfg.levels)
+        leaf = _pad(_leaf(0), cfg.levels)
+        root = TreeNode("root", cfg.levels, "padding", (leaf,), leaf.leaves, 0.0)
+        return BehaviourTree(root, cfg.levels, thresholds, cfg.method, cfg.bands)
+
+    z = linkage_matrix(d, cfg.method)
+    heights = z[:, 2]
+    root_height = float(heights[-1])
+    thresholds = BANDS[cfg.bands](root_height, cfg.levels)
+    merge_levels = assign_levels(heights, thresholds)
+    merge_levels[-1] = cfg.levels
+
+    n_clusters = 2 * n - 1
+    level = np.zeros(n_clusters, dtype=np.int64)
+    level[n:] = merge_levels
+    parent = np.full(n_clusters, -1, dtype=np.int64)
+    for r in range(n - 2, -1, -1):
+        for child in (int(z[r, 0]), int(z[r, 1])):
+            parent[child] = n + r
+            # heights are monotone for every offered linkage; clamping top-down keeps the
+            # levels consistent even if rounding ever made a child higher than its parent
+            level[child] = min(level[child], level[n + r]) if child >= n else 0
+    # a merge at its parent's level is dissolved into the parent
+    dissolved = np.zeros(n_clusters, dtype=bool)
+    dissolved[n:-1] = level[n:-1] == level[parent[n:-1]]
+
+    # bottom up (SciPy numbers children before parents); iterative, so a chain of 1000
+    # merges does not hit Python's recursion limit
+    spliced: dict[int, list[TreeNode]] = {}  # dissolved merge -> its n-ary children
+    built: dict[int, TreeNode] = {}  # kept merge -> its node
+    for r in range(n - 1):
+        c = n + r
+        lvl = int(level[c])
+        children: list[TreeNode] = []
+        for child in (int(z[r, 0]), int(z[r, 1])):
+            if child < n:
+                children.append(_pad(_leaf(child), lvl))
+            elif dissolved[child]:
+                children.extend(spliced.pop(child))
+            else:
+                children.append(_pad(built.pop(child), lvl))
+        if dissolved[c]:
+            spliced[c] = children
+        else:
+            node_id = "root" if c == n_clusters - 1 else f"m{c}"
+            built[c] = _merge(node_id, lvl, children, float(heights[r]))
+    root = built.pop(n_clusters - 1)
+    return BehaviourTree(root, cfg.levels, thresholds, cfg.method, cfg.bands)
+
+
+def group_candidates(
+    tree: BehaviourTree,
+    levels: Sequence[int] = (1, 2),
+    min_size: int = 2,
+    max_size: int = 8,
+) -> list[TreeNode]:
+    """Nodes that can be offered as one group (SPEC §4): at one of `levels`, with
+    min_size..max_size leaves, in pre-order (left to right, parents before children).
+
+    Padding nodes are left out: each has exactly the leaves of the real node below it, so
+    it would repeat that node's group.
+    """
+    wanted = set(levels)
+    return [
+        node
+        for node in tree.nodes()
+        if node.kind != "padding" and node.level in wanted and min_size <= node.size <= max_size
+    ]
+
+
+def medoids(node: TreeNode, distances: FloatArray, k: int = 3) -> tuple[int, ...]:
+    """Up to k representative behaviours of a node: its leaves with the smallest summed
+    distance to the node's other leaves, best first (ties keep the leaf order).
+
+    distances: condensed (N (N - 1) / 2,) or square (N, N) over the whole pool.
+    """
+    if k < 1:
+        raise ValueError(f"k must be >= 1, got {k}")
+    idx = np.asarray(node.leaves, dtype=np.int64)
+    if idx.size == 1:
+        return (int(idx[0]),)
+    d = np.asarray(distances, dtype=np.float64)
+    if d.ndim == 2:
+        sub = d[np.ix_(idx, idx)]
+    else:
+        n = pool_size(d.shape[0])
+        i, j = np.minimum.outer(idx, idx), np.maximum.outer(idx, idx)
+        pos = n * i - i * (i + 1) // 2 + j - i - 1
+        sub = np.where(i == j, 0.0, d[np.where(i == j, 0, pos)])
+    order = np.argsort(sub.sum(axis=1), kind="stable")[:k]
+    return tuple(int(idx[o]) for o in order)
+
+
+LeafExtra = Callable[[int], Mapping[str, Any]] | Mapping[int, Mapping[str, Any]]
+"""Per-leaf JSON fields: a function of the behaviour index, or a mapping from it."""
+
+
+def to_json(tree: BehaviourTree, leaf_extra: LeafExtra | None = None) -> dict[str, Any]:
+    """The JSON-serialisable form of a tree (format in the module docstring).
+
+    leaf_extra fills each leaf's "extra" object (e.g. {"clip": url, "poster": url}); a
+    mapping may leave behaviours out.
+    """
+
+    def extra(i: int) -> dict[str, Any]:
+        if leaf_extra is None:
+            return {}
+        if isinstance(leaf_extra, Mapping):
+            return dict(leaf_extra.get(i, {}))
+        return dict(leaf_extra(i))
+
+    def encode(node: TreeNode) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "id": node.id,
+            "kind": node.kind,
+            "level": node.level,
+            "height": node.height,
+            "size": node.size,
+            "leaves": list(node.leaves),
+            "children": [encode(c) for c in node.children],
+        }
+        if node.kind == "leaf":
+            out["behaviour"] = node.behaviour
+            out["extra"] = extra(node.behaviour)
+        return out
+
+    return {
+        "format": JSON_FORMAT,
+        "levels": tree.levels,
+        "method": tree.method,
+        "bands": tree.bands,
+        "thresholds": list(tree.thresholds),
+        "leaf_order": list(tree.leaf_order),
+        "root": encode(tree.root),
+    }
+
+
+def from_json(data: Mapping[str, Any]) -> BehaviourTree:
+    """Rebuild a tree from `to_json` output (leaf "extra" fields are not part of the tree)."""
+    if data.get("format") != JSON_FORMAT:
+        raise ValueError(f"not a {JSON_FORMAT} document: format {data.get('format')!r}")
+
+    def decode(obj: Mapping[str, Any]) -> TreeNode:
+        children = tuple(decode(c) for c in obj["children"])
+        leaves = tuple(int(i) for i in obj["leaves"])
+        if children and leaves != tuple(i for c in children for i in c.leaves):
+            raise ValueError(f"node {obj['id']}: leaves disagree with its children")
+        height = float(obj["height"])
+        return TreeNode(str(obj["id"]), int(obj["level"]), obj["kind"], children, leaves, height)
+
+    return BehaviourTree(
+        root=decode(data["root"]),
+        levels=int(data["levels"]),
+        thresholds=tuple(float(t) for t in data["thresholds"]),
+        method=str(data["method"]),
+        bands=str(data["bands"]),
+    )

@@ -1,0 +1,243 @@
+import json
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.cluster.hierarchy import leaves_list, linkage
+from scipy.spatial.distance import pdist, squareform
+
+from groupwise.behaviour.tree import (
+    BehaviourTree,
+    TreeConfig,
+    TreeNode,
+    assign_levels,
+    build_tree,
+    from_json,
+    geometric_thresholds,
+    group_candidates,
+    linear_thresholds,
+    medoids,
+    to_json,
+)
+
+# six points on a line; complete linkage merges (0,1)@1 -> m6, (4,5)@1 -> m7,
+# (2,m6)@3 -> m8, (3,m8)@7 -> m9, (m7,m9)@16 -> root. D = 16, thresholds 4, 8, 12, 16.
+LINE = np.array([0.0, 1.0, 3.0, 7.0, 15.0, 16.0])
+LINE_D = pdist(LINE[:, None])
+
+
+def shape(node: TreeNode) -> tuple:
+    """(id, level, children shapes) or the leaf's id."""
+    if node.kind == "leaf":
+        return node.id
+    return (node.id, node.level, [shape(c) for c in node.children])
+
+
+def check_invariants(tree: BehaviourTree, n: int) -> None:
+    ids = [node.id for node in tree.nodes()]
+    assert len(ids) == len(set(ids))
+    assert tree.root.id == "root" and tree.root.level == tree.levels
+    assert sorted(tree.root.leaves) == list(range(n))
+    for node in tree.nodes():
+        assert node.size == len(node.leaves)
+        if node.kind == "leaf":
+            assert node.level == 0 and node.children == ()
+            continue
+        # padding keeps every edge one level long, so every leaf is at depth `levels`
+        assert all(c.level == node.level - 1 for c in node.children)
+        assert node.leaves == tuple(i for c in node.children for i in c.leaves)
+        assert len(node.children) == 1 if node.kind == "padding" else len(node.children) >= 1
+    leaves = [node for node in tree.nodes() if node.kind == "leaf"]
+    assert [leaf.behaviour for leaf in leaves] == list(tree.leaf_order)
+
+
+def test_line_tree_by_hand():
+    tree = build_tree(LINE_D)
+    assert tree.thresholds == (4.0, 8.0, 12.0, 16.0)
+    # m6 (level 1) under m8 (level 1) is dissolved: b0, b1 take its place after b2
+    assert shape(tree.root) == (
+        "root",
+        4,
+        [
+            ("m7@3", 3, [("m7@2", 2, [("m7", 1, ["b4", "b5"])])]),
+            ("m9@3", 3, [("m9", 2, [("b3@1", 1, ["b3"]), ("m8", 1, ["b2", "b0", "b1"])])]),
+        ],
+    )
+    assert tree.leaf_order == (4, 5, 3, 2, 0, 1)
+    assert tree.leaf_order == tuple(leaves_list(linkage(LINE_D, "complete")))
+    assert tree.node("m8").height == 3.0 and tree.node("m7@2").kind == "padding"
+    assert tree.parent("m8") is tree.node("m9") and tree.parent("root") is None
+    assert [n.id for n in tree.at_level(1)] == ["m7", "b3@1", "m8"]
+    check_invariants(tree, 6)
+
+
+def test_dissolved_merges_splice_in_place():
+    # (0,1)@1 and (2,3)@1 sit under a merge @3.5; D = 20 puts all three at level 1, so
+    # both dissolve and their leaves become the children of the @3.5 merge, in order
+    x = np.array([0.0, 1.0, 2.5, 3.5, 20.0])
+    d = pdist(x[:, None])
+    tree = build_tree(d)
+    order = tuple(int(i) for i in leaves_list(linkage(d, "complete")))
+    level1 = [n for n in tree.at_level(1) if n.kind == "merge"]
+    assert [n.leaves for n in level1] == [tuple(i for i in order if i < 4)]
+    assert [c.id for c in level1[0].children] == [f"b{i}" for i in order if i < 4]
+    check_invariants(tree, 5)
+
+
+def test_merge_at_an_exact_threshold_goes_one_level_up():
+    # (0,1)@1 and (3,4)@1 with D = 4: t_1 = 1 does not exceed 1, so both are level 2
+    tree = build_tree(pdist(np.array([[0.0], [1.0], [3.0], [4.0]])))
+    assert tree.thresholds == (1.0, 2.0, 3.0, 4.0)
+    merges = [n for n in tree.nodes() if n.kind == "merge" and n.id != "root"]
+    assert [(n.level, n.leaves) for n in merges] == [(2, (0, 1)), (2, (2, 3))]
+    assert assign_levels(
+        np.array([0.0, 0.999, 1.0, 2.5, 3.0, 4.0]), (1.0, 2.0, 3.0, 4.0)
+    ).tolist() == [
+        1,
+        1,
+        2,
+        3,
+        4,
+        4,
+    ]
+    check_invariants(tree, 4)
+
+
+def test_threshold_bands():
+    assert linear_thresholds(16.0, 4) == (4.0, 8.0, 12.0, 16.0)
+    assert geometric_thresholds(16.0, 4) == (2.0, 4.0, 8.0, 16.0)
+    assert linear_thresholds(0.3, 3)[-1] == 0.3  # the top is exactly the root height
+    tree = build_tree(LINE_D, TreeConfig(bands="geometric"))
+    assert tree.thresholds == (2.0, 4.0, 8.0, 16.0)
+    assert tree.node("m8").level == 2 and tree.node("m9").level == 3
+    check_invariants(tree, 6)
+
+
+def test_group_candidates():
+    tree = build_tree(LINE_D)
+    # pre-order; the padding m7@2 repeats m7's leaves and is left out
+    assert [n.id for n in group_candidates(tree)] == ["m7", "m9", "m8"]
+    assert [n.id for n in group_candidates(tree, max_size=3)] == ["m7", "m8"]
+    assert [n.id for n in group_candidates(tree, levels=(2,))] == ["m9"]
+    assert [n.id for n in group_candidates(tree, min_size=3)] == ["m9", "m8"]
+
+
+def test_medoids():
+    tree = build_tree(LINE_D)
+    # m8 holds points 3 (b2), 0 (b0), 1 (b1): summed distances 5, 4, 3
+    assert medoids(tree.node("m8"), LINE_D) == (1, 0, 2)
+    assert medoids(tree.node("m8"), squareform(LINE_D), k=2) == (1, 0)
+    assert medoids(tree.node("b3"), LINE_D) == (3,)
+    assert len(medoids(tree.root, LINE_D, k=3)) == 3
+
+
+@pytest.mark.parametrize("n", [1, 2, 5])
+def test_degenerate_pools_give_valid_trees(n):
+    tree = build_tree(np.zeros(n * (n - 1) // 2))  # n identical behaviours: root height 0
+    check_invariants(tree, n)
+    assert tree.thresholds == (0.0, 0.0, 0.0, 0.0)
+    assert [c.id for c in tree.root.children] == [f"b{i}@3" for i in tree.leaf_order]
+    assert group_candidates(tree) == []
+
+
+def test_two_behaviours():
+    tree = build_tree(np.array([2.5]), TreeConfig(levels=2))
+    assert shape(tree.root) == ("root", 2, [("b0@1", 1, ["b0"]), ("b1@1", 1, ["b1"])])
+
+
+def test_long_chain_does_not_recurse():
+    x = 2.0 ** np.arange(300)  # complete linkage adds one point per merge
+    tree = build_tree(pdist(x[:, None]))
+    check_invariants(tree, 300)
+
+
+def test_json_round_trip():
+    tree = build_tree(LINE_D)
+    payload = to_json(tree, leaf_extra={4: {"clip": "/clips/4.mp4"}})
+    text = json.dumps(payload)
+    back = json.loads(text)
+    assert back["format"] == "groupwise.behaviour-tree/1"
+    assert back["levels"] == 4 and back["thresholds"] == [4.0, 8.0, 12.0, 16.0]
+    assert back["leaf_order"] == [4, 5, 3, 2, 0, 1]
+    root = back["root"]
+    assert (root["id"], root["level"], root["size"]) == ("root", 4, 6)
+    leaf = root["children"][0]["children"][0]["children"][0]["children"][0]
+    assert leaf == {
+        "id": "b4",
+        "kind": "leaf",
+        "level": 0,
+        "height": 0.0,
+        "size": 1,
+        "leaves": [4],
+        "children": [],
+        "behaviour": 4,
+        "extra": {"clip": "/clips/4.mp4"},
+    }
+    assert from_json(back) == tree
+    by_callback = to_json(tree, leaf_extra=lambda i: {"poster": f"/p/{i}.png"})
+    assert by_callback["root"]["children"][1]["children"][0]["children"][0]["children"][0][
+        "extra"
+    ] == {"poster": "/p/3.png"}
+
+
+def test_invalid_inputs():
+    with pytest.raises(ValueError):
+        TreeConfig(levels=0)
+    with pytest.raises(ValueError):
+        TreeConfig(method="single")
+    with pytest.raises(ValueError):
+        TreeConfig(bands="log")
+    with pytest.raises(ValueError):
+        build_tree(np.array([1.0, 2.0]))  # not N (N - 1) / 2 distances
+    with pytest.raises(ValueError):
+        build_tree(np.array([-1.0]))
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    n=st.integers(1, 24),
+    seed=st.integers(0, 2**32 - 1),
+    method=st.sampled_from(["complete", "average", "ward"]),
+    bands=st.sampled_from(["linear", "geometric"]),
+    levels=st.integers(1, 5),
+    ties=st.booleans(),
+)
+def test_tree_properties(n, seed, method, bands, levels, ties):
+    rng = np.random.default_rng(seed)
+    d = rng.random(n * (n - 1) // 2) * 10
+    if ties:  # few distinct values: equal heights and merges exactly at thresholds
+        d = np.round(d / 2.5) * 2.5
+    tree = build_tree(d, TreeConfig(levels=levels, method=method, bands=bands))
+    check_invariants(tree, n)
+    if n >= 2:
+        assert tree.leaf_order == tuple(int(i) for i in leaves_list(linkage(d, method)))
+        t = (0.0, *tree.thresholds)
+        for node in tree.nodes():
+            if node.kind == "merge" and node.level < levels:
+                assert t[node.level - 1] <= node.height < t[node.level]
+    assert from_json(json.loads(json.dumps(to_json(tree)))) == tree
+
+
+def test_pool_to_tree_end_to_end():
+    from groupwise.behaviour import dtw_matrix, pool_features
+    from groupwise.clips.fragments import Fragment
+
+    rng = np.random.default_rng(5)
+    fragments = [
+        Fragment(
+            obs=rng.normal(size=(30, 11)) * 10 + i % 3,
+            acts=rng.uniform(-1, 1, size=(30, 3)),
+            true_rewards=np.zeros(30),
+            episode=i,
+            start=0,
+            reset_seed=i,
+        )
+        for i in range(40)
+    ]
+    distances = dtw_matrix(pool_features(fragments), window=5)
+    tree = build_tree(distances, TreeConfig(method="average"))
+    check_invariants(tree, 40)
+    for node in group_candidates(tree):
+        assert 2 <= node.size <= 8 and node.level in (1, 2)
+        assert set(medoids(node, distances)) <= set(node.leaves)
