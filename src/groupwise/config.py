@@ -18,19 +18,31 @@ class RewardConfig:
     ensemble_size: int = 3
     """K, the number of independently bootstrapped members."""
     hidden_sizes: tuple[int, ...] = (64, 64)
-    """Hidden layer widths of each member's MLP (ReLU)."""
+    """Hidden layer widths of each member's MLP."""
+    activation: str = "relu"
+    """Hidden-layer nonlinearity, a key of `groupwise.reward.network.ACTIVATIONS`."""
     lr: float = 1e-3
     """AdamW learning rate."""
     batch_size: int = 4
     """Preference pairs per minibatch."""
     epochs: int = 3
-    """Passes over the (bootstrapped) dataset per fit after round 0."""
+    """Passes over the (bootstrapped) dataset per fit after round 0. On a simulated 5-round
+    session (warm-started ensemble) 3 beat 1 and matched 5 and 10 within seed noise."""
     initial_epoch_multiplier: float = 10.0
-    """Round 0 trains this many times more epochs (its dataset is small and the net fresh)."""
+    """Round 0 trains this many times more epochs (its dataset is small and the net fresh):
+    with 10 pairs, 30 epochs lifted the round-0 reward's correlation with the truth from
+    0.35 (3 epochs) to 0.49, and PPO trains on that reward for a whole round."""
     initial_l2: float = 1e-4
     """Starting weight of the L2 penalty; adapted during training (see `bradley_terry`)."""
     l2_bounds: tuple[float, float] = (1.1, 1.5)
     """Validation/training loss ratio band the adaptive L2 weight aims for (Christiano et al.)."""
+    l2_factor: float = 1.2
+    """After each epoch with a validation split, the L2 weight is multiplied by this when the
+    loss ratio is above `l2_bounds` and divided by it when below."""
+    l2_range: tuple[float, float] = (1e-8, 0.1)
+    """The adaptive L2 weight stays inside this range. Above ~0.1 the penalty (about 4 for a
+    fresh 64-64 member) swamps the cross-entropy and can kill every ReLU for good: the
+    reward becomes a constant (seen on small validation splits, `bradley_terry`)."""
     validation_fraction: float = 0.2
     """Share of pairs held out for validation, only when there are `min_pairs_for_validation`."""
     min_pairs_for_validation: int = 10

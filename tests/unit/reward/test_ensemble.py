@@ -1,0 +1,117 @@
+import pickle
+from pathlib import Path
+
+import cloudpickle
+import numpy as np
+import pytest
+import torch
+
+from groupwise.config import RewardConfig
+from groupwise.reward import RewardEnsemble
+
+OBS, ACT = 5, 2
+
+
+def _ensemble(seed: int = 0, cfg: RewardConfig | None = None) -> RewardEnsemble:
+    return RewardEnsemble(OBS, ACT, cfg or RewardConfig(), np.random.default_rng(seed))
+
+
+def _inputs(*batch: int, seed: int = 1) -> tuple[np.ndarray, np.ndarray]:
+    rng = np.random.default_rng(seed)
+    return rng.normal(size=(*batch, OBS)), rng.normal(size=(*batch, ACT))
+
+
+def test_prediction_shapes_and_consistency():
+    ens = _ensemble(cfg=RewardConfig(ensemble_size=4))
+    obs, acts = _inputs(6, 3)
+    steps = ens.step_rewards(obs, acts)
+    assert steps.shape == (4, 6, 3)
+    returns = ens.returns(obs, acts)
+    assert returns.shape == (6, 4)
+    np.testing.assert_allclose(returns, steps.sum(axis=-1).T, rtol=1e-5, atol=1e-6)
+    flat_obs, flat_acts = obs.reshape(-1, OBS), acts.reshape(-1, ACT)
+    mean = ens.mean_reward(flat_obs, flat_acts)
+    assert mean.shape == (18,) and mean.dtype == np.float32
+    np.testing.assert_allclose(mean, steps.reshape(4, -1).mean(axis=0), rtol=1e-5, atol=1e-6)
+    assert ens.step_rewards(*_inputs(0)).shape == (4, 0)
+
+
+def test_members_differ_and_construction_is_seeded():
+    obs, acts = _inputs(7)
+    rewards = _ensemble(seed=3).step_rewards(obs, acts)
+    assert not np.allclose(rewards[0], rewards[1])
+    np.testing.assert_array_equal(rewards, _ensemble(seed=3).step_rewards(obs, acts))
+    assert not np.allclose(rewards, _ensemble(seed=4).step_rewards(obs, acts))
+
+
+def test_construction_leaves_the_global_torch_rng_alone():
+    state = torch.get_rng_state()
+    _ensemble()
+    assert torch.equal(state, torch.get_rng_state())
+
+
+def test_bad_shapes_raise():
+    ens = _ensemble()
+    obs, acts = _inputs(3)
+    with pytest.raises(ValueError, match="expected obs"):
+        ens.step_rewards(obs[:, :-1], acts)
+    with pytest.raises(ValueError, match="batch shape"):
+        ens.step_rewards(obs, acts[:2])
+    with pytest.raises(ValueError, match="N, L, dim"):
+        ens.returns(obs, acts)
+    with pytest.raises(ValueError, match="expected obs"):
+        ens.mean_reward(obs, acts[:, :1])
+
+
+def test_predicting_never_moves_the_normaliser():
+    ens = _ensemble()
+    ens.update_normalizer(*_inputs(20, seed=2))
+    before = {k: v.clone() for k, v in ens.net.state_dict().items()}
+    obs, acts = _inputs(4, 3)
+    ens.step_rewards(obs, acts)
+    ens.returns(obs, acts)
+    ens.mean_reward(obs[:, 0], acts[:, 0])
+    for name, value in ens.net.state_dict().items():
+        assert torch.equal(value, before[name]), name
+
+
+def test_save_and_load_round_trip(tmp_path: Path):
+    ens = _ensemble(5, RewardConfig(hidden_sizes=(8, 8)))
+    ens.update_normalizer(*_inputs(30, seed=6))
+    ens.l2_weight = 0.125
+    path = tmp_path / "reward.pt"
+    ens.save(path)
+    assert isinstance(torch.load(path, weights_only=True), dict)
+
+    obs, acts = _inputs(4, 3)
+    rebuilt = RewardEnsemble.load(path)
+    assert rebuilt.cfg == ens.cfg and rebuilt.l2_weight == 0.125
+    np.testing.assert_array_equal(rebuilt.returns(obs, acts), ens.returns(obs, acts))
+
+    other = _ensemble(9, RewardConfig(hidden_sizes=(8, 8)))
+    predict = other.mean_reward  # a bound method held elsewhere (PPO) sees the loaded weights
+    other.load_state(path)
+    np.testing.assert_array_equal(
+        predict(obs[:, 0], acts[:, 0]), ens.mean_reward(obs[:, 0], acts[:, 0])
+    )
+
+
+def test_load_state_refuses_another_shape(tmp_path: Path):
+    path = tmp_path / "reward.pt"
+    _ensemble(cfg=RewardConfig(hidden_sizes=(8,))).save(path)
+    with pytest.raises(ValueError, match="does not fit"):
+        _ensemble(cfg=RewardConfig(hidden_sizes=(9,))).load_state(path)
+    with pytest.raises(ValueError, match="obs"):
+        RewardEnsemble(
+            OBS + 1, ACT, RewardConfig(hidden_sizes=(8,)), np.random.default_rng(0)
+        ).load_state(path)
+
+
+@pytest.mark.parametrize("dumps", [pickle.dumps, cloudpickle.dumps])
+def test_ensemble_and_its_mean_reward_pickle(dumps):
+    ens = _ensemble()
+    obs, acts = _inputs(8)
+    copy = pickle.loads(dumps(ens))
+    np.testing.assert_array_equal(copy.mean_reward(obs, acts), ens.mean_reward(obs, acts))
+    reward_fn = pickle.loads(dumps(ens.mean_reward))
+    np.testing.assert_array_equal(reward_fn(obs, acts), ens.mean_reward(obs, acts))
