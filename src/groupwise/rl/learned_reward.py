@@ -28,8 +28,8 @@ class LearnedRewardVecEnv(VecEnvWrapper):
         self._actions: np.ndarray | None = None
 
     def reset(self) -> np.ndarray:
-        obs = self.venv.reset()
-        self._obs = np.asarray(obs)
+        obs = np.asarray(self.venv.reset())  # Box observations only
+        self._obs = obs
         return obs
 
     def step_async(self, actions: np.ndarray) -> None:

@@ -8,9 +8,11 @@ repeats an uninterrupted one.
 import logging
 from pathlib import Path
 
+import gymnasium as gym
 import numpy as np
 import torch
 from stable_baselines3 import PPO
+from stable_baselines3.common.running_mean_std import RunningMeanStd
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecMonitor, VecNormalize
 
 from groupwise.config import PPOConfig
@@ -87,12 +89,33 @@ class PPOAgent:
         )
 
     def act(self, obs: FloatArray, rng: np.random.Generator, deterministic: bool) -> np.ndarray:
-        """Actions for raw observations (B, *obs_shape); stochastic draws come from `rng`."""
+        """Actions for raw observations (B, *obs_shape).
+
+        Stochastic actions are drawn from the policy's distribution with `rng` (not torch's
+        global generator), greedy ones are its mode; Box actions are clipped to the space
+        as SB3's `predict` does.
+        """
         normalised = self._normaliser().normalize_obs(np.asarray(obs, dtype=np.float32))
-        with torch.random.fork_rng(devices=[]):
-            torch.manual_seed(int(rng.integers(2**31 - 1)))
-            actions, _ = self.model.predict(normalised, deterministic=deterministic)
-        return np.asarray(actions)
+        with torch.no_grad():
+            obs_tensor = torch.as_tensor(normalised, dtype=torch.float32)
+            dist = self.model.policy.get_distribution(obs_tensor).distribution
+        if isinstance(dist, torch.distributions.Categorical):
+            probs = dist.probs.numpy()
+            if deterministic:
+                return probs.argmax(axis=1)
+            draws = rng.random((probs.shape[0], 1))
+            return np.minimum((draws > probs.cumsum(axis=1)).sum(axis=1), probs.shape[1] - 1)
+        if isinstance(dist, torch.distributions.Normal):
+            mean = dist.mean.numpy()
+            actions = (
+                mean
+                if deterministic
+                else mean + dist.stddev.numpy() * rng.standard_normal(mean.shape)
+            )
+            space = self.model.action_space
+            assert isinstance(space, gym.spaces.Box)
+            return np.clip(actions, space.low, space.high).astype(space.dtype)
+        raise TypeError(f"unsupported policy distribution {type(dist).__name__}")
 
     def policy(self, deterministic: bool = False) -> "AgentPolicy":
         """This agent as a `Policy` (stochastic for sampling behaviours, greedy for evaluation)."""
@@ -101,15 +124,15 @@ class PPOAgent:
     def save(self, directory: Path) -> None:
         directory.mkdir(parents=True, exist_ok=True)
         self.model.save(directory / POLICY_FILE)
-        norm = self._normaliser()
+        obs_rms, ret_rms = self._running_stats()
         np.savez(
             directory / NORMALISER_FILE,
-            obs_mean=norm.obs_rms.mean,
-            obs_var=norm.obs_rms.var,
-            obs_count=norm.obs_rms.count,
-            ret_mean=norm.ret_rms.mean,
-            ret_var=norm.ret_rms.var,
-            ret_count=norm.ret_rms.count,
+            obs_mean=obs_rms.mean,
+            obs_var=obs_rms.var,
+            obs_count=obs_rms.count,
+            ret_mean=ret_rms.mean,
+            ret_var=ret_rms.var,
+            ret_count=ret_rms.count,
         )
 
     def load(self, directory: Path) -> None:
@@ -117,12 +140,12 @@ class PPOAgent:
         tensorboard_log = self.model.tensorboard_log
         self.model = PPO.load(directory / POLICY_FILE, env=self.venv, device="cpu")
         self.model.tensorboard_log = tensorboard_log
-        norm = self._normaliser()
+        obs_rms, ret_rms = self._running_stats()
         with np.load(directory / NORMALISER_FILE) as data:
-            norm.obs_rms.mean, norm.obs_rms.var = data["obs_mean"], data["obs_var"]
-            norm.obs_rms.count = float(data["obs_count"])
-            norm.ret_rms.mean, norm.ret_rms.var = data["ret_mean"], data["ret_var"]
-            norm.ret_rms.count = float(data["ret_count"])
+            obs_rms.mean, obs_rms.var = data["obs_mean"], data["obs_var"]
+            obs_rms.count = float(data["obs_count"])
+            ret_rms.mean, ret_rms.var = data["ret_mean"], data["ret_var"]
+            ret_rms.count = float(data["ret_count"])
 
     def close(self) -> None:
         self.venv.close()
@@ -130,6 +153,12 @@ class PPOAgent:
     def _normaliser(self) -> VecNormalize:
         assert isinstance(self.venv, VecNormalize)
         return self.venv
+
+    def _running_stats(self) -> tuple[RunningMeanStd, RunningMeanStd]:
+        """The observation and return statistics (Box observations only)."""
+        norm = self._normaliser()
+        assert isinstance(norm.obs_rms, RunningMeanStd)
+        return norm.obs_rms, norm.ret_rms
 
 
 class AgentPolicy:

@@ -1,0 +1,51 @@
+"""PPO env steps per second on the true reward vs on the learned reward (same run).
+
+The ratio is the overhead of querying the reward ensemble at every env step.
+Run: `python benchmarks/ppo_throughput.py` (or `python -m benchmarks ppo_throughput`).
+"""
+
+import time
+
+import numpy as np
+import torch
+
+from groupwise.config import PPOConfig, RewardConfig
+from groupwise.envs import make_env
+from groupwise.envs.spaces import action_dim, observation_dim
+from groupwise.reward import RewardEnsemble
+from groupwise.rl.ppo import PPOAgent
+
+ENVS = ["GridWorld", "Hopper"]
+STEPS = 8 * 256 * 4
+
+
+def steps_per_second(env: str, learned: bool) -> float:
+    cfg = PPOConfig(tensorboard=False)
+    probe = make_env(env)
+    obs_dim, act_dim = observation_dim(probe.observation_space), action_dim(probe.action_space)
+    probe.close()
+    reward_fn = None
+    if learned:
+        ensemble = RewardEnsemble(obs_dim, act_dim, RewardConfig(), np.random.default_rng(0))
+        reward_fn = ensemble.mean_reward
+    agent = PPOAgent(lambda: make_env(env), cfg, seed=0, reward_fn=reward_fn)
+    agent.learn(cfg.n_envs * cfg.n_steps, seed=0)  # warm-up rollout
+    start = time.perf_counter()
+    agent.learn(STEPS, seed=1)
+    seconds = time.perf_counter() - start
+    agent.close()
+    return STEPS / seconds
+
+
+def main() -> None:
+    torch.set_num_threads(1)
+    print("| env | PPO, true reward (steps/s) | PPO, learned reward (steps/s) | ratio |")
+    print("|---|---:|---:|---:|")
+    for env in ENVS:
+        true = steps_per_second(env, learned=False)
+        learned = steps_per_second(env, learned=True)
+        print(f"| {env} | {true:,.0f} | {learned:,.0f} | {learned / true:.2f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()
