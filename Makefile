@@ -16,7 +16,7 @@ RUN_OUT ?= runs/quickstart
 
 run: $(STAMPS)/python
 	$(BIN)/groupwise train --env $(RUN_ENV) --oracle pairwise --comparisons 60 --rounds 3 \
-		--steps 30000 --seed 0 --out $(RUN_OUT)
+		--steps 30000 --seed 0 --out $(RUN_OUT) --resume
 
 test: $(STAMPS)/dev
 	$(BIN)/python -m pytest -n 2 --dist loadfile -q

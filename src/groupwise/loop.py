@@ -111,7 +111,10 @@ class Session:
             self.ensemble.save(directory / REWARD_FILE)
             self.dataset.save(directory / DATASET_FILE)
 
-        state = {"round": self.next_round - 1, "records": [dataclasses.asdict(r) for r in self.records]}
+        state = {
+            "round": self.next_round - 1,
+            "records": [dataclasses.asdict(r) for r in self.records],
+        }
         write_checkpoint(out, self.next_round - 1, state, files)
 
     def restore(self, directory: Path, state: dict) -> None:
@@ -165,7 +168,12 @@ def run_round(
     with timer("sample"):
         pool_size = min(loop.pool_cap, max(2, math.ceil(loop.pool_factor * n_comparisons)))
         pool = build_pool(
-            index, session.make_env, session.agent.policy(), session.ensemble, pool_size, cfg,
+            index,
+            session.make_env,
+            session.agent.policy(),
+            session.ensemble,
+            pool_size,
+            cfg,
             sample_rng,
         )
     with timer("feedback"):
@@ -183,7 +191,9 @@ def run_round(
         session.agent.learn(steps, seed, show_progress=show_progress)
     with timer("eval"):
         returns = evaluate(
-            session.make_env, session.agent.policy(deterministic=True), loop.eval_episodes,
+            session.make_env,
+            session.agent.policy(deterministic=True),
+            loop.eval_episodes,
             np.random.default_rng(np.random.SeedSequence([loop.seed, 2**21])),
         )
     record = RoundRecord(
@@ -245,8 +255,13 @@ def run_session(
     if loop.final_steps > 0:
         plan.append((0, loop.final_steps))
 
-    bar = tqdm(total=len(plan), initial=session.next_round, desc=loop.env, unit="round",
-               disable=not show_progress)
+    bar = tqdm(
+        total=len(plan),
+        initial=session.next_round,
+        desc=loop.env,
+        unit="round",
+        disable=not show_progress,
+    )
     try:
         while session.next_round < len(plan):
             n_comparisons, steps = plan[session.next_round]
@@ -255,8 +270,11 @@ def run_session(
             write_records(out / RESULTS_FILE, session.records)
             log.info(
                 "round %d: %d pairs in total, label error %.3f, reward acc %.3f, true return %.2f",
-                record.round, record.pairs_total, record.label_error_rate_total,
-                record.reward_accuracy, record.true_return_mean,
+                record.round,
+                record.pairs_total,
+                record.label_error_rate_total,
+                record.reward_accuracy,
+                record.true_return_mean,
             )
             bar.update(1)
             bar.set_postfix(true_return=f"{record.true_return_mean:.1f}")
@@ -272,7 +290,9 @@ def write_records(path: Path, records: list[RoundRecord]) -> None:
     """Rewrite the per-round CSV atomically."""
     tmp = path.with_suffix(".tmp")
     with tmp.open("w", newline="") as handle:
-        writer = csv.DictWriter(handle, fieldnames=[f.name for f in dataclasses.fields(RoundRecord)])
+        writer = csv.DictWriter(
+            handle, fieldnames=[f.name for f in dataclasses.fields(RoundRecord)]
+        )
         writer.writeheader()
         writer.writerows(dataclasses.asdict(r) for r in records)
     tmp.replace(path)

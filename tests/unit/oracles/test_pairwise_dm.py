@@ -44,8 +44,12 @@ def test_noisy_dm_errs_more_on_close_pairs_and_is_seeded():
     first = dm.gather(pool, 300, np.random.default_rng(5))
     assert first == dm.gather(pool, 300, np.random.default_rng(5))
     true = pool.true_returns
-    wrong_close = [j for j in first if {j.left[0], j.right[0]} == {0, 1}
-                   and j.label != (1.0 if true[j.left[0]] > true[j.right[0]] else 0.0)]
+    wrong_close = [
+        j
+        for j in first
+        if {j.left[0], j.right[0]} == {0, 1}
+        and j.label != (1.0 if true[j.left[0]] > true[j.right[0]] else 0.0)
+    ]
     close = [j for j in first if {j.left[0], j.right[0]} == {0, 1}]
     far = [j for j in first if 2 in (j.left[0], j.right[0])]
     wrong_far = [j for j in far if (j.label == 1.0) != (j.left[0] == 2)]

@@ -39,6 +39,9 @@ def test_empty_dataset_has_nan_error_rate():
 
 
 def test_wrong_labels_by_hand():
-    wrong = wrong_labels(np.array([2.0, 1.0, 1.0, 5.0]), np.array([1.0, 2.0, 1.0, 1.0]),
-                         np.array([1.0, 1.0, 0.5, 0.5]))
+    wrong = wrong_labels(
+        np.array([2.0, 1.0, 1.0, 5.0]),
+        np.array([1.0, 2.0, 1.0, 1.0]),
+        np.array([1.0, 1.0, 0.5, 0.5]),
+    )
     np.testing.assert_array_equal(wrong, [False, True, False, True])
