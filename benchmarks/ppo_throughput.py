@@ -37,13 +37,17 @@ def steps_per_second(env: str, learned: bool) -> float:
     return STEPS / seconds
 
 
+REPEATS = 3
+
+
 def main() -> None:
     torch.set_num_threads(1)
+    print(f"{STEPS} PPO steps per measurement, median of {REPEATS} interleaved repeats\n")
     print("| env | PPO, true reward (steps/s) | PPO, learned reward (steps/s) | ratio |")
     print("|---|---:|---:|---:|")
     for env in ENVS:
-        true = steps_per_second(env, learned=False)
-        learned = steps_per_second(env, learned=True)
+        runs = [(steps_per_second(env, False), steps_per_second(env, True)) for _ in range(REPEATS)]
+        true, learned = np.median(np.array(runs), axis=0)
         print(f"| {env} | {true:,.0f} | {learned:,.0f} | {learned / true:.2f} |", flush=True)
 
 
