@@ -1,4 +1,4 @@
-"""Run every benchmark (or those named) and print their tables: `python -m benchmarks [name ...]`."""
+"""Run every benchmark (or those named) and print their tables: `python -m benchmarks [NAME]`."""
 
 import importlib
 import sys

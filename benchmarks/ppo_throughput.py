@@ -1,6 +1,7 @@
 """PPO env steps per second on the true reward vs on the learned reward (same run).
 
-The ratio is the overhead of querying the reward ensemble at every env step.
+The ratio is the overhead of querying the reward ensemble at every env step. Times are
+this process's CPU time (one torch thread), so other load on the machine distorts them less.
 Run: `python benchmarks/ppo_throughput.py` (or `python -m benchmarks ppo_throughput`).
 """
 
@@ -30,9 +31,9 @@ def steps_per_second(env: str, learned: bool) -> float:
         reward_fn = ensemble.mean_reward
     agent = PPOAgent(lambda: make_env(env), cfg, seed=0, reward_fn=reward_fn)
     agent.learn(cfg.n_envs * cfg.n_steps, seed=0)  # warm-up rollout
-    start = time.perf_counter()
+    start = time.process_time()
     agent.learn(STEPS, seed=1)
-    seconds = time.perf_counter() - start
+    seconds = time.process_time() - start
     agent.close()
     return STEPS / seconds
 
@@ -42,7 +43,7 @@ REPEATS = 3
 
 def main() -> None:
     torch.set_num_threads(1)
-    print(f"{STEPS} PPO steps per measurement, median of {REPEATS} interleaved repeats\n")
+    print(f"{STEPS} PPO steps per measurement (CPU time), median of {REPEATS} repeats\n")
     print("| env | PPO, true reward (steps/s) | PPO, learned reward (steps/s) | ratio |")
     print("|---|---:|---:|---:|")
     for env in ENVS:
