@@ -3,7 +3,7 @@
 import importlib
 import sys
 
-BENCHMARKS = ["ppo_throughput", "render_fps", "dtw"]
+BENCHMARKS = ["ppo_throughput", "render_fps", "dtw", "pool_prep"]
 
 
 def main(names: list[str]) -> None:

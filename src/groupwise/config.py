@@ -108,6 +108,22 @@ class LoopConfig:
     """Decision-maker noise per step (SPEC §7): ε ~ N(0, (L·σ)²) per behaviour per judgement."""
     eval_episodes: int = 5
     """Episodes of the true reward used to measure the policy after each round."""
+    pair_derivation: str = "cover"
+    """How a group judgement becomes preference pairs (SPEC §6), a key of
+    `groupwise.preferences.PAIR_DERIVATIONS`: "cover" (max(m, n) pairs) or "cartesian"
+    (m × n pairs, the earlier CLRVis method, for ablations)."""
+    max_group_size: int = 8
+    """Largest group the group DMs compare (paper §6: 8 keeps comparisons humanly possible)."""
+    teacher_gamma: float = 0.9
+    """Myopic imperfect teachers ("<dm>-myopic"): discount per step back from the last (B-Pref)."""
+    teacher_mistake: float = 0.1
+    """Mistake-prone teachers ("<dm>-mistake"): probability of flipping a label (B-Pref)."""
+    teacher_skip_quantile: float = 0.1
+    """Skipping teachers ("<dm>-skip"): skip when both groups look worse than this quantile
+    of the pool's true returns."""
+    teacher_equal_fraction: float = 0.1
+    """Equal-when-close teachers ("<dm>-equal"): answer equal when the groups' mean returns
+    differ by less than this many standard deviations of the pool's true returns."""
     seed: int = 0
 
     def __post_init__(self) -> None:
@@ -124,6 +140,15 @@ class LoopConfig:
             (self.candidate_pairs >= 1, "candidate pairs must be >= 1"),
             (self.noise_sigma >= 0, "noise sigma must be >= 0"),
             (self.eval_episodes >= 1, "eval episodes must be >= 1"),
+            (
+                self.pair_derivation in ("cover", "cartesian"),
+                "pair derivation must be cover or cartesian",
+            ),
+            (self.max_group_size >= 2, "max group size must be >= 2"),
+            (0.0 < self.teacher_gamma <= 1.0, "teacher gamma must be in (0, 1]"),
+            (0.0 <= self.teacher_mistake <= 1.0, "teacher mistake must be in [0, 1]"),
+            (0.0 <= self.teacher_skip_quantile <= 1.0, "teacher skip quantile must be in [0, 1]"),
+            (self.teacher_equal_fraction >= 0, "teacher equal fraction must be >= 0"),
             (self.seed >= 0, "seed must be >= 0"),
         ]
         for ok, message in checks:

@@ -32,7 +32,8 @@ from groupwise.envs.spaces import action_dim, observation_dim
 from groupwise.oracles import ORACLES, Oracle
 from groupwise.pool import Pool
 from groupwise.preferences.dataset import PreferenceDataset, wrong_labels
-from groupwise.preferences.pairs import Pair, covering_pairs
+from groupwise.preferences.pairs import PAIR_DERIVATIONS, Pair
+from groupwise.query.groups import step_variance
 from groupwise.query.schedule import comparisons_per_round
 from groupwise.reward import RewardEnsemble, fit
 from groupwise.rl.policy import Policy
@@ -150,9 +151,15 @@ def build_pool(
     trajectories = sample_trajectories(make, policy, episodes, rng, cfg.loop.exploration_fraction)
     fragments = tile_fragments(trajectories, length)
     obs, acts = stack_fragments(fragments)
-    returns = ensemble.returns(obs, acts)
+    step = ensemble.step_rewards(obs, acts)  # (K, M, L): one forward pass for both uses
+    returns = np.ascontiguousarray(step.sum(axis=-1).T)  # (M, K), as ensemble.returns
     keep = most_uncertain(returns.var(axis=1), size)
-    return Pool(round_index, tuple(fragments[i] for i in keep), returns[keep])
+    return Pool(
+        round_index,
+        tuple(fragments[i] for i in keep),
+        returns[keep],
+        step_variance(step[:, keep]),
+    )
 
 
 def run_round(
@@ -178,7 +185,8 @@ def run_round(
         )
     with timer("feedback"):
         judgements = oracle.gather(pool, n_comparisons, feedback_rng)
-        pairs = [pair for j in judgements for pair in covering_pairs(j, pair_rng)]
+        derive = PAIR_DERIVATIONS[loop.pair_derivation]
+        pairs = [pair for j in judgements for pair in derive(j, pair_rng)]
         before = len(session.dataset)
         session.dataset.add(pool.fragments, pairs, index)
         round_errors = _label_errors(pool, pairs)

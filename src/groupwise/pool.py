@@ -14,16 +14,26 @@ class Pool:
 
     `predicted_returns` is computed once per round (SPEC §5) and shared by every query
     strategy: row i is behaviour i's predicted return under each ensemble member.
+    `step_variance` is each behaviour's ensemble variance of its per-step rewards, averaged
+    over its steps (`groupwise.query.groups.step_variance`), the intra term of the
+    group-variance score; None when the pool was built without it (group active learning
+    then falls back to `groupwise.query.groups.return_variance`).
     """
 
     round: int
     fragments: tuple[Fragment, ...]
     predicted_returns: FloatArray  # (N, K)
+    step_variance: FloatArray | None = None  # (N,)
 
     def __post_init__(self) -> None:
         if self.predicted_returns.shape[0] != len(self.fragments):
             raise ValueError(
                 f"{self.predicted_returns.shape[0]} predicted returns for "
+                f"{len(self.fragments)} fragments"
+            )
+        if self.step_variance is not None and self.step_variance.shape != (len(self.fragments),):
+            raise ValueError(
+                f"step variance of shape {self.step_variance.shape} for "
                 f"{len(self.fragments)} fragments"
             )
 

@@ -2,7 +2,13 @@
 
 from collections.abc import Callable
 
-from groupwise.commands import train
+from groupwise.commands import clustering_study, pool, report, study, train
 
-COMMANDS: list[Callable] = [train.register]
+COMMANDS: list[Callable] = [
+    train.register,
+    pool.register,
+    clustering_study.register,
+    study.register,
+    report.register,
+]
 """Each adds its subparser and sets `handler` to a function (args) -> exit code."""

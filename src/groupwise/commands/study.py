@@ -1,0 +1,108 @@
+"""`groupwise study`: run the simulated study's (env, DM, seed) cells, resumably."""
+
+import argparse
+import os
+from pathlib import Path
+
+from groupwise.commands.arguments import UsageError, positive_int, writable_dir
+
+
+def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    from groupwise.study.profiles import PROFILES
+
+    visible = [name for name, p in PROFILES.items() if not p.hidden]
+    profiles = "; ".join(f"{name}: {PROFILES[name].summary}" for name in visible)
+    study = subparsers.add_parser(
+        "study",
+        help="run the simulated study (env × DM × seed cells); rerun to resume",
+        description=(
+            "Run every (env, DM, seed) cell as its own process into OUT/cells/ENV/DM/seed-K. "
+            "Finished cells are skipped and unfinished ones resume from their last round, so "
+            f"rerunning the same command continues a stopped study. Profiles: {profiles}."
+        ),
+    )
+    study.add_argument("--envs", nargs="+", help="envs (default: the profile's)")
+    study.add_argument("--dms", nargs="+", help="decision-makers (default: the paper's three)")
+    study.add_argument("--seeds", type=positive_int, help="seeds 0 … N−1 (default: the profile's)")
+    study.add_argument(
+        "--profile",
+        default="quick",
+        choices=list(PROFILES),
+        metavar="|".join(visible),
+        help="cell size (default: quick)",
+    )
+    study.add_argument("--out", type=Path, required=True, help="study directory")
+    study.add_argument(
+        "--ray",
+        nargs="?",
+        const="",
+        default=None,
+        metavar="ADDRESS",
+        help="run on Ray: the cluster at ADDRESS, or a local Ray without one "
+        "(OUT must be on a filesystem every node sees)",
+    )
+    study.add_argument(
+        "--workers",
+        type=positive_int,
+        default=os.cpu_count() or 1,
+        help="cells at a time on this machine (default: one per core)",
+    )
+    study.add_argument(
+        "--cap-pairs",
+        action="store_true",
+        help="also run the ablation that keeps at most one preference pair per comparison",
+    )
+    study.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
+    study.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from groupwise.envs import resolve_id
+    from groupwise.oracles import ORACLES
+    from groupwise.study.cells import CONDITIONS
+    from groupwise.study.profiles import PROFILES, PairCapUnsupportedError
+    from groupwise.study.runner import (
+        RayUnavailableError,
+        StudyMismatchError,
+        StudySpec,
+        plan_jobs,
+        run_study,
+    )
+
+    profile = PROFILES[args.profile]
+    envs = tuple(args.envs or profile.envs)
+    dms = tuple(args.dms or (dm for dm in profile.dms if dm in ORACLES))
+    for env in envs:
+        try:
+            resolve_id(env)
+        except ValueError as error:
+            raise UsageError(str(error)) from None
+    if not dms:
+        raise UsageError(f"no decision-maker given; choose from {', '.join(ORACLES)}")
+    unknown = [dm for dm in dms if dm not in ORACLES]
+    if unknown:
+        raise UsageError(f"unknown DM {unknown[0]!r}; choose from {', '.join(ORACLES)}")
+    if any(name in CONDITIONS for name in (*envs, *dms)):
+        raise UsageError(f"env and DM names cannot be {' or '.join(CONDITIONS)}")
+    spec = StudySpec(profile, envs, dms, args.seeds or profile.seeds, args.cap_pairs)
+    out = writable_dir(args.out)
+    try:
+        plan_jobs(spec, out)  # reject bad values before anything starts
+        summary = run_study(
+            spec,
+            out,
+            workers=args.workers,
+            backend="local" if args.ray is None else "ray",
+            ray_address=args.ray or None,
+            show_progress=not args.quiet,
+        )
+    except (StudyMismatchError, PairCapUnsupportedError, RayUnavailableError, ValueError) as error:
+        raise UsageError(str(error)) from None
+    print(
+        f"{len(summary.outcomes)} cells: {summary.count('done')} run now, "
+        f"{summary.count('skipped')} finished before, {summary.count('failed')} failed\n"
+        f"study: {out}\nreport: groupwise report {out}"
+    )
+    for outcome in summary.failed:
+        print(f"failed: {outcome.cell.label}: {outcome.error}")
+    return 1 if summary.failed else 0

@@ -1,0 +1,96 @@
+"""Interactive-DM (SPEC §7): a person exploring the view, who finds comparisons that span
+the whole range of quality.
+
+The DM ranks the pool's group candidates (tree nodes at levels 1–2 with 2–8 leaves) by the
+*mean* true return of their members (the paper says mean; the prototype summed, which
+favours big groups) and walks the ranking from best to worst (`chain_pairs`):
+
+- a group whose behaviours are not all still available starts no comparison;
+- otherwise it is paired with the first group after it in the ranking that shares no
+  behaviour with it and whose behaviours are all still available;
+- a behaviour is available while it has been used in fewer than 2 comparisons.
+
+So neighbours in quality are compared (best vs second, second vs third, ...), and the chain
+runs down to the worst groups. The higher-ranked group is always the left one. When the
+chain has more comparisons than the round's queries, an evenly spaced subset is asked, so
+the comparisons still span the range. Each comparison is answered with the noisy group
+decision, and a skipped one uses up its query.
+"""
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from groupwise.behaviour import TreeConfig
+from groupwise.oracles.group_decision import Teacher
+from groupwise.oracles.groupwise import pool_candidates
+from groupwise.pool import Pool
+from groupwise.preferences.judgement import Judgement
+from groupwise.types import FloatArray
+
+
+def chain_pairs(
+    groups: Sequence[Sequence[int]], scores: FloatArray, max_uses: int = 2
+) -> list[tuple[int, int]]:
+    """Comparisons (higher, lower) as indices into `groups`, best first (module docstring).
+
+    groups: G groups of behaviour indices; scores: (G,) their rank key, higher is better
+    (ties keep the list order).
+    """
+    if max_uses < 1:
+        raise ValueError(f"max uses must be >= 1, got {max_uses}")
+    order = np.argsort(-np.asarray(scores, dtype=np.float64), kind="stable").tolist()
+    sets = [frozenset(int(i) for i in g) for g in groups]
+    uses: dict[int, int] = {}
+
+    def available(g: int) -> bool:
+        return all(uses.get(i, 0) < max_uses for i in sets[g])
+
+    pairs = []
+    for pos, g in enumerate(order):
+        if not available(g):
+            continue
+        partner = next(
+            (h for h in order[pos + 1 :] if not sets[g] & sets[h] and available(h)), None
+        )
+        if partner is None:
+            continue
+        for i in sets[g] | sets[partner]:
+            uses[i] = uses.get(i, 0) + 1
+        pairs.append((g, partner))
+    return pairs
+
+
+def evenly_spaced(total: int, count: int) -> list[int]:
+    """`count` distinct indices below `total`, evenly spread from the first to the last
+    (all of them when count >= total)."""
+    if count >= total:
+        return list(range(total))
+    if count <= 0:
+        return []
+    return np.round(np.linspace(0, total - 1, count)).astype(int).tolist()
+
+
+@dataclass(frozen=True)
+class InteractiveDM:
+    """Compares neighbouring groups in true mean return, best to worst (module docstring)."""
+
+    teacher: Teacher = field(default_factory=Teacher)
+    tree: TreeConfig = field(default_factory=TreeConfig)
+    levels: tuple[int, ...] = (1, 2)
+    min_group: int = 2
+    max_group: int = 8
+    max_uses: int = 2
+
+    def gather(self, pool: Pool, n_queries: int, rng: np.random.Generator) -> list[Judgement]:
+        if n_queries <= 0 or len(pool) < 2:
+            return []
+        candidates = pool_candidates(pool, self.tree, self.levels, self.min_group, self.max_group)
+        true = pool.true_returns
+        means = np.array([true[list(c.members)].mean() for c in candidates])
+        members = [c.members for c in candidates]
+        pairs = chain_pairs(members, means, self.max_uses)
+        asked = [pairs[k] for k in evenly_spaced(len(pairs), n_queries)]
+        judgements = (self.teacher.judge(pool, members[g], members[h], rng) for g, h in asked)
+        return [j for j in judgements if j is not None]

@@ -1,0 +1,219 @@
+"""Study profiles: how big each cell of a simulated study is (SPEC §8).
+
+A profile fixes everything of a cell but its env, decision-maker and seed: the comparisons,
+the rounds, the PPO step budgets per env and the evaluation. Four ship:
+
+- ``paper``: SPEC §8 as written, for a cluster (``--ray``). 400 comparisons in 5 rounds,
+  then a long PPO run on the frozen learned reward. The paper gives no step budgets; its
+  training curves do: HalfCheetah ran past six million steps ("it took six million steps
+  before the average of Groupwise-DM overtook Interactive-DM") and Walker2d past three
+  ("slopes downward after 2–3 million steps"). We take 7 M steps for HalfCheetah, 5 M for
+  Hopper and Walker2d, 2 M for Reacher and 1 M for the two small envs, 0.5 M (0.2 M for the
+  small envs) of them in the RLHF rounds. At the ~1,650 PPO steps/s one core managed here
+  (see `LOCAL`), that is 315 M steps ≈ 53 core-hours for 6 envs × 3 DMs × 5 seeds: about
+  3.5 h on 16 cores, 27 h on 2.
+- ``local``: the largest budget that runs the same 90 cells in a night (≤ 10 h; 8–9 h
+  extrapolated from measured cells) on two cores; the arithmetic is in `LOCAL`'s docstring.
+- ``quick``: GridWorld and MountainCarContinuous, 2 seeds, tiny budgets: a few minutes on two
+  cores, for CI and for trying the pipeline.
+- ``smoke`` (hidden): the tiniest cell that still runs every phase, for the tests.
+
+Every profile only sets `RunConfig` fields; whatever it leaves alone keeps the defaults of
+`groupwise.config` (SPEC §3).
+"""
+
+import dataclasses
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+from groupwise.config import LoopConfig, PPOConfig, RewardConfig, RunConfig
+
+PAIR_CAP_FIELD = "pair_cap"
+"""The `LoopConfig` field the capped-pairs ablation needs (see `StudyProfile.run_config`)."""
+
+
+class PairCapUnsupportedError(ValueError):
+    """The capped-pairs ablation was asked for, but `LoopConfig` has no pair cap yet."""
+
+
+@dataclass(frozen=True)
+class EnvBudget:
+    """PPO env steps of one cell."""
+
+    steps: int
+    """Steps over the RLHF rounds (`LoopConfig.steps`, split evenly over the rounds)."""
+    final_steps: int
+    """Steps on the frozen learned reward after the last round (`LoopConfig.final_steps`)."""
+
+    @property
+    def total(self) -> int:
+        return self.steps + self.final_steps
+
+
+@dataclass(frozen=True)
+class StudyProfile:
+    """Everything of a study cell except (env, DM, seed)."""
+
+    name: str
+    """Key in `PROFILES` and the name written into ``study.json``."""
+    summary: str
+    """One line for ``--help`` and the report."""
+    envs: tuple[str, ...]
+    """Envs run when the command names none."""
+    dms: tuple[str, ...]
+    """Decision-makers run when the command names none (those of them that are registered)."""
+    seeds: int
+    """Seeds (0 … seeds−1) run when the command names no count."""
+    comparisons: int
+    """Comparisons (queries) per cell (`LoopConfig.comparisons`)."""
+    rounds: int
+    """Feedback rounds per cell (`LoopConfig.rounds`)."""
+    budgets: Mapping[str, EnvBudget]
+    """PPO budgets per env name; envs not listed get `default_budget`."""
+    default_budget: EnvBudget
+    """PPO budget of any env not in `budgets` (e.g. a Gymnasium id)."""
+    eval_episodes: int = 5
+    """True-reward episodes measured after every round (`LoopConfig.eval_episodes`)."""
+    ppo: PPOConfig = field(default_factory=PPOConfig)
+    """PPO settings of every cell."""
+    reward: RewardConfig = field(default_factory=RewardConfig)
+    """Reward-model settings of every cell."""
+    hidden: bool = False
+    """Left out of the CLI's help (test-only profiles)."""
+
+    def budget(self, env: str) -> EnvBudget:
+        return self.budgets.get(env, self.default_budget)
+
+    def run_config(self, env: str, dm: str, seed: int, capped: bool = False) -> RunConfig:
+        """The full configuration of cell (env, dm, seed).
+
+        With `capped`, each round keeps at most as many preference pairs as it asked
+        comparisons, the pairwise DM's count (SPEC §8's capped ablation).
+
+        Raises:
+            PairCapUnsupportedError: `capped` and `LoopConfig` has no `pair_cap` field.
+            ValueError: a value `LoopConfig` rejects.
+        """
+        budget = self.budget(env)
+        values: dict[str, object] = {
+            "env": env,
+            "oracle": dm,
+            "comparisons": self.comparisons,
+            "rounds": self.rounds,
+            "steps": budget.steps,
+            "final_steps": budget.final_steps,
+            "eval_episodes": self.eval_episodes,
+            "seed": seed,
+        }
+        if capped:
+            if not supports_pair_cap():
+                raise PairCapUnsupportedError(
+                    "the capped-pairs ablation needs LoopConfig.pair_cap, which this version "
+                    "of groupwise does not have yet"
+                )
+            values[PAIR_CAP_FIELD] = 1.0
+        return RunConfig(
+            loop=dataclasses.replace(LoopConfig(), **values),  # type: ignore[arg-type]  # mixed value types
+            reward=self.reward,
+            ppo=self.ppo,
+        )
+
+
+def supports_pair_cap() -> bool:
+    """Whether `LoopConfig` can cap the preference pairs per round."""
+    return PAIR_CAP_FIELD in {f.name for f in dataclasses.fields(LoopConfig)}
+
+
+PAPER_DMS = ("pairwise", "groupwise", "interactive")
+"""The paper's three decision-makers (SPEC §7); any other registered DM can be asked for."""
+_SMALL_ENVS = ("GridWorld", "MountainCarContinuous")
+_ALL_ENVS = ("Hopper", "HalfCheetah", "Walker2d", "Reacher", "MountainCarContinuous", "GridWorld")
+
+PAPER = StudyProfile(
+    name="paper",
+    summary="SPEC §8 as written: 400 comparisons, 1–7 M PPO steps per cell (a cluster's job)",
+    envs=_ALL_ENVS,
+    dms=PAPER_DMS,
+    seeds=5,
+    comparisons=400,
+    rounds=5,
+    budgets={
+        "Hopper": EnvBudget(steps=500_000, final_steps=4_500_000),
+        "HalfCheetah": EnvBudget(steps=500_000, final_steps=6_500_000),
+        "Walker2d": EnvBudget(steps=500_000, final_steps=4_500_000),
+        "Reacher": EnvBudget(steps=500_000, final_steps=1_500_000),
+        "MountainCarContinuous": EnvBudget(steps=200_000, final_steps=800_000),
+        "GridWorld": EnvBudget(steps=200_000, final_steps=800_000),
+    },
+    default_budget=EnvBudget(steps=500_000, final_steps=4_500_000),
+    eval_episodes=10,
+)
+
+LOCAL = StudyProfile(
+    name="local",
+    summary="the paper's 90 cells in a night (8–9 h) on 2 cores: 400 comparisons, "
+    "0.4–1.5 M PPO steps per cell",
+    envs=_ALL_ENVS,
+    dms=PAPER_DMS,
+    seeds=5,
+    comparisons=400,
+    rounds=5,
+    budgets={
+        "Hopper": EnvBudget(steps=300_000, final_steps=900_000),
+        "HalfCheetah": EnvBudget(steps=400_000, final_steps=1_100_000),
+        "Walker2d": EnvBudget(steps=400_000, final_steps=1_100_000),
+        "Reacher": EnvBudget(steps=200_000, final_steps=600_000),
+        "MountainCarContinuous": EnvBudget(steps=100_000, final_steps=300_000),
+        "GridWorld": EnvBudget(steps=100_000, final_steps=300_000),
+    },
+    default_budget=EnvBudget(steps=300_000, final_steps=900_000),
+    eval_episodes=5,
+)
+"""Sized from measured cells on this 2-core machine, two cells running at once.
+
+Measured (groupwise DM, 400 comparisons in 5 rounds of 2,048 PPO steps, then 81,920 steps
+on the frozen reward): PPO ran at 1,500 (Hopper, Walker2d), 1,740 (Reacher) and 1,950
+(HalfCheetah) env steps/s per worker; GridWorld and the pairwise DM alike. The rest of a
+round (pool sampling 1–3 s, feedback ≤ 0.2 s, reward fit ≤ 1.4 s with 1,272 pairs,
+evaluation 0.5–1.6 s) is ~6 s, so ~40 s per cell with process start-up. Budget: 15 cells
+per env × (1.2 + 1.5 + 1.5 + 0.8 + 0.4 + 0.4) M steps = 87 M steps; at 1,500 steps/s that
+is 58,000 core-s, plus 90 × 40 s = 3,600 s, over 2 cores ≈ 30,800 s ≈ 8.6 h (7.8 h at the
+measured mean of 1,650 steps/s). The longest cell (1.5 M steps, ~17 min) leaves no long
+tail. A quarter of each budget is spent in the feedback rounds. Other processes on the
+machine slow it down in proportion.
+"""
+
+QUICK = StudyProfile(
+    name="quick",
+    summary="GridWorld and MountainCarContinuous, 2 seeds, tiny budgets: ~2 min on 2 cores",
+    envs=_SMALL_ENVS,
+    dms=PAPER_DMS,
+    seeds=2,
+    comparisons=40,
+    rounds=2,
+    budgets={},
+    default_budget=EnvBudget(steps=16_384, final_steps=16_384),
+    eval_episodes=2,
+    reward=RewardConfig(epochs=2, initial_epoch_multiplier=3.0),
+    ppo=PPOConfig(tensorboard=False),
+)
+"""Measured: the 12 cells took 110 s on this 2-core machine (13–20 s each, two at a time)."""
+
+SMOKE = StudyProfile(
+    name="smoke",
+    summary="the smallest cell that runs every phase (tests only)",
+    envs=("GridWorld",),
+    dms=PAPER_DMS,
+    seeds=1,
+    comparisons=16,  # with 6 or 10 the group DMs found no comparison on GridWorld (0 pairs)
+    rounds=2,
+    budgets={},
+    default_budget=EnvBudget(steps=512, final_steps=256),
+    eval_episodes=1,
+    reward=RewardConfig(epochs=1, initial_epoch_multiplier=2.0),
+    ppo=PPOConfig(n_envs=2, n_steps=128, batch_size=64, n_epochs=1, tensorboard=False),
+    hidden=True,
+)
+
+PROFILES: dict[str, StudyProfile] = {p.name: p for p in (PAPER, LOCAL, QUICK, SMOKE)}
+"""Every profile by name; `StudyProfile.hidden` ones are for tests."""

@@ -1,0 +1,325 @@
+"""The study report: ``DIR/report.md`` and its PNGs, from the cells' ``rounds.csv`` (SPEC §8).
+
+Sections: coverage; final true return per env and DM (mean ± SD over seeds, the paper's
+table 1 beside it); preference pairs and label error rate per DM; training curves;
+normalised final returns (per env, IQR ↦ [0, 1]) pooled over envs with Welch t-tests and
+IQMs with stratified-bootstrap 95 % CIs; the capped-pairs ablation when its cells exist; and
+what is missing. Final results use finished cells only; curves also show unfinished ones.
+"""
+
+import logging
+import math
+from collections.abc import Mapping
+from pathlib import Path
+
+import numpy as np
+
+from groupwise.study import figures, paper
+from groupwise.study.figures import Band
+from groupwise.study.profiles import supports_pair_cap
+from groupwise.study.results import Grid, StudyResults, load_results
+from groupwise.study.statistics import (
+    confidence_band,
+    iqm,
+    iqr_normalise,
+    mean_sd,
+    relative_difference,
+    stratified_bootstrap_ci,
+    welch_t_test,
+)
+
+log = logging.getLogger(__name__)
+
+REPORT_FILE = "report.md"
+CURVES_PNG = "curves.png"
+PAIRS_PNG = "pairs_errors.png"
+NORMALISED_PNG = "normalised.png"
+CAPPED_PNG = "normalised_capped.png"
+DASH = "–"
+ALL_PAIRS_UP_TO = 4
+"""With more DMs than this, each is tested against the first only (the table stays short)."""
+
+
+class NoResultsError(ValueError):
+    """The directory holds no started study cell."""
+
+
+def write_report(root: Path, seed: int = 0, bootstrap_reps: int = 2000) -> Path:
+    """Write ``root/report.md`` and its figures; return the report's path.
+
+    Args:
+        seed: seeds the bootstrap, so the same cells give the same report.
+    Raises:
+        NoResultsError: no cell under `root` has started.
+        ValueError: a cell's files cannot be parsed.
+    """
+    results = load_results(root)
+    if not results.records:
+        raise NoResultsError(f"{root} holds no study cells (expected {root}/cells/ENV/DM/seed-K)")
+    main_rng, capped_rng = np.random.default_rng(seed).spawn(2)
+    grid = results.grid("cells")
+    sections = [
+        _header(results),
+        _returns_table(grid),
+        _pairs_section(results, root),
+        _curves_section(results, root),
+        _normalised_section(
+            grid,
+            "Normalised final returns",
+            None,
+            paper.NORMALISED_TESTS,
+            main_rng,
+            bootstrap_reps,
+            root / NORMALISED_PNG,
+        ),
+        _capped_section(results, capped_rng, bootstrap_reps, root),
+        _missing_section(results),
+    ]
+    path = root / REPORT_FILE
+    path.write_text("\n\n".join(s.rstrip() for s in sections if s) + "\n")
+    log.info("report: %s", path)
+    return path
+
+
+def _header(results: StudyResults) -> str:
+    total = len(set(results.planned) | set(results.records))
+    done = sum(r.complete for r in results.records.values())
+    profile = results.profile or "unknown (no study.json)"
+    return (
+        "# Simulated study report\n\n"
+        f"Study directory `{results.root}`, profile `{profile}`: {done} of {total} cells "
+        f"finished, {len(results.unfinished())} unfinished, "
+        f"{len(results.not_started())} not started. Final results use finished cells only."
+    )
+
+
+def _returns_table(grid: Grid) -> str:
+    title = "## Final true return\n\nMean ± SD over seeds (n = finished seeds), after the last "
+    title += "row of each cell; the paper's table 1 beside ours."
+    if not grid.dms:
+        return title + "\n\nNo finished cell yet."
+    header = ["env"]
+    for dm in grid.dms:
+        header += [dm, f"{dm} (paper)"] if _in_paper(dm) else [dm]
+    lines = [_row(header), _row(["---"] * len(header))]
+    for j, env in enumerate(grid.envs):
+        row = [env]
+        for dm in grid.dms:
+            column = grid.values[dm][:, j]
+            n = int(np.isfinite(column).sum())
+            mean, sd = mean_sd(column)
+            row.append(f"{_num(mean, 1)} ± {_num(sd, 1)} (n={n})" if n else DASH)
+            if _in_paper(dm):
+                cited = paper.TABLE1.get(env, {}).get(dm)
+                row.append(f"{cited[0]:g} ± {cited[1]:g}" if cited else DASH)
+        lines.append(_row(row))
+    return title + "\n\n" + "\n".join(lines)
+
+
+def _pairs_section(results: StudyResults, root: Path) -> str:
+    pairs, errors = results.grid("cells", "final_pairs"), results.grid("cells", "final_error_rate")
+    title = "## Preference pairs and label error rate\n\nPer finished cell at its end, pooled "
+    title += "over envs and seeds (mean ± SD); the error rate is the share of pairs whose label "
+    title += "disagrees with the true returns."
+    if not pairs.dms:
+        return title + "\n\nNo finished cell yet."
+    lines = [
+        _row(["DM", "runs", "preference pairs", "paper", "label error rate"]),
+        _row(["---"] * 5),
+    ]
+    for dm in pairs.dms:
+        n = int(np.isfinite(pairs.values[dm]).sum())
+        p_mean, p_sd = mean_sd(pairs.values[dm])
+        e_mean, e_sd = mean_sd(errors.values[dm])
+        cited = paper.PREFERENCE_PAIRS.get(dm)
+        lines.append(
+            _row(
+                [
+                    dm,
+                    str(n),
+                    f"{_num(p_mean, 1)} ± {_num(p_sd, 1)}",
+                    f"{cited:g}" if cited is not None else DASH,
+                    f"{_num(e_mean, 3)} ± {_num(e_sd, 3)}",
+                ]
+            )
+        )
+    tests = _tests_table(
+        {dm: pairs.values[dm] for dm in pairs.dms}, pairs.dms, paper.PAIR_TESTS, digits=1
+    )
+    figures.pairs_and_errors(
+        pairs.envs,
+        {dm: np.nanmean(_nan_safe(pairs.values[dm]), axis=0) for dm in pairs.dms},
+        {dm: np.nanmean(_nan_safe(errors.values[dm]), axis=0) for dm in errors.dms},
+        root / PAIRS_PNG,
+    )
+    return (
+        f"{title}\n\n" + "\n".join(lines) + "\n\nWelch t-tests of the pair counts:\n\n"
+        f"{tests}\n\n![pairs and error rate per env]({PAIRS_PNG})"
+    )
+
+
+def _curves_section(results: StudyResults, root: Path) -> str:
+    panels: dict[str, dict[str, Band]] = {}
+    for env in results.envs("cells"):
+        for dm in results.dms("cells"):
+            curves = results.curves("cells", env, dm)
+            if curves is not None:
+                mean, low, high = confidence_band(curves.returns)
+                panels.setdefault(env, {})[dm] = Band(curves.steps, mean, low, high)
+    if not panels:
+        return ""
+    figures.training_curves(panels, results.dms("cells"), root / CURVES_PNG)
+    return (
+        "## Training curves\n\nTrue return (evaluation after every round) against PPO env "
+        "steps; mean over seeds with a 95 % Student-t band. Unfinished cells count as far as "
+        f"they got.\n\n![training curves]({CURVES_PNG})"
+    )
+
+
+def _normalised_section(
+    grid: Grid,
+    title: str,
+    paper_means: Mapping[str, tuple[float, float]] | None,
+    paper_tests: Mapping[tuple[str, str], paper.PaperTest],
+    rng: np.random.Generator,
+    reps: int,
+    png: Path,
+    note: str = "",
+) -> str:
+    intro = (
+        f"## {title}\n\n{note}Each env's final returns are scaled so that the interquartile "
+        "range over all its runs (every DM) maps to [0, 1], then pooled over envs. IQM = "
+        "interquartile mean, 95 % CI by stratified bootstrap over runs per env "
+        f"({reps} resamples)."
+    )
+    if not grid.dms:
+        return intro + "\n\nNo finished cell yet."
+    normalised = iqr_normalise(grid.values)
+    header = ["DM", "runs", "mean", "SD", "IQM [95 % CI]"] + (["paper"] if paper_means else [])
+    lines = [_row(header), _row(["---"] * len(header))]
+    iqms = {}
+    for dm, rng_dm in zip(grid.dms, rng.spawn(len(grid.dms)), strict=True):
+        values = normalised[dm]
+        mean, sd = mean_sd(values)
+        centre, interval = iqm(values), stratified_bootstrap_ci(values, rng_dm, reps=reps)
+        iqms[dm] = (centre, interval)
+        row = [
+            dm,
+            str(int(np.isfinite(values).sum())),
+            _num(mean, 3),
+            _num(sd, 3),
+            f"{_num(centre, 3)} [{_num(interval.low, 3)}, {_num(interval.high, 3)}]",
+        ]
+        if paper_means:
+            cited = paper_means.get(dm)
+            row.append(f"{cited[0]:g} ± {cited[1]:g}" if cited else DASH)
+        lines.append(_row(row))
+    figures.normalised_returns({dm: normalised[dm].ravel() for dm in grid.dms}, iqms, title, png)
+    tests = _tests_table(normalised, grid.dms, paper_tests, digits=3)
+    return (
+        f"{intro}\n\n" + "\n".join(lines) + "\n\nWelch t-tests between DMs, pooled over "
+        f"envs:\n\n{tests}\n\n![{title.lower()}]({png.name})"
+    )
+
+
+def _capped_section(results: StudyResults, rng: np.random.Generator, reps: int, root: Path) -> str:
+    grid, stand_ins = results.capped_grid()
+    if not grid.dms:
+        text = (
+            "## Capped preference pairs\n\nNo finished capped cells: run the study again with "
+            "`--cap-pairs` for SPEC §8's ablation (each round keeps at most as many preference "
+            "pairs as it asked comparisons, the pairwise DM's count)."
+        )
+        if not supports_pair_cap():
+            text += " This version's loop cannot cap pairs yet (`LoopConfig.pair_cap`)."
+        return text
+    note = "Each round kept at most one preference pair per comparison. "
+    if stand_ins:
+        note += f"{', '.join(stand_ins)}: uncapped cells stand in (they never exceeded the cap). "
+    return _normalised_section(
+        grid,
+        "Capped preference pairs",
+        paper.CAPPED_MEANS,
+        paper.CAPPED_TESTS,
+        rng,
+        reps,
+        root / CAPPED_PNG,
+        note,
+    )
+
+
+def _missing_section(results: StudyResults) -> str:
+    unfinished, not_started = results.unfinished(), results.not_started()
+    if not unfinished and not not_started:
+        return "## Missing cells\n\nNone: every planned cell has finished."
+    lines = ["## Missing cells", ""]
+    lines += [
+        f"- {r.cell.label}: unfinished, {r.rows} of {r.planned_rows} rows" for r in unfinished
+    ]
+    lines += [f"- {c.label}: not started" for c in not_started]
+    lines += ["", "Run the same `groupwise study` command again to finish them."]
+    return "\n".join(lines)
+
+
+def _tests_table(
+    values: Mapping[str, np.ndarray],
+    dms: tuple[str, ...],
+    cited: Mapping[tuple[str, str], paper.PaperTest],
+    digits: int,
+) -> str:
+    lines = [_row(["a vs b", "mean a − b", "a vs b (%)", "t", "df", "p", "paper"])]
+    lines.append(_row(["---"] * 7))
+    for a, b in _comparisons(dms):
+        test = welch_t_test(values[a], values[b])
+        mean_a, mean_b = mean_sd(values[a])[0], mean_sd(values[b])[0]
+        relative = relative_difference(mean_a, mean_b)
+        found = paper.paper_test(dict(cited), a, b)
+        reference = _paper_reference(found[0], found[1]) if found else DASH
+        lines.append(
+            _row(
+                [
+                    f"{a} vs {b}",
+                    _num(mean_a - mean_b, digits),
+                    _num(100 * relative, 1),
+                    _num(test.t, 3),
+                    _num(test.df, 1),
+                    _num(test.p, 3, general=True),
+                    reference,
+                ]
+            )
+        )
+    return "\n".join(lines) if len(lines) > 2 else "Only one DM: nothing to test."
+
+
+def _comparisons(dms: tuple[str, ...]) -> list[tuple[str, str]]:
+    """(a, b) pairs to test: every pair of up to `ALL_PAIRS_UP_TO` DMs (later vs earlier, so
+    the baseline, first in the registry, is b), else each DM against the first."""
+    if len(dms) <= ALL_PAIRS_UP_TO:
+        return [(a, b) for i, b in enumerate(dms) for a in dms[i + 1 :]]
+    return [(a, dms[0]) for a in dms[1:]]
+
+
+def _paper_reference(test: paper.PaperTest, sign: float) -> str:
+    text = f"t = {sign * test.t:.3f}, p = {test.p:.3g}"
+    if test.relative is not None and sign > 0:
+        text += f", {100 * test.relative:+.1f} %"
+    return text
+
+
+def _in_paper(dm: str) -> bool:
+    return any(dm in row for row in paper.TABLE1.values())
+
+
+def _nan_safe(values: np.ndarray) -> np.ndarray:
+    """Columns with no finite value become 0 instead of warning in `nanmean`."""
+    return np.where(np.isfinite(values).any(axis=0), values, 0.0)
+
+
+def _num(value: float, digits: int, general: bool = False) -> str:
+    if value is None or not math.isfinite(value):
+        return DASH
+    return f"{value:.{digits}g}" if general else f"{value:.{digits}f}"
+
+
+def _row(cells: list[str]) -> str:
+    return "| " + " | ".join(cells) + " |"

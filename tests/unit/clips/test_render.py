@@ -1,0 +1,151 @@
+"""Clip frames come from replaying the episode (frame k shows the state of step start + k);
+workers turn them into stored clips."""
+
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from groupwise.clips.fragments import Trajectory, tile_fragments
+from groupwise.clips.render import ClipJob, plan_jobs, run_job
+from groupwise.clips.replay import (
+    FrameSettings,
+    ReplayMismatchError,
+    make_render_env,
+    replay_windows,
+)
+from groupwise.clips.store import ClipStore
+from groupwise.clips.video import probe, read_frames
+from groupwise.envs import make_env
+from groupwise.envs.gridworld import draw_grid
+from groupwise.rl.policy import RandomPolicy
+from groupwise.rl.rollout import sample_trajectories
+
+SIZE = 48
+SETTINGS = FrameSettings("GridWorld", width=SIZE, height=SIZE)
+
+
+def _episodes(n: int, seed: int = 0) -> list[Trajectory]:
+    env = make_env("GridWorld")
+    policy = RandomPolicy(env.action_space)
+    return sample_trajectories(
+        lambda: make_env("GridWorld"), policy, n, np.random.default_rng(seed), max_steps=100
+    )
+
+
+def test_replayed_observations_equal_the_stored_ones_and_frames_show_them() -> None:
+    trajectory = _episodes(1)[0]
+    fragments = tile_fragments([trajectory], 10)
+    chosen = [fragments[1], fragments[4]]
+    env = make_render_env(SETTINGS)
+    windows = dict(
+        replay_windows(
+            env,
+            trajectory.reset_seed,
+            trajectory.actions,
+            [f.start for f in chosen],
+            10,
+            observations=trajectory.obs,  # checked step by step
+        )
+    )
+    for fragment in chosen:
+        frames = windows[fragment.start]
+        assert frames.shape == (10, SIZE, SIZE, 3)
+        for k, obs in enumerate(fragment.obs):
+            # the GridWorld frame is a pure function of the observation (agent, target)
+            expected = draw_grid(5, obs[:2].astype(int), obs[2:].astype(int), SIZE, SIZE)
+            np.testing.assert_array_equal(frames[k], expected)
+
+
+def test_replay_with_other_actions_is_caught() -> None:
+    trajectory = _episodes(1)[0]
+    actions = np.asarray(trajectory.actions).copy()
+    moving = np.flatnonzero(actions[:30] != 0)[0]
+    actions[moving] = 0  # "stay" instead of a move: the next observation differs
+    env = make_render_env(SETTINGS)
+    with pytest.raises(ReplayMismatchError, match="before step"):
+        list(replay_windows(env, trajectory.reset_seed, actions, [20], 10, trajectory.obs))
+
+
+def test_plan_splits_episodes_so_every_worker_has_jobs() -> None:
+    episodes = _episodes(2)
+    fragments = tile_fragments(episodes, 10)  # 2 x 10 windows
+    jobs = plan_jobs(episodes, fragments, SETTINGS, workers=2)
+    assert len(jobs) >= 4
+    covered = sorted((job.episode, s) for job in jobs for s in job.starts)
+    assert covered == sorted((f.episode, f.start) for f in fragments)
+    for job in jobs:  # a job carries the actions and observations up to its last frame
+        assert len(job.actions) == job.starts[-1] + job.length - 1
+        assert len(job.observations) == len(job.actions) + 1
+    assert [job.cost for job in jobs] == sorted((job.cost for job in jobs), reverse=True)
+
+
+def test_plan_rejects_fragments_without_their_episode() -> None:
+    episodes = _episodes(2)
+    fragments = tile_fragments(episodes, 10)
+    with pytest.raises(ValueError, match="no trajectory"):
+        plan_jobs(episodes[:1], fragments, SETTINGS, workers=1)
+
+
+def _job(episode: Trajectory, starts: tuple[int, ...], length: int) -> ClipJob:
+    last = starts[-1] + length - 1
+    return ClipJob(
+        SETTINGS,
+        episode.episode,
+        episode.reset_seed,
+        episode.actions[:last],
+        episode.obs[: last + 1],
+        starts,
+        length,
+    )
+
+
+def test_a_job_stores_one_clip_and_poster_per_window(tmp_path: Path) -> None:
+    episode = _episodes(1)[0]
+    fragments = tile_fragments([episode], 10)[:3]
+    job = _job(episode, (0, 10, 20), 10)
+    store = ClipStore(tmp_path)
+    report = run_job(job, store, make_render_env(SETTINGS))
+    assert [c.start for c in report.clips] == [0, 10, 20]
+    for clip in report.clips:
+        assert probe(store.path(clip.clip)).frames == 10
+        assert store.path(clip.poster).suffix == ".jpg"
+    assert report.render_s > 0 and report.ffmpeg_cpu_s > 0
+    # no temporary files are left behind
+    assert not list((store.root / ".tmp").iterdir())
+    # the decoded clip shows the fragment's window
+    decoded = read_frames(store.path(report.clips[1].clip))
+    obs = fragments[1].obs[0]
+    expected = draw_grid(5, obs[:2].astype(int), obs[2:].astype(int), SIZE, SIZE)
+    assert np.abs(decoded[0].astype(int) - expected).mean() < 8
+
+
+def test_same_job_gives_the_same_clip_ids(tmp_path: Path) -> None:
+    episode = _episodes(1, seed=3)[0]
+    job = _job(episode, (10, 30), 10)
+    first = run_job(job, ClipStore(tmp_path / "a"), make_render_env(SETTINGS))
+    second = run_job(job, ClipStore(tmp_path / "b"), make_render_env(SETTINGS))
+    assert first.clips == second.clips
+
+
+def test_cheaper_clip_geometry_changes_neither_physics_nor_the_picture() -> None:
+    settings = FrameSettings("Hopper", width=96, height=96)
+    cheap = make_render_env(settings)  # coarser floor grid and tessellation
+    plain = make_env("Hopper", render_mode="rgb_array", width=96, height=96)
+    cheap_base: Any = cheap.unwrapped
+    plain_base: Any = plain.unwrapped
+    assert cheap_base.model.geom_size[0, 2] > plain_base.model.geom_size[0, 2]
+    rng = np.random.default_rng(0)
+    obs_a, _ = cheap.reset(seed=4)
+    obs_b, _ = plain.reset(seed=4)
+    for _ in range(10):
+        action = rng.uniform(-1, 1, size=3)
+        obs_a, obs_b = cheap.step(action)[0], plain.step(action)[0]
+    np.testing.assert_array_equal(obs_a, obs_b)
+    difference = np.abs(
+        np.asarray(cheap.render(), dtype=int) - np.asarray(plain.render(), dtype=int)
+    )
+    assert difference.mean() < 0.5
+    cheap.close()
+    plain.close()

@@ -1,0 +1,112 @@
+from collections import Counter
+
+import numpy as np
+
+from groupwise.oracles.group_decision import Perception, Teacher
+from groupwise.oracles.groupwise import pool_candidates
+from groupwise.oracles.interactive import InteractiveDM, chain_pairs, evenly_spaced
+from groupwise.preferences.dataset import wrong_labels
+from groupwise.preferences.judgement import LEFT_BETTER
+from groupwise.preferences.pairs import covering_pairs
+
+NOISE_FREE = Teacher(Perception(sigma=0.0))
+
+
+def test_chain_pairs_by_hand():
+    groups = [(0, 1), (0, 1, 2, 3), (2, 3), (4, 5), (6, 7)]
+    means = [10.0, 8.0, 6.0, 4.0, 2.0]
+    # G0 skips G1 (shares 0 and 1) and takes G2; G1 then takes G3 (G2 overlaps it);
+    # G2's behaviours are used twice by now, so it starts nothing; G3 takes G4.
+    assert chain_pairs(groups, means) == [(0, 2), (1, 3), (3, 4)]
+    # ranking, not list order, decides
+    assert chain_pairs(groups[::-1], means[::-1]) == [(4, 2), (3, 1), (1, 0)]
+
+
+def test_chain_pairs_each_behaviour_at_most_twice_and_disjoint():
+    rng = np.random.default_rng(0)
+    groups = [tuple(rng.choice(30, size=rng.integers(2, 9), replace=False)) for _ in range(40)]
+    means = rng.normal(size=40)
+    pairs = chain_pairs(groups, means)
+    uses = Counter(i for g, h in pairs for i in (*groups[g], *groups[h]))
+    assert max(uses.values()) <= 2
+    for g, h in pairs:
+        assert not set(groups[g]) & set(groups[h])
+        assert means[g] >= means[h]  # best to worst: the left group ranks higher
+    lefts = [means[g] for g, _ in pairs]
+    assert lefts == sorted(lefts, reverse=True)
+
+
+def test_evenly_spaced():
+    assert evenly_spaced(5, 10) == [0, 1, 2, 3, 4]
+    assert evenly_spaced(9, 3) == [0, 4, 8]
+    assert evenly_spaced(10, 4) == [0, 3, 6, 9]
+    assert evenly_spaced(5, 1) == [0]
+    assert evenly_spaced(5, 0) == []
+
+
+# four clusters of sizes 2, 6, 3, 4 with mean returns 30, 20, 25, 5 (every member of a
+# cluster has its cluster's return). By mean: c0 (30) > c2 (25) > c1 (20) > c3 (5); by sum
+# it would be c1 (120) > c2 (75) > c0 (60) > c3 (20).
+SIZES = [2, 6, 3, 4]
+MEANS = [30.0, 20.0, 25.0, 5.0]
+CLUSTERS = [c for c, size in enumerate(SIZES) for _ in range(size)]
+
+
+def _cluster_pool(make_pool):
+    return make_pool([MEANS[c] for c in CLUSTERS], clusters=CLUSTERS)
+
+
+def _members(c):
+    return {i for i, ci in enumerate(CLUSTERS) if ci == c}
+
+
+def test_pairs_neighbours_by_mean_return_best_to_worst(make_pool):
+    pool = _cluster_pool(make_pool)
+    # the tree finds exactly the four clusters as candidates
+    assert sorted(map(set, (c.members for c in pool_candidates(pool))), key=min) == [
+        _members(c) for c in (0, 1, 2, 3)
+    ]
+    judgements = InteractiveDM(NOISE_FREE).gather(pool, 10, np.random.default_rng(0))
+    asked = [(set(j.left), set(j.right)) for j in judgements]
+    assert asked == [
+        (_members(0), _members(2)),
+        (_members(2), _members(1)),
+        (_members(1), _members(3)),
+    ]
+    assert all(j.label == LEFT_BETTER and j.edits == 0 for j in judgements)
+
+
+def test_more_pairs_than_queries_keep_the_ends(make_pool):
+    pool = _cluster_pool(make_pool)
+    judgements = InteractiveDM(NOISE_FREE).gather(pool, 2, np.random.default_rng(0))
+    assert [(set(j.left), set(j.right)) for j in judgements] == [
+        (_members(0), _members(2)),
+        (_members(1), _members(3)),
+    ]
+
+
+def _random_pool(make_pool, n=80, seed=4):
+    return make_pool(np.random.default_rng(seed).uniform(0, 30, size=n).tolist(), seed=seed)
+
+
+def test_random_pool_uses_each_behaviour_at_most_twice(make_pool):
+    pool = _random_pool(make_pool)
+    judgements = InteractiveDM().gather(pool, 40, np.random.default_rng(0))
+    assert 0 < len(judgements) <= 40
+    uses = Counter(i for j in judgements for i in j.left + j.right)
+    assert max(uses.values()) <= 2
+    assert all(len(j.left) <= 8 and len(j.right) <= 8 for j in judgements)
+
+
+def test_noise_free_dm_is_always_right_and_seeded(make_pool):
+    pool = _random_pool(make_pool, seed=5)
+    dm = InteractiveDM(NOISE_FREE)
+    judgements = dm.gather(pool, 40, np.random.default_rng(1))
+    pairs = [p for j in judgements for p in covering_pairs(j, np.random.default_rng(0))]
+    true = pool.true_returns
+    a, b = np.array([p.a for p in pairs]), np.array([p.b for p in pairs])
+    assert not wrong_labels(true[a], true[b], np.array([p.label for p in pairs])).any()
+    noisy = InteractiveDM()
+    assert noisy.gather(pool, 40, np.random.default_rng(9)) == noisy.gather(
+        pool, 40, np.random.default_rng(9)
+    )
