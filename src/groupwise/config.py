@@ -112,6 +112,10 @@ class LoopConfig:
     """How a group judgement becomes preference pairs (SPEC §6), a key of
     `groupwise.preferences.PAIR_DERIVATIONS`: "cover" (max(m, n) pairs) or "cartesian"
     (m × n pairs, the earlier CLRVis method, for ablations)."""
+    pair_cap: float | None = None
+    """Keep at most ⌊pair_cap × comparisons⌋ derived pairs per round, drawn at random (SPEC §8's
+    capped ablation uses 1.0: the group DMs get no more pairs than the pairwise DM); None keeps
+    every pair."""
     max_group_size: int = 8
     """Largest group the group DMs compare (paper §6: 8 keeps comparisons humanly possible)."""
     teacher_gamma: float = 0.9
@@ -144,6 +148,7 @@ class LoopConfig:
                 self.pair_derivation in ("cover", "cartesian"),
                 "pair derivation must be cover or cartesian",
             ),
+            (self.pair_cap is None or self.pair_cap > 0, "pair cap must be > 0"),
             (self.max_group_size >= 2, "max group size must be >= 2"),
             (0.0 < self.teacher_gamma <= 1.0, "teacher gamma must be in (0, 1]"),
             (0.0 <= self.teacher_mistake <= 1.0, "teacher mistake must be in [0, 1]"),

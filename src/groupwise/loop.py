@@ -32,7 +32,7 @@ from groupwise.envs.spaces import action_dim, observation_dim
 from groupwise.oracles import ORACLES, Oracle
 from groupwise.pool import Pool
 from groupwise.preferences.dataset import PreferenceDataset, wrong_labels
-from groupwise.preferences.pairs import PAIR_DERIVATIONS, Pair
+from groupwise.preferences.pairs import PAIR_DERIVATIONS, Pair, cap_pairs
 from groupwise.query.groups import step_variance
 from groupwise.query.schedule import comparisons_per_round
 from groupwise.reward import RewardEnsemble, fit
@@ -187,6 +187,8 @@ def run_round(
         judgements = oracle.gather(pool, n_comparisons, feedback_rng)
         derive = PAIR_DERIVATIONS[loop.pair_derivation]
         pairs = [pair for j in judgements for pair in derive(j, pair_rng)]
+        if loop.pair_cap is not None:
+            pairs = cap_pairs(pairs, math.floor(loop.pair_cap * n_comparisons), pair_rng)
         before = len(session.dataset)
         session.dataset.add(pool.fragments, pairs, index)
         round_errors = _label_errors(pool, pairs)

@@ -82,3 +82,12 @@ def test_resume_refuses_a_different_configuration(tmp_path):
     )
     with pytest.raises(ValueError, match="different configuration"):
         run_session(TINY, tmp_path, resume=True, show_progress=False)
+
+
+def test_a_pair_cap_keeps_one_pair_per_comparison(tmp_path):
+    capped = dataclasses.replace(
+        TINY, loop=dataclasses.replace(TINY.loop, oracle="groupwise", comparisons=24, pair_cap=1.0)
+    )
+    records = run_session(capped, tmp_path, show_progress=False)
+    assert all(r.pairs <= r.comparisons for r in records)
+    assert records[-1].pairs_total > 0

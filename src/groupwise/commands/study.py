@@ -60,7 +60,7 @@ def run(args: argparse.Namespace) -> int:
     from groupwise.envs import resolve_id
     from groupwise.oracles import ORACLES
     from groupwise.study.cells import CONDITIONS
-    from groupwise.study.profiles import PROFILES, PairCapUnsupportedError
+    from groupwise.study.profiles import PROFILES
     from groupwise.study.runner import (
         RayUnavailableError,
         StudyMismatchError,
@@ -96,7 +96,7 @@ def run(args: argparse.Namespace) -> int:
             ray_address=args.ray or None,
             show_progress=not args.quiet,
         )
-    except (StudyMismatchError, PairCapUnsupportedError, RayUnavailableError, ValueError) as error:
+    except (StudyMismatchError, RayUnavailableError, ValueError) as error:
         raise UsageError(str(error)) from None
     print(
         f"{len(summary.outcomes)} cells: {summary.count('done')} run now, "

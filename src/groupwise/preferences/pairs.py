@@ -36,6 +36,16 @@ def cartesian_pairs(judgement: Judgement, rng: np.random.Generator) -> list[Pair
     return [Pair(a, b, judgement.label) for a in judgement.left for b in judgement.right]
 
 
+def cap_pairs(pairs: list[Pair], limit: int, rng: np.random.Generator) -> list[Pair]:
+    """At most `limit` of `pairs`, drawn without replacement, in their original order."""
+    if limit < 0:
+        raise ValueError(f"pair limit must be >= 0, got {limit}")
+    if len(pairs) <= limit:
+        return list(pairs)
+    keep = np.sort(rng.choice(len(pairs), size=limit, replace=False))
+    return [pairs[i] for i in keep]
+
+
 PAIR_DERIVATIONS: dict[str, Callable[[Judgement, np.random.Generator], list[Pair]]] = {
     "cover": covering_pairs,
     "cartesian": cartesian_pairs,

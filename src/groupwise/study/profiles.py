@@ -28,14 +28,6 @@ from dataclasses import dataclass, field
 
 from groupwise.config import LoopConfig, PPOConfig, RewardConfig, RunConfig
 
-PAIR_CAP_FIELD = "pair_cap"
-"""The `LoopConfig` field the capped-pairs ablation needs (see `StudyProfile.run_config`)."""
-
-
-class PairCapUnsupportedError(ValueError):
-    """The capped-pairs ablation was asked for, but `LoopConfig` has no pair cap yet."""
-
-
 @dataclass(frozen=True)
 class EnvBudget:
     """PPO env steps of one cell."""
@@ -91,7 +83,6 @@ class StudyProfile:
         comparisons, the pairwise DM's count (SPEC §8's capped ablation).
 
         Raises:
-            PairCapUnsupportedError: `capped` and `LoopConfig` has no `pair_cap` field.
             ValueError: a value `LoopConfig` rejects.
         """
         budget = self.budget(env)
@@ -106,22 +97,12 @@ class StudyProfile:
             "seed": seed,
         }
         if capped:
-            if not supports_pair_cap():
-                raise PairCapUnsupportedError(
-                    "the capped-pairs ablation needs LoopConfig.pair_cap, which this version "
-                    "of groupwise does not have yet"
-                )
-            values[PAIR_CAP_FIELD] = 1.0
+            values["pair_cap"] = 1.0
         return RunConfig(
             loop=dataclasses.replace(LoopConfig(), **values),  # type: ignore[arg-type]  # mixed value types
             reward=self.reward,
             ppo=self.ppo,
         )
-
-
-def supports_pair_cap() -> bool:
-    """Whether `LoopConfig` can cap the preference pairs per round."""
-    return PAIR_CAP_FIELD in {f.name for f in dataclasses.fields(LoopConfig)}
 
 
 PAPER_DMS = ("pairwise", "groupwise", "interactive")

@@ -16,7 +16,6 @@ import numpy as np
 
 from groupwise.study import figures, paper
 from groupwise.study.figures import Band
-from groupwise.study.profiles import supports_pair_cap
 from groupwise.study.results import Grid, StudyResults, load_results
 from groupwise.study.statistics import (
     confidence_band,
@@ -230,8 +229,6 @@ def _capped_section(results: StudyResults, rng: np.random.Generator, reps: int, 
             "`--cap-pairs` for SPEC §8's ablation (each round keeps at most as many preference "
             "pairs as it asked comparisons, the pairwise DM's count)."
         )
-        if not supports_pair_cap():
-            text += " This version's loop cannot cap pairs yet (`LoopConfig.pair_cap`)."
         return text
     note = "Each round kept at most one preference pair per comparison. "
     if stand_ins:

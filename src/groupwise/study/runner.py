@@ -118,7 +118,6 @@ def plan_jobs(spec: StudySpec, out: Path) -> list[CellJob]:
     """Every cell of `spec` as a job, the largest PPO budgets first (better packing).
 
     Raises:
-        PairCapUnsupportedError: `spec.cap_pairs` and the loop has no pair cap.
         ValueError: a profile value `LoopConfig` rejects.
     """
     root = out.resolve()
@@ -199,7 +198,6 @@ def run_study(
 
     Raises:
         StudyMismatchError: `out` was started with another profile.
-        PairCapUnsupportedError: the capped ablation without loop support.
         RayUnavailableError: `backend="ray"` and Ray is not installed.
     """
     plan = read_plan(out)

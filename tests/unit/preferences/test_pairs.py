@@ -4,7 +4,7 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from groupwise.preferences.judgement import EQUAL, LEFT_BETTER, Judgement
-from groupwise.preferences.pairs import cartesian_pairs, covering_pairs
+from groupwise.preferences.pairs import Pair, cap_pairs, cartesian_pairs, covering_pairs
 
 
 @given(
@@ -50,3 +50,20 @@ def test_cartesian_pairs_are_all_m_times_n():
 def test_invalid_judgements_are_rejected(left, right, label, message):
     with pytest.raises(ValueError, match=message):
         Judgement(left, right, label)
+
+
+@given(
+    count=st.integers(0, 30), limit=st.integers(0, 40), seed=st.integers(0, 2**32 - 1)
+)
+def test_cap_pairs_keeps_at_most_the_limit_in_order(count, limit, seed):
+    pairs = [Pair(i, i + 100, 1.0) for i in range(count)]
+    kept = cap_pairs(pairs, limit, np.random.default_rng(seed))
+    assert len(kept) == min(count, limit)
+    assert len(set(kept)) == len(kept)
+    assert kept == sorted(kept)  # the original order
+    assert set(kept) <= set(pairs)
+
+
+def test_cap_pairs_rejects_a_negative_limit():
+    with pytest.raises(ValueError, match="limit"):
+        cap_pairs([], -1, np.random.default_rng(0))
