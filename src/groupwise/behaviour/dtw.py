@@ -35,7 +35,11 @@ the kernels (or loads them from numba's on-disk cache); `warm_up` does that expl
 
 Processes. The kernel runs on numba's threading layer, OpenMP where available. numba
 terminates a child forked from a process that has used the OpenMP layer, so a process
-that computes distances should start its workers with "spawn" or "forkserver".
+that computes distances should start its workers with "spawn" or "forkserver". Starting
+that layer sets the OpenMP thread count of the whole process, torch's OpenMP runtime
+included (a process that had asked torch for one thread found it on every core, and two
+study cells on two cores took 145 s instead of ~15 s), so every kernel launch restores the
+OpenMP limits it found (threadpoolctl).
 """
 
 import time
@@ -44,6 +48,7 @@ from collections.abc import Sequence
 import numba
 import numpy as np
 from numba import njit, prange
+from threadpoolctl import threadpool_limits
 
 from groupwise.types import FloatArray, IntArray
 
@@ -127,7 +132,7 @@ def dtw_matrix(sequences: Sequence[FloatArray], window: int | None = None) -> Fl
     order[1::2] = n - 1 - np.arange(n // 2)
     # small chunks handed out dynamically: a thread that loses its core to another process
     # does not hold up the whole matrix (static halves did, on a shared 2-core machine)
-    with numba.parallel_chunksize(2):
+    with threadpool_limits(limits=None, user_api="openmp"), numba.parallel_chunksize(2):
         _matrix_kernel(
             steps,
             sq,

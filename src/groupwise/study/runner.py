@@ -35,11 +35,9 @@ log = logging.getLogger(__name__)
 
 RAY_HINT = "pip install groupwise[ray]"
 WORKER_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1"}
-"""Environment of every worker: one cell, one core. numba reads NUMBA_NUM_THREADS when it is
-imported, and its OpenMP layer, once started by the group DMs' DTW, sets the process's OpenMP
-thread count to it, which puts torch back on every core whatever `torch.set_num_threads`
-said. Two workers on two cores then spin against each other: a quick-profile GridWorld cell
-took 123 s instead of 9 s. Setting it after numba is imported does not help."""
+"""Environment of every worker: one cell, one core. With a worker per core, a DTW kernel
+or OpenMP region that spreads over every core only contends with the other workers. numba
+reads NUMBA_NUM_THREADS when it is imported, so it is set before the worker starts."""
 
 
 class StudyMismatchError(ValueError):

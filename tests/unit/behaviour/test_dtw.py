@@ -1,4 +1,7 @@
 import math
+import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -138,3 +141,27 @@ def test_invalid_input_raises(seqs, window):
 
 def test_warm_up_reports_seconds():
     assert warm_up() >= 0.0
+
+
+_THREADS_SCRIPT = """
+import numpy as np
+import torch
+torch.set_num_threads(1)
+x = torch.randn(256, 256)
+for _ in range(3):
+    x = torch.tanh(x @ x / 256)  # starts torch's OpenMP runtime
+from groupwise.behaviour.dtw import dtw_matrix
+rng = np.random.default_rng(0)
+dtw_matrix([rng.normal(size=(30, 5)) for _ in range(40)])
+print(torch.get_num_threads())
+"""
+
+
+def test_the_parallel_kernel_leaves_torchs_thread_count_alone():
+    # numba's OpenMP layer used to set the process's OpenMP thread count to every core,
+    # torch's included; a fresh process, because the layer starts once per process
+    env = {k: v for k, v in os.environ.items() if k not in ("NUMBA_NUM_THREADS", "OMP_NUM_THREADS")}
+    done = subprocess.run(
+        [sys.executable, "-c", _THREADS_SCRIPT], capture_output=True, text=True, env=env, check=True
+    )
+    assert done.stdout.split()[-1] == "1"
