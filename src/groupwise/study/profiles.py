@@ -1,7 +1,7 @@
 """Study profiles: how big each cell of a simulated study is (SPEC §8).
 
 A profile fixes everything of a cell but its env, decision-maker and seed: the comparisons,
-the rounds, the PPO step budgets per env and the evaluation. Four ship:
+the rounds, the PPO step budgets per env and the evaluation. Five ship:
 
 - ``paper``: SPEC §8 as written, for a cluster (``--ray``). 400 comparisons in 5 rounds,
   then a long PPO run on the frozen learned reward. The paper gives no step budgets; its
@@ -14,6 +14,8 @@ the rounds, the PPO step budgets per env and the evaluation. Four ship:
   3.5 h on 16 cores, 27 h on 2.
 - ``local``: the largest budget that runs the same 90 cells in a night (≤ 10 h; 8–9 h
   extrapolated from measured cells) on two cores; the arithmetic is in `LOCAL`'s docstring.
+- ``session``: the paper's protocol on GridWorld, MountainCarContinuous and Reacher with a
+  tenth of ``local``'s PPO budgets: about an hour on two cores (the study in ``docs/results``).
 - ``quick``: GridWorld and MountainCarContinuous, 2 seeds, tiny budgets: a few minutes on two
   cores, for CI and for trying the pipeline.
 - ``smoke`` (hidden): the tiniest cell that still runs every phase, for the tests.
@@ -164,6 +166,26 @@ tail. A quarter of each budget is spent in the feedback rounds. Other processes 
 machine slow it down in proportion.
 """
 
+SESSION = StudyProfile(
+    name="session",
+    summary="GridWorld, MountainCarContinuous and Reacher, 5 seeds, 400 comparisons, "
+    "80–160 k PPO steps per cell: about an hour on 2 cores",
+    envs=("GridWorld", "MountainCarContinuous", "Reacher"),
+    dms=PAPER_DMS,
+    seeds=5,
+    comparisons=400,
+    rounds=5,
+    budgets={
+        "Reacher": EnvBudget(steps=80_000, final_steps=80_000),
+    },
+    default_budget=EnvBudget(steps=40_000, final_steps=40_000),
+    eval_episodes=5,
+    ppo=PPOConfig(tensorboard=False),
+)
+"""The study that fits in one working session: the paper's protocol (400 comparisons in 5
+rounds, three DMs, five seeds) on the three cheapest envs, with PPO budgets a tenth of
+`LOCAL`'s. 45 cells × (80–160 k steps) = 4.8 M steps."""
+
 QUICK = StudyProfile(
     name="quick",
     summary="GridWorld and MountainCarContinuous, 2 seeds, tiny budgets: ~2 min on 2 cores",
@@ -196,5 +218,7 @@ SMOKE = StudyProfile(
     hidden=True,
 )
 
-PROFILES: dict[str, StudyProfile] = {p.name: p for p in (PAPER, LOCAL, QUICK, SMOKE)}
+PROFILES: dict[str, StudyProfile] = {
+    p.name: p for p in (PAPER, LOCAL, SESSION, QUICK, SMOKE)
+}
 """Every profile by name; `StudyProfile.hidden` ones are for tests."""
