@@ -2,7 +2,7 @@
 
 from collections.abc import Callable
 
-from groupwise.commands import clustering_study, pool, report, study, train
+from groupwise.commands import clustering_study, pool, report, serve, study, train
 
 COMMANDS: list[Callable] = [
     train.register,
@@ -10,5 +10,6 @@ COMMANDS: list[Callable] = [
     clustering_study.register,
     study.register,
     report.register,
+    serve.register,
 ]
 """Each adds its subparser and sets `handler` to a function (args) -> exit code."""

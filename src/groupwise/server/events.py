@@ -1,0 +1,106 @@
+"""The event stream of a session (``text/event-stream``, docs/app.md "Events").
+
+One async generator per connection. It polls the session's `revision` about four times a
+second on a worker thread (a read of one row, so streams never block other requests) and,
+when it moved, sends:
+
+- ``judgement``: each judgement stored or undone since the last revision sent
+  (`JudgementOut`, with ``"undone": true`` for an undo);
+- ``state``: the `SessionState`, when phase, round, progress, counts, error or the timer's
+  pause changed (not for the timer's ticking: the page counts seconds itself);
+- ``round``: ``{"round": r}`` when round r has become ready (the page re-fetches).
+
+Each event's ``id`` is the revision it reflects; a reconnecting EventSource sends it back
+as ``Last-Event-ID`` and gets the judgements it missed. On connect the stream sends the
+state at once; a quiet stream sends a keep-alive comment every `keepalive_s`.
+"""
+
+import json
+import time
+from collections.abc import AsyncIterator
+from typing import Any
+
+import anyio
+from pydantic import BaseModel
+
+from groupwise.server.schemas import RoundEvent, SessionState
+from groupwise.server.state import close_if_due, judgement_out, read_state
+from groupwise.storage import Database
+from groupwise.storage.judgements import list_judgements
+
+RETRY_MS = 2000
+"""How long a disconnected EventSource waits before it reconnects."""
+
+
+def format_event(event: str, data: BaseModel | dict[str, Any], event_id: int | None) -> bytes:
+    """One SSE message: ``event:``, optional ``id:``, one ``data:`` line of JSON."""
+    payload = data.model_dump_json() if isinstance(data, BaseModel) else json.dumps(data)
+    head = f"event: {event}\n" + (f"id: {event_id}\n" if event_id is not None else "")
+    return f"{head}data: {payload}\n\n".encode()
+
+
+def _key(state: SessionState) -> tuple[Any, ...]:
+    return (
+        state.phase,
+        state.round,
+        state.progress,
+        state.counts,
+        state.error,
+        state.timer.paused,
+        state.timer.running,
+    )
+
+
+async def session_events(
+    db: Database,
+    session_id: str,
+    poll_s: float,
+    keepalive_s: float,
+    last_event_id: int | None = None,
+) -> AsyncIterator[bytes]:
+    """The stream of one session (module docstring). Ends when the client disconnects."""
+    revision = await anyio.to_thread.run_sync(close_if_due, db, session_id)
+    state = await anyio.to_thread.run_sync(read_state, db, session_id)
+    yield f"retry: {RETRY_MS}\n\n".encode()
+    yield format_event("state", state, revision)
+    sent_judgements = last_event_id if last_event_id is not None else revision
+    if last_event_id is not None:
+        chunks, sent_judgements = await _judgements(db, session_id, sent_judgements)
+        for chunk in chunks:
+            yield chunk
+    key = _key(state)
+    ready_round = state.round if state.phase == "ready" else None
+    quiet_since = time.monotonic()
+    while True:
+        await anyio.sleep(poll_s)
+        now_revision = await anyio.to_thread.run_sync(close_if_due, db, session_id)
+        if now_revision == revision:
+            if time.monotonic() - quiet_since >= keepalive_s:
+                quiet_since = time.monotonic()
+                yield b": keep-alive\n\n"
+            continue
+        chunks, sent_judgements = await _judgements(db, session_id, sent_judgements)
+        for chunk in chunks:
+            yield chunk
+        revision = now_revision
+        state = await anyio.to_thread.run_sync(read_state, db, session_id)
+        if _key(state) != key:
+            key = _key(state)
+            yield format_event("state", state, revision)
+        if state.phase == "ready" and state.round != ready_round:
+            ready_round = state.round
+            yield format_event("round", RoundEvent(round=state.round), revision)
+        quiet_since = time.monotonic()
+
+
+async def _judgements(db: Database, session_id: str, after: int) -> tuple[list[bytes], int]:
+    """The events of judgements changed after revision `after`, and the newest revision
+    among them (`after` when none)."""
+
+    def read() -> tuple[list[bytes], int]:
+        with db.read() as s:
+            records = list_judgements(s, session_id, include_undone=True, after_revision=after)
+        chunks = [format_event("judgement", judgement_out(r), r.revision) for r in records]
+        return chunks, max([after, *(r.revision for r in records)])
+
+    return await anyio.to_thread.run_sync(read)

@@ -1,0 +1,156 @@
+"""A round's pool as the views need it: the tree, suggestion edges, group suggestions, and
+the pairwise baseline's next pairs.
+
+The tree and medoids come from the prepared pool's directory (`groupwise.prepare` layout),
+read once per round and cached: a prepared pool never changes. Everything else is read from
+the database on each request.
+"""
+
+import json
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from groupwise.server import schemas
+from groupwise.server.context import AppContext
+from groupwise.storage import ConflictError, Database, InvalidError, NotFoundError
+from groupwise.storage import rounds as repo
+from groupwise.storage.models import RoundRow
+from groupwise.storage.sessions import READY, ROUND_PREPARING, get_round, get_session
+
+
+def _prepared_round(db: Database, session_id: str, index: int) -> RoundRow:
+    with db.read() as s:
+        get_session(s, session_id)
+        row = get_round(s, session_id, index)
+    if row.phase == ROUND_PREPARING:
+        raise ConflictError(f"round {index} is still being prepared")
+    return row
+
+
+def _pool_directory(context: AppContext, row: RoundRow) -> Path:
+    """The round's pool directory; only ever inside the data directory (an imported
+    session's export could name any path)."""
+    root = context.data_dir.resolve()
+    if row.pool_dir is None:
+        raise NotFoundError(f"the pool of round {row.index} is not available")
+    directory = (root / row.pool_dir).resolve()
+    if not directory.is_relative_to(root) or not (directory / "tree.json").is_file():
+        raise NotFoundError(f"the pool of round {row.index} is not available")
+    return directory
+
+
+def _node(obj: dict[str, Any]) -> schemas.TreeNodeOut:
+    extra = obj.get("extra") or {}
+    return schemas.TreeNodeOut(
+        id=obj["id"],
+        kind=obj["kind"],
+        level=obj["level"],
+        size=obj["size"],
+        children=[_node(child) for child in obj["children"]],
+        behaviour=obj.get("behaviour"),
+        clip=extra.get("clip"),
+        poster=extra.get("poster"),
+    )
+
+
+def _tree(
+    context: AppContext, session_id: str, row: RoundRow
+) -> tuple[schemas.TreeNodeOut, int, dict[str, list[str]]]:
+    key = (session_id, row.index)
+    with context.trees_lock:
+        cached = context.trees.get(key)
+    if cached is not None:
+        return cached
+    directory = _pool_directory(context, row)
+    data = json.loads((directory / "tree.json").read_text())
+    medoids_file = directory / "medoids.json"
+    raw = json.loads(medoids_file.read_text()) if medoids_file.is_file() else {}
+    medoids = {node: [f"b{i}" for i in members] for node, members in raw.items()}
+    value = (_node(data["root"]), int(data["levels"]), medoids)
+    with context.trees_lock:
+        context.trees[key] = value
+    return value
+
+
+def round_tree(context: AppContext, session_id: str, index: int) -> schemas.RoundTree:
+    """The tree view of round `index`. Raises NotFoundError, ConflictError (preparing)."""
+    row = _prepared_round(context.db, session_id, index)
+    tree, levels, medoids = _tree(context, session_id, row)
+    with context.db.read() as s:
+        compared = repo.compared(s, row)
+    return schemas.RoundTree(
+        round=index, levels=levels, tree=tree, medoids=medoids, compared=compared
+    )
+
+
+def round_edges(db: Database, session_id: str, index: int, k: int) -> list[schemas.Edge]:
+    """The round's `k` best pairwise suggestion edges, best first."""
+    row = _prepared_round(db, session_id, index)
+    with db.read() as s:
+        return [schemas.Edge(a=e.a, b=e.b, score=e.score) for e in repo.edges(s, row.id, k)]
+
+
+def next_suggestion(
+    db: Database, session_id: str, index: int, exclude: Sequence[Sequence[str]] | None
+) -> schemas.SuggestionOut:
+    """The best unused group suggestion of the round, skipping `exclude` (consecutive
+    [left], [right] lists). Raises InvalidError for an odd number of lists."""
+    lists = list(exclude or [])
+    if len(lists) % 2:
+        raise InvalidError("exclude must hold pairs of lists: [left ids], [right ids], …")
+    queries = [(lists[i], lists[i + 1]) for i in range(0, len(lists), 2)]
+    row = _prepared_round(db, session_id, index)
+    with db.read() as s:
+        found = repo.next_suggestion(s, row.id, queries)
+        if found is None:
+            return schemas.SuggestionOut(suggestion=None)
+        return schemas.SuggestionOut(
+            suggestion=schemas.Suggestion(
+                left=list(found.left),
+                right=list(found.right),
+                left_node=found.left_node,
+                right_node=found.right_node,
+                score=found.score,
+            )
+        )
+
+
+def _open_round(db: Database, session_id: str) -> RoundRow:
+    with db.read() as s:
+        session = get_session(s, session_id)
+        if session.phase != READY:
+            raise ConflictError(f"session {session_id} is {session.phase}; no round is open")
+        return get_round(s, session_id, session.round)
+
+
+def pairwise_next(db: Database, session_id: str) -> schemas.PairwiseNext:
+    """The pair to ask now and the one after it (the page preloads both clips)."""
+    row = _open_round(db, session_id)
+    with db.read() as s:
+        queue = repo.pairwise_next(s, row.id, 2)
+        clips = {b.name: b for b in repo.behaviours(s, row.id)}
+
+    def query(entry: Any) -> schemas.PairQuery:
+        left, right = clips[entry.a], clips[entry.b]
+        return schemas.PairQuery(
+            left=entry.a,
+            right=entry.b,
+            left_clip=left.clip,
+            right_clip=right.clip,
+            left_poster=left.poster,
+            right_poster=right.poster,
+        )
+
+    pairs = [query(entry) for entry in queue]
+    return schemas.PairwiseNext(
+        pair=pairs[0] if pairs else None, following=pairs[1] if len(pairs) > 1 else None
+    )
+
+
+def skip_pair(db: Database, session_id: str, skip: schemas.PairSkip) -> schemas.PairwiseNext:
+    """Skip a pair of the open round's queue; the next pairs. Raises NotFoundError."""
+    row = _open_round(db, session_id)
+    with db.write() as s:
+        repo.skip_pair(s, row.id, skip.left, skip.right)
+    return pairwise_next(db, session_id)

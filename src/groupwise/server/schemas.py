@@ -1,0 +1,210 @@
+"""Request and response schemas: the contract with the web UI (docs/app.md).
+
+FastAPI publishes them as the OpenAPI schema at ``/api/openapi.json``, from which the web
+UI's types are generated. Requests reject unknown fields; every string and list is bounded.
+"""
+
+from datetime import datetime
+from typing import Annotated, Literal
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from groupwise.storage.settings import MAX_GROUP, SessionSettings
+
+Phase = Literal["preparing", "ready", "training", "finished", "failed"]
+Mode = Literal["groupwise", "pairwise"]
+Label = Literal["left", "right", "equal"]
+Source = Literal["suggested", "explored", "pairwise"]
+BehaviourId = Annotated[str, Field(pattern=r"^b\d{1,6}$", max_length=8, examples=["b17"])]
+ClipId = Annotated[str, Field(pattern=r"^[0-9a-f]{64}\.(mp4|jpg|png)$")]
+
+
+class _In(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class _Out(BaseModel):
+    model_config = ConfigDict(frozen=True)
+
+
+class ErrorOut(_Out):
+    """Every 4xx answer: one clear sentence."""
+
+    detail: str
+
+
+# ------------------------------------------------------------------ sessions
+
+
+class SessionCreate(_In):
+    env: str = Field(min_length=1, max_length=200, examples=["GridWorld"])
+    mode: Mode = "groupwise"
+    settings: SessionSettings = SessionSettings()
+    annotator: str = Field(default="", max_length=200)
+
+
+class Progress(_Out):
+    phase: str = Field(description="the step the worker is on, e.g. pool, reward, ppo")
+    fraction: float = Field(ge=0, le=1)
+    message: str
+
+
+class Timer(_Out):
+    elapsed_s: float = Field(description="seconds the open round's timer has run")
+    budget_s: float = Field(description="the round's time budget (0 = no limit)")
+    paused: bool
+    running: bool = Field(description="whether the timer runs now (ready and not paused)")
+
+
+class Counts(_Out):
+    comparisons_round: int
+    pairs_round: int
+    comparisons_total: int
+    pairs_total: int
+
+
+class SessionState(_Out):
+    """Everything a reloaded page needs but the tree."""
+
+    id: str
+    env: str
+    mode: Mode
+    settings: SessionSettings
+    annotator: str
+    round: int
+    rounds: int
+    phase: Phase
+    progress: Progress
+    error: str | None
+    timer: Timer
+    counts: Counts
+    created_at: datetime
+    origin: str | None = Field(default=None, description="the exported session an import came from")
+
+
+# ------------------------------------------------------------------ rounds
+
+
+class TreeNodeOut(_Out):
+    """A node of the behaviour tree; leaves carry their behaviour's index, clip and poster."""
+
+    id: str
+    kind: Literal["merge", "padding", "leaf"]
+    level: int
+    size: int
+    children: list["TreeNodeOut"]
+    behaviour: int | None = None
+    clip: str | None = None
+    poster: str | None = None
+
+
+class RoundTree(_Out):
+    round: int
+    levels: int
+    tree: TreeNodeOut
+    medoids: dict[str, list[str]] = Field(
+        description="inner node id → up to 3 representative behaviour ids"
+    )
+    compared: list[str] = Field(description="behaviours already in a judgement of the round")
+
+
+class Edge(_Out):
+    a: str
+    b: str
+    score: float = Field(gt=0, le=1)
+
+
+class SuggestionRequest(_In):
+    exclude: (
+        Annotated[
+            list[Annotated[list[BehaviourId], Field(max_length=MAX_GROUP)]], Field(max_length=200)
+        ]
+        | None
+    ) = Field(
+        default=None,
+        description="queries to skip, as consecutive [left ids], [right ids] lists "
+        "(one query: [[left], [right]])",
+    )
+
+
+class Suggestion(_Out):
+    left: list[str]
+    right: list[str]
+    left_node: str
+    right_node: str
+    score: float
+
+
+class SuggestionOut(_Out):
+    suggestion: Suggestion | None
+
+
+# ------------------------------------------------------------------ judgements
+
+
+class JudgementIn(_In):
+    client_id: str = Field(min_length=1, max_length=100, description="unique per comparison")
+    round: int = Field(ge=0, le=10_000)
+    left: list[BehaviourId] = Field(min_length=1, max_length=MAX_GROUP)
+    right: list[BehaviourId] = Field(min_length=1, max_length=MAX_GROUP)
+    label: Label
+    source: Source
+    seconds: float = Field(default=0.0, ge=0, le=86_400)
+    edits: int = Field(default=0, ge=0, le=1_000_000)
+    annotator: str = Field(default="", max_length=200)
+
+
+class PairOut(_Out):
+    a: str
+    b: str
+    label: float = Field(description="P(a preferred): 1, 0.5 or 0")
+
+
+class JudgementOut(_Out):
+    id: int
+    client_id: str
+    round: int
+    left: list[str]
+    right: list[str]
+    label: Label
+    source: str
+    seconds: float
+    edits: int
+    annotator: str
+    created_at: datetime
+    undone: bool
+    pairs: list[PairOut]
+
+
+# ------------------------------------------------------------------ pairwise
+
+
+class PairQuery(_Out):
+    left: str
+    right: str
+    left_clip: str
+    right_clip: str
+    left_poster: str
+    right_poster: str
+
+
+class PairwiseNext(_Out):
+    pair: PairQuery | None
+    following: PairQuery | None
+
+
+class PairSkip(_In):
+    left: BehaviourId
+    right: BehaviourId
+
+
+# ------------------------------------------------------------------ misc
+
+
+class RoundEvent(_Out):
+    round: int
+
+
+class Health(_Out):
+    status: Literal["ok"] = "ok"
+    worker_pid: int | None = Field(description="the training worker's process id, if running")

@@ -1,0 +1,152 @@
+"""Sessions as the page sees them: `SessionState`, creation, and the lifecycle actions.
+
+Every read checks the round timer lazily: a round whose time budget is used up is closed
+(phase ``training``) before its state is returned, so the page never sees an open round
+that should have ended (the supervisor also checks, for sessions nobody is looking at).
+"""
+
+from datetime import datetime
+
+from groupwise.envs import horizon
+from groupwise.server import schemas
+from groupwise.server.context import AppContext
+from groupwise.storage import Database, InvalidError
+from groupwise.storage import sessions as repo
+from groupwise.storage.judgements import JudgementRecord
+from groupwise.storage.models import SessionRow, utcnow
+from groupwise.storage.settings import SessionSettings
+
+
+def state_of(session: SessionRow, counts: repo.Counts, now: datetime) -> schemas.SessionState:
+    """The `SessionState` of a session row."""
+    settings = SessionSettings.model_validate(session.settings)
+    return schemas.SessionState(
+        id=session.id,
+        env=session.env,
+        mode=session.mode,  # type: ignore[arg-type]  # one of MODES, checked on creation
+        settings=settings,
+        annotator=session.annotator,
+        round=session.round,
+        rounds=settings.rounds,
+        phase=session.phase,  # type: ignore[arg-type]  # one of PHASES
+        progress=schemas.Progress(
+            phase=session.progress_phase,
+            fraction=session.progress_fraction,
+            message=session.progress_message,
+        ),
+        error=session.error,
+        timer=schemas.Timer(
+            elapsed_s=round(repo.elapsed(session, now), 3),
+            budget_s=settings.round_seconds,
+            paused=session.paused,
+            running=session.timer_started_at is not None,
+        ),
+        counts=schemas.Counts(
+            comparisons_round=counts.comparisons_round,
+            pairs_round=counts.pairs_round,
+            comparisons_total=counts.comparisons_total,
+            pairs_total=counts.pairs_total,
+        ),
+        created_at=session.created_at,
+        origin=session.origin,
+    )
+
+
+def close_if_due(db: Database, session_id: str) -> int:
+    """Close the session's round if its time is up; the session's revision after that.
+
+    Raises NotFoundError.
+    """
+    with db.read() as s:
+        session = repo.get_session(s, session_id)
+        if not repo.round_due(session):
+            return session.revision
+    with db.write() as s:
+        repo.close_if_due(s, session_id)
+        return repo.get_session(s, session_id).revision
+
+
+def read_state(db: Database, session_id: str) -> schemas.SessionState:
+    """The session's current state. Raises NotFoundError."""
+    close_if_due(db, session_id)
+    with db.read() as s:
+        session = repo.get_session(s, session_id)
+        return state_of(session, repo.counts(s, session), utcnow())
+
+
+def list_states(db: Database) -> list[schemas.SessionState]:
+    """Every session's state, newest first."""
+    now = utcnow()
+    with db.read() as s:
+        return [state_of(row, repo.counts(s, row), now) for row in repo.list_sessions(s)]
+
+
+def check_env(env: str, settings: SessionSettings) -> None:
+    """Raise InvalidError unless `env` is known and its episodes hold a fragment."""
+    try:
+        steps = horizon(env)
+    except ValueError as error:
+        raise InvalidError(str(error)) from None
+    if steps is None or steps < settings.fragment_length:
+        raise InvalidError(
+            f"env {env} needs a fixed horizon of at least fragment_length = "
+            f"{settings.fragment_length} steps; it has {steps}"
+        )
+
+
+def create_session(context: AppContext, request: schemas.SessionCreate) -> schemas.SessionState:
+    """Create a session (its round 0 is queued for the worker). Raises InvalidError."""
+    check_env(request.env, request.settings)
+    with context.db.write() as s:
+        session = repo.create_session(
+            s, request.env, request.mode, request.settings, request.annotator
+        )
+        session_id = session.id
+    context.supervisor.ensure_worker_soon()
+    return read_state(context.db, session_id)
+
+
+def pause(db: Database, session_id: str) -> schemas.SessionState:
+    with db.write() as s:
+        repo.pause(s, session_id)
+    return read_state(db, session_id)
+
+
+def resume(db: Database, session_id: str) -> schemas.SessionState:
+    with db.write() as s:
+        repo.resume(s, session_id)
+    return read_state(db, session_id)
+
+
+def end_round(context: AppContext, session_id: str) -> schemas.SessionState:
+    with context.db.write() as s:
+        repo.end_round(s, session_id)
+    context.supervisor.ensure_worker_soon()
+    return read_state(context.db, session_id)
+
+
+def retry(context: AppContext, session_id: str) -> schemas.SessionState:
+    """Re-queue the failed step and make sure a worker runs. Raises ConflictError."""
+    with context.db.write() as s:
+        repo.retry(s, session_id)
+    context.supervisor.ensure_worker_soon()
+    return read_state(context.db, session_id)
+
+
+def judgement_out(record: JudgementRecord) -> schemas.JudgementOut:
+    """The page's view of a stored judgement."""
+    return schemas.JudgementOut(
+        id=record.id,
+        client_id=record.client_id,
+        round=record.round,
+        left=list(record.left),
+        right=list(record.right),
+        label=record.label,  # type: ignore[arg-type]  # validated on storing
+        source=record.source,
+        seconds=record.seconds,
+        edits=record.edits,
+        annotator=record.annotator,
+        created_at=record.created_at,
+        undone=record.undone,
+        pairs=[schemas.PairOut(a=p.a, b=p.b, label=p.label) for p in record.pairs],
+    )

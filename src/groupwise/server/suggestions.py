@@ -1,0 +1,78 @@
+"""What a round offers besides its pool, from the ensemble's predictions (SPEC §5).
+
+Pure functions of the N × K predicted returns (and the per-behaviour step variance), so the
+worker's `jobs.prepare` stays a composition: group suggestions over the tree's candidates,
+the top-k pairwise edges of the exploration view, and the pairwise baseline's queue.
+"""
+
+import numpy as np
+
+from groupwise.behaviour import TreeNode
+from groupwise.config import LoopConfig
+from groupwise.query.groups import GroupCandidate, suggest_groups
+from groupwise.query.pairwise import select_pairs, top_pairs
+from groupwise.storage.rounds import GroupSuggestionInput, PairInput
+from groupwise.types import FloatArray
+
+MAX_GROUP_SUGGESTIONS = 1000
+"""Group suggestions stored per round (the list is refilled once used up, SPEC §5)."""
+CANDIDATE_PAIRS = LoopConfig().candidate_pairs
+"""Random candidate pairs scored per pairwise query (SPEC §5)."""
+
+
+def group_suggestions(
+    returns: FloatArray, intra: FloatArray, nodes: tuple[TreeNode, ...]
+) -> tuple[GroupSuggestionInput, ...]:
+    """The suggestion list over the tree's group candidates (each node in at most 2
+    suggestions per list; the list refilled over the pairs left when used up)."""
+    candidates = [GroupCandidate(node.id, tuple(node.leaves)) for node in nodes]
+    suggestions = suggest_groups(
+        returns, intra, candidates, MAX_GROUP_SUGGESTIONS, max_uses=2, refill=True
+    )
+    return tuple(
+        GroupSuggestionInput(
+            left=tuple(f"b{i}" for i in g.left.members),
+            right=tuple(f"b{i}" for i in g.right.members),
+            left_node=g.left.id,
+            right_node=g.right.id,
+            score=float(g.score),
+        )
+        for g in suggestions
+    )
+
+
+def pairwise_edges(returns: FloatArray, k: int) -> tuple[PairInput, ...]:
+    """The top-k pairs by Var_k[R_k(a) − R_k(b)], scores divided by the best: in (0, 1]."""
+    if k <= 0 or len(returns) < 2:
+        return ()
+    pairs, scores = top_pairs(returns, k)
+    top = float(scores[0]) if len(scores) else 0.0
+    scaled = scores / top if top > 0 else np.ones_like(scores)
+    return tuple(
+        PairInput(f"b{a}", f"b{b}", float(max(s, 1e-6)))
+        for (a, b), s in zip(pairs.tolist(), scaled.tolist(), strict=True)
+    )
+
+
+def pairwise_queue(
+    returns: FloatArray, length: int, rng: np.random.Generator
+) -> tuple[PairInput, ...]:
+    """Up to `length` distinct pairs for the pairwise baseline, in the order asked: for each
+    query the most disputed of `CANDIDATE_PAIRS` random pairs (SPEC §5)."""
+    n = len(returns)
+    if n < 2:
+        return ()
+    wanted = min(length, n * (n - 1) // 2)
+    chosen = select_pairs(returns, wanted * 2, CANDIDATE_PAIRS, rng)
+    seen: set[frozenset[int]] = set()
+    queue = []
+    for a, b in chosen.tolist():
+        key = frozenset((a, b))
+        if key in seen:
+            continue
+        seen.add(key)
+        score = float(np.var(returns[a] - returns[b]))
+        queue.append(PairInput(f"b{a}", f"b{b}", score))
+        if len(queue) >= wanted:
+            break
+    return tuple(queue)

@@ -1,0 +1,146 @@
+"""The training worker: a process of its own that polls the database for jobs.
+
+It looks for sessions whose phase is ``preparing`` or ``training`` (the longest-waiting
+first), runs the job (`jobs.prepare` / `jobs.train`) with progress written to the session
+row, and goes back to polling. It never talks HTTP; the server and it share only the
+database and the data directory. A job that raises marks its session ``failed`` with the
+error, and the worker goes on serving the other sessions.
+
+Started by the server's `Supervisor` with the "spawn" context (numba's threading layer kills
+forked children) and with one thread per numeric library: NUMBA_NUM_THREADS and
+OMP_NUM_THREADS are set to 1 before the process starts, and torch to one thread inside it
+(numba's OpenMP layer otherwise resets torch to every core, and the nets are tiny).
+
+The worker leads a process group of its own, which its render processes and their ffmpeg
+encoders join: the supervisor ends the whole group when it stops the worker or finds it
+dead, so no render process outlives it. The worker ends its group by itself when its
+parent (the server) is gone, so a killed server leaves no orphan that a restarted one
+would race.
+"""
+
+import logging
+import multiprocessing
+import os
+import signal
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from groupwise.server.progress import ProgressReporter
+from groupwise.storage import Database
+from groupwise.storage.sessions import WORK_PHASES, mark_failed, sessions_in
+
+if TYPE_CHECKING:  # the server imports this module; only the worker process needs these
+    from groupwise.clips.render import RenderPool
+    from groupwise.server.jobs import Job
+
+log = logging.getLogger(__name__)
+
+THREAD_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+"""Set in the environment the worker is spawned with (see the module docstring)."""
+
+
+def worker_main(database_url: str, data_dir: str, poll_s: float, log_level: int) -> None:
+    """The worker process's entry point: poll for jobs until the parent process is gone."""
+    os.setpgrp()  # see the module docstring
+    # SIGTERM (the supervisor stopping it) unwinds the job, so the render pool shuts down
+    # cleanly; the step re-runs when a server starts again.
+    signal.signal(signal.SIGTERM, _stop)
+    import torch
+
+    torch.set_num_threads(1)
+    logging.basicConfig(
+        level=logging.WARNING, format="%(asctime)s %(levelname)s %(name)s: %(message)s"
+    )
+    logging.getLogger("groupwise").setLevel(log_level)
+    db = Database(database_url, pool_size=2)
+    Worker(db, Path(data_dir), poll_s).run()
+
+
+def _stop(signum: int, frame: object) -> None:
+    raise SystemExit(0)
+
+
+def _parent_alive() -> bool:
+    parent = multiprocessing.parent_process()
+    return parent is None or parent.is_alive()
+
+
+def _exit_if_orphaned() -> None:
+    if not _parent_alive():
+        log.warning("the server is gone; the training worker exits")
+        os.killpg(os.getpgrp(), signal.SIGKILL)  # this process and its render processes
+
+
+def kill_group(pid: int) -> None:
+    """End the process group led by worker `pid` (its render processes), if any is left."""
+    try:
+        os.killpg(pid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass
+
+
+class Worker:
+    """Runs jobs one at a time; the render pool is kept across rounds."""
+
+    def __init__(self, db: Database, data_dir: Path, poll_s: float) -> None:
+        self.db = db
+        self.data_dir = data_dir
+        self.poll_s = poll_s
+        self._render: dict[int, RenderPool] = {}
+
+    def run(self) -> None:
+        log.info("training worker %d started", os.getpid())
+        try:
+            while _parent_alive():
+                if not self.run_next():
+                    time.sleep(self.poll_s)
+        finally:
+            self._close_render_pools()
+        _exit_if_orphaned()
+
+    def run_next(self) -> bool:
+        """Run the job of the longest-waiting session, if any; True when one ran."""
+        from groupwise.server import jobs
+
+        with self.db.read() as s:
+            waiting = [row.id for row in sessions_in(s, WORK_PHASES)]
+        for session_id in waiting:
+            job = jobs.job_of(self.db, session_id)
+            if job is not None:
+                self.run_job(job)
+                return True
+        return False
+
+    def run_job(self, job: "Job") -> None:
+        """Run one job; an exception marks the session failed with its message."""
+        from groupwise.server import jobs
+
+        log.info("session %s: %s round %d", job.session_id, job.phase, job.round)
+        reporter = ProgressReporter(self.db, job.session_id, job.phase, on_tick=_exit_if_orphaned)
+        try:
+            with reporter:
+                if job.phase == "preparing":
+                    render = self._render_pool(job.settings.render_workers)
+                    jobs.prepare(job, self.db, self.data_dir, render, reporter)
+                else:
+                    jobs.train(job, self.db, self.data_dir, reporter)
+        except Exception as error:
+            log.exception("session %s: %s round %d failed", job.session_id, job.phase, job.round)
+            message = f"{job.phase} round {job.round} failed: {type(error).__name__}: {error}"
+            with self.db.write() as s:
+                mark_failed(s, job.session_id, job.phase, message[:2000])
+            if job.phase == "preparing":  # a broken render pool must not fail the next job
+                self._close_render_pools()
+
+    def _render_pool(self, workers: int) -> "RenderPool":
+        from groupwise.clips.render import RenderPool
+
+        if workers not in self._render:
+            self._render[workers] = RenderPool(workers)
+        return self._render[workers]
+
+    def _close_render_pools(self) -> None:
+        for pool in self._render.values():
+            pool.close()
+        self._render.clear()

@@ -1,0 +1,33 @@
+"""The app's database: schema, connections and repositories (docs/app.md, "Processes").
+
+SQLAlchemy 2 on SQLite (WAL) by default, portable to PostgreSQL. Repository functions take
+an open ORM `Session` from `Database.read()` / `Database.write()` and leave the commit to
+that block, so a request is one transaction:
+
+    db = Database(default_url(data_dir)); db.create_schema()
+    with db.write() as s:
+        record, created = add_judgement(s, session_id, judgement)
+    # committed here, before the HTTP answer
+
+Modules: `models` (tables), `database` (engines, pragmas), `settings` (session settings),
+`sessions` (lifecycle, timer, counts), `rounds` (pools, suggestions, pairwise queue),
+`judgements` (store, retry, undo, list), `export` (JSONL / Parquet, import).
+"""
+
+from groupwise.storage.database import DATABASE_FILE, Database, default_url, sqlite_url
+from groupwise.storage.errors import ConflictError, InvalidError, NotFoundError, StorageError
+from groupwise.storage.settings import PPOSettings, RewardSettings, SessionSettings
+
+__all__ = [
+    "DATABASE_FILE",
+    "ConflictError",
+    "Database",
+    "InvalidError",
+    "NotFoundError",
+    "PPOSettings",
+    "RewardSettings",
+    "SessionSettings",
+    "StorageError",
+    "default_url",
+    "sqlite_url",
+]

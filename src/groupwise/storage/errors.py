@@ -1,0 +1,20 @@
+"""What the repositories raise for requests they refuse; each message is one clear sentence.
+
+The server maps them to HTTP statuses (404, 409, 422) with the message as ``detail``.
+"""
+
+
+class StorageError(Exception):
+    """A refused request; `str(error)` is the sentence shown to the user."""
+
+
+class NotFoundError(StorageError):
+    """An unknown session, round, judgement or behaviour (HTTP 404)."""
+
+
+class ConflictError(StorageError):
+    """The request does not fit the session's current state (HTTP 409)."""
+
+
+class InvalidError(StorageError):
+    """The request is well-formed but its content is not acceptable (HTTP 422)."""

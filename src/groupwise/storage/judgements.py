@@ -1,0 +1,338 @@
+"""Judgements: storing, retrying, undoing and listing comparisons, and their pairs.
+
+`add_judgement` is the write path of every comparison: it validates the groups against the
+open round, derives the preference pairs (SPEC §6, `covering_pairs`, max(m, n) pairs) and
+adds judgement and pairs in the caller's transaction, which commits before the HTTP answer
+is sent, so an answered judgement survives a crash. A retry with the same `client_id`
+returns the stored judgement instead of storing it twice.
+
+Pairs are reproducible: judgement number `seq` of a session (0, 1, … in arrival order,
+undone ones included) draws its shuffles from
+``SeedSequence([seed, round, PAIR_STREAM, seq])``.
+"""
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from datetime import datetime
+
+import numpy as np
+from sqlalchemy import func, select
+from sqlalchemy.orm import Session, selectinload
+
+from groupwise.preferences.judgement import EQUAL, LEFT_BETTER, RIGHT_BETTER, Judgement
+from groupwise.preferences.pairs import covering_pairs
+from groupwise.storage.errors import ConflictError, InvalidError, NotFoundError
+from groupwise.storage.models import BehaviourRow, JudgementRow, PairRow, SessionRow, utcnow
+from groupwise.storage.rounds import mark_suggestion_used
+from groupwise.storage.sessions import (
+    READY,
+    close_round,
+    get_round,
+    get_session,
+    round_due,
+    touch,
+)
+from groupwise.storage.settings import MAX_GROUP
+
+LABELS: dict[str, float] = {"left": LEFT_BETTER, "right": RIGHT_BETTER, "equal": EQUAL}
+"""The page's label → P(left group preferred)."""
+SOURCES = ("suggested", "explored", "pairwise")
+PAIR_STREAM = 1
+"""Tags the pair-derivation generators apart from the worker's streams of the same round."""
+MAX_GROUP_BY_MODE = {"groupwise": MAX_GROUP, "pairwise": 1}
+
+
+@dataclass(frozen=True)
+class PairRecord:
+    """A preference pair over behaviour names; `label` = P(a preferred)."""
+
+    a: str
+    b: str
+    label: float
+
+
+@dataclass(frozen=True)
+class JudgementInput:
+    """A comparison as the page sends it (`JudgementIn`)."""
+
+    client_id: str
+    round: int
+    left: tuple[str, ...]
+    right: tuple[str, ...]
+    label: str  # "left" | "right" | "equal"
+    source: str  # "suggested" | "explored" | "pairwise"
+    seconds: float = 0.0
+    edits: int = 0
+    annotator: str = ""
+
+
+@dataclass(frozen=True)
+class JudgementRecord:
+    """A stored judgement with its derived pairs (none once undone)."""
+
+    id: int
+    session_id: str
+    seq: int
+    client_id: str
+    round: int
+    left: tuple[str, ...]
+    right: tuple[str, ...]
+    label: str
+    source: str
+    seconds: float
+    edits: int
+    annotator: str
+    created_at: datetime
+    undone: bool
+    revision: int
+    pairs: tuple[PairRecord, ...]
+
+
+def record_of(row: JudgementRow) -> JudgementRecord:
+    """The frozen record of a judgement row (its pairs must be loaded)."""
+    return JudgementRecord(
+        id=row.id,
+        session_id=row.session_id,
+        seq=row.seq,
+        client_id=row.client_id,
+        round=row.round_index,
+        left=tuple(row.left),
+        right=tuple(row.right),
+        label=row.label,
+        source=row.source,
+        seconds=row.seconds,
+        edits=row.edits,
+        annotator=row.annotator,
+        created_at=row.created_at,
+        undone=row.undone,
+        revision=row.revision,
+        pairs=tuple(PairRecord(p.a, p.b, p.label) for p in row.pairs),
+    )
+
+
+def pair_rng(seed: int, round_index: int, seq: int) -> np.random.Generator:
+    """The generator that derives judgement `seq`'s pairs (module docstring)."""
+    return np.random.default_rng(np.random.SeedSequence([seed, round_index, PAIR_STREAM, seq]))
+
+
+def add_judgement(
+    s: Session, session_id: str, judgement: JudgementInput, now: datetime | None = None
+) -> tuple[JudgementRecord, bool]:
+    """Store a judgement and its pairs; (record, True) when new, (stored, False) on a retry.
+
+    A retry (same `client_id`) returns the stored judgement, whatever the session's state
+    now. When the round's comparison budget is reached, the round closes in the same
+    transaction.
+
+    Raises:
+        NotFoundError: unknown session.
+        ConflictError: the session is not ready, the round is not the open one or its
+            time is up, or the `client_id` was used for a different comparison.
+        InvalidError: a behaviour not in the round, in both groups or twice in one; an
+            empty group or one too large for the mode; an unknown label or source.
+    """
+    now = now or utcnow()
+    session = get_session(s, session_id, lock=True)
+    stored = _by_client_id(s, session_id, judgement.client_id)
+    if stored is not None:
+        if (stored.round, stored.left, stored.right, stored.label) != (
+            judgement.round,
+            tuple(judgement.left),
+            tuple(judgement.right),
+            judgement.label,
+        ):
+            raise ConflictError(
+                f"client_id {judgement.client_id!r} was already used for another comparison"
+            )
+        return stored, False
+    _check_open(session, judgement.round, now)
+    round_row = get_round(s, session_id, judgement.round)
+    indices = _check_groups(s, session, round_row.id, judgement)
+    seq = session.judgement_seq
+    session.judgement_seq += 1
+    label = LABELS[judgement.label]
+    derived = covering_pairs(
+        Judgement(indices[0], indices[1], label),
+        pair_rng(int(session.settings["seed"]), judgement.round, seq),
+    )
+    touch(session, now)
+    row = JudgementRow(
+        session_id=session_id,
+        round_id=round_row.id,
+        round_index=judgement.round,
+        seq=seq,
+        client_id=judgement.client_id,
+        left=list(judgement.left),
+        right=list(judgement.right),
+        label=judgement.label,
+        source=judgement.source,
+        seconds=float(judgement.seconds),
+        edits=int(judgement.edits),
+        annotator=judgement.annotator,
+        created_at=now,
+        revision=session.revision,
+        pairs=[
+            PairRow(position=i, a=f"b{p.a}", b=f"b{p.b}", label=p.label)
+            for i, p in enumerate(derived)
+        ],
+    )
+    s.add(row)
+    s.flush()
+    mark_suggestion_used(s, round_row.id, judgement.left, judgement.right, judgement.source)
+    limit = int(session.settings.get("comparisons_per_round", 0))
+    if limit > 0 and _live_in_round(s, session_id, judgement.round) >= limit:
+        close_round(s, session, "comparisons", now)
+    return record_of(row), True
+
+
+def _by_client_id(s: Session, session_id: str, client_id: str) -> JudgementRecord | None:
+    row = s.scalars(
+        select(JudgementRow)
+        .where(JudgementRow.session_id == session_id, JudgementRow.client_id == client_id)
+        .options(selectinload(JudgementRow.pairs))
+    ).one_or_none()
+    return None if row is None else record_of(row)
+
+
+def _check_open(session: SessionRow, round_index: int, now: datetime) -> None:
+    if session.phase != READY:
+        raise ConflictError(
+            f"session {session.id} is {session.phase}; judgements are taken only while a "
+            "round is open"
+        )
+    if round_index != session.round:
+        state = "closed" if round_index < session.round else "not open yet"
+        raise ConflictError(f"round {round_index} is {state}; the open round is {session.round}")
+    if round_due(session, now):  # closed lazily by the next read or the supervisor
+        raise ConflictError(f"the time of round {round_index} is up")
+
+
+def _check_groups(
+    s: Session, session: SessionRow, round_id: int, judgement: JudgementInput
+) -> tuple[tuple[int, ...], tuple[int, ...]]:
+    if judgement.label not in LABELS:
+        raise InvalidError(f"label must be one of {', '.join(LABELS)}, got {judgement.label!r}")
+    if judgement.source not in SOURCES:
+        raise InvalidError(f"source must be one of {', '.join(SOURCES)}, got {judgement.source!r}")
+    largest = MAX_GROUP_BY_MODE[session.mode]
+    for side, group in (("left", judgement.left), ("right", judgement.right)):
+        if not group:
+            raise InvalidError(f"the {side} group is empty")
+        if len(group) > largest:
+            raise InvalidError(
+                f"the {side} group has {len(group)} behaviours; a {session.mode} comparison "
+                f"allows at most {largest}"
+            )
+        if len(set(group)) != len(group):
+            raise InvalidError(f"the {side} group lists a behaviour twice")
+    both = sorted(set(judgement.left) & set(judgement.right))
+    if both:
+        raise InvalidError(f"{', '.join(both)} cannot be in both groups")
+    known = _behaviour_indices(s, round_id, [*judgement.left, *judgement.right])
+    unknown = [name for name in (*judgement.left, *judgement.right) if name not in known]
+    if unknown:
+        raise InvalidError(f"{', '.join(unknown)} are not behaviours of round {judgement.round}")
+    return (
+        tuple(known[name] for name in judgement.left),
+        tuple(known[name] for name in judgement.right),
+    )
+
+
+def _behaviour_indices(s: Session, round_id: int, names: Sequence[str]) -> dict[str, int]:
+    rows = s.execute(
+        select(BehaviourRow.name, BehaviourRow.index).where(
+            BehaviourRow.round_id == round_id, BehaviourRow.name.in_(set(names))
+        )
+    ).all()
+    return {name: index for name, index in rows}
+
+
+def _live_in_round(s: Session, session_id: str, round_index: int) -> int:
+    return int(
+        s.scalar(
+            select(func.count(JudgementRow.id)).where(
+                JudgementRow.session_id == session_id,
+                JudgementRow.round_index == round_index,
+                JudgementRow.undone.is_(False),
+            )
+        )
+        or 0
+    )
+
+
+def undo_judgement(
+    s: Session, session_id: str, judgement_id: int, now: datetime | None = None
+) -> JudgementRecord:
+    """Undo a judgement of the open round: its pairs are deleted, the row stays (undone).
+
+    Undoing an undone judgement returns it unchanged.
+
+    Raises:
+        NotFoundError: unknown session, or no such judgement in it.
+        ConflictError: the judgement's round is closed.
+    """
+    now = now or utcnow()
+    session = get_session(s, session_id, lock=True)
+    row = s.scalars(
+        select(JudgementRow)
+        .where(JudgementRow.id == judgement_id, JudgementRow.session_id == session_id)
+        .options(selectinload(JudgementRow.pairs))
+    ).one_or_none()
+    if row is None:
+        raise NotFoundError(f"session {session_id} has no judgement {judgement_id}")
+    if row.undone:
+        return record_of(row)
+    if session.phase != READY or row.round_index != session.round:
+        raise ConflictError(
+            f"judgement {judgement_id} is in round {row.round_index}, which is closed; only "
+            "judgements of the open round can be undone"
+        )
+    row.undone = True
+    row.undone_at = now
+    row.pairs.clear()
+    touch(session, now)
+    row.revision = session.revision
+    s.flush()
+    return record_of(row)
+
+
+def list_judgements(
+    s: Session,
+    session_id: str,
+    round_index: int | None = None,
+    *,
+    include_undone: bool = False,
+    after_revision: int | None = None,
+) -> list[JudgementRecord]:
+    """A session's judgements, oldest first; optionally one round's, or only those changed
+    after `after_revision` (the event stream's query). Raises NotFoundError."""
+    get_session(s, session_id)
+    query = (
+        select(JudgementRow)
+        .where(JudgementRow.session_id == session_id)
+        .options(selectinload(JudgementRow.pairs))
+        .order_by(JudgementRow.seq)
+    )
+    if round_index is not None:
+        query = query.where(JudgementRow.round_index == round_index)
+    if not include_undone:
+        query = query.where(JudgementRow.undone.is_(False))
+    if after_revision is not None:
+        query = (
+            query.where(JudgementRow.revision > after_revision)
+            .order_by(None)
+            .order_by(JudgementRow.revision)
+        )
+    return [record_of(row) for row in s.scalars(query)]
+
+
+def live_pairs(s: Session, session_id: str) -> list[tuple[int, PairRecord]]:
+    """Every pair of the session's non-undone judgements as (round, pair), in judgement
+    then pair order: what the reward model trains on."""
+    rows = s.execute(
+        select(JudgementRow.round_index, PairRow.a, PairRow.b, PairRow.label)
+        .join(PairRow, PairRow.judgement_id == JudgementRow.id)
+        .where(JudgementRow.session_id == session_id, JudgementRow.undone.is_(False))
+        .order_by(JudgementRow.seq, PairRow.position)
+    ).all()
+    return [(r, PairRecord(a, b, label)) for r, a, b, label in rows]
