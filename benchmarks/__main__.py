@@ -3,7 +3,7 @@
 import importlib
 import sys
 
-BENCHMARKS = ["ppo_throughput", "render_fps", "dtw", "pool_prep", "submit_latency"]
+BENCHMARKS = ["ppo_throughput", "render_fps", "dtw", "pool_prep", "submit_latency", "web_render"]
 
 
 def main(names: list[str]) -> None:

@@ -1,0 +1,292 @@
+/**
+ * The page: mounts the views, derives each view's data from the one store (once per frame),
+ * and maps keys and handlers to store actions and controller effects.
+ */
+import { type Api, type Edge, type JudgementOut, createApi } from "./api";
+import { type Controller, createController } from "./controller";
+import { type KeyInput, keyCommand } from "./lib/keys";
+import type { Tree } from "./lib/tree";
+import { type State, type Store, comparedLeaves, createStore } from "./state";
+import { startTogether } from "./views/clips";
+import { type ClipRef, renderComparison } from "./views/comparison";
+import { h } from "./views/dom";
+import { type HistoryEdge, renderExploration } from "./views/exploration";
+import { renderPairwise } from "./views/pairwise";
+import { renderProgress } from "./views/progress";
+import { renderStart } from "./views/start";
+import { renderStatus } from "./views/status";
+import { renderToast } from "./views/toast";
+
+/** Caches a function of one argument by the argument's identity (derived data per state). */
+function memo1<A, R>(fn: (a: A) => R): (a: A) => R {
+  let last: { a: A; r: R } | null = null;
+  return (a) => {
+    if (!last || last.a !== a) last = { a, r: fn(a) };
+    return last.r;
+  };
+}
+
+function memo2<A, B, R>(fn: (a: A, b: B) => R): (a: A, b: B) => R {
+  let last: { a: A; b: B; r: R } | null = null;
+  return (a, b) => {
+    if (!last || last.a !== a || last.b !== b) last = { a, b, r: fn(a, b) };
+    return last.r;
+  };
+}
+
+const historyEdges = memo1((judgements: readonly JudgementOut[]): HistoryEdge[] =>
+  judgements.flatMap((j) => j.pairs.map((p) => ({ a: p.a, b: p.b, label: p.label }))),
+);
+const compared = memo1(comparedLeaves);
+const topK = memo2((edges: readonly Edge[], k: number) => edges.slice(0, Math.max(0, k)));
+const highlighted = memo2((hover: State["hover"], tree: Tree | undefined): ReadonlySet<string> => {
+  const node = hover.id ? tree?.nodes.get(hover.id) : undefined;
+  return new Set(node?.leaves ?? []);
+});
+
+export interface AppOptions {
+  api?: Api;
+  store?: Store;
+  /** The page's query string (session, token, annotator). */
+  search?: string;
+}
+
+export function startApp(root: HTMLElement, options: AppOptions = {}): { store: Store; controller: Controller } {
+  const params = new URLSearchParams(options.search ?? window.location.search);
+  const api = options.api ?? createApi({ token: params.get("token") });
+  const store = options.store ?? createStore();
+  const controller = createController(store, api, {
+    annotator: params.get("annotator") ?? "",
+    setUrl(sid) {
+      const url = new URL(window.location.href);
+      if (sid) url.searchParams.set("session", sid);
+      else url.searchParams.delete("session");
+      window.history.replaceState(null, "", url);
+    },
+  });
+  const dispatch = store.dispatch;
+
+  const status = h("header", { class: "statusbar", hidden: true });
+  const start = h("section", { class: "start", hidden: true });
+  const message = h("div", { class: "page-message", role: "status" });
+  const exploration = h("section", {});
+  const comparison = h("section", {});
+  const progressA = h("div", { class: "progress-overlay", hidden: true });
+  const pairwise = h("section", {});
+  const progressB = h("div", { class: "progress-overlay", hidden: true });
+  const groupWorkspace = h(
+    "div",
+    { class: "workspace groupwise", hidden: true },
+    exploration,
+    h("div", { class: "right" }, comparison, progressA),
+  );
+  const pairWorkspace = h("div", { class: "workspace pairwise-mode", hidden: true }, h("div", { class: "right" }, pairwise, progressB));
+  const toast = h("div", { class: "toast-host" });
+  const main = h("main", { class: "main" }, message, start, groupWorkspace, pairWorkspace);
+  root.replaceChildren(status, main, toast);
+
+  const clipsOf = memo1((tree: Tree | undefined) => (id: string): ClipRef | null => {
+    const leaf = tree?.nodes.get(id);
+    if (!leaf?.clip) return null;
+    const ref: ClipRef = { src: api.clipUrl(leaf.clip) };
+    if (leaf.poster) ref.poster = api.clipUrl(leaf.poster);
+    return ref;
+  });
+
+  function render(): void {
+    const st = store.getState();
+    const s = st.session;
+    const mode = st.boot === "ready" && s ? s.mode : null;
+    message.hidden = st.boot === "ready" || st.boot === "choose";
+    message.textContent =
+      st.boot === "error" ? `Cannot load the app: ${st.bootError ?? "unknown error"}` : "Loading…";
+    message.classList.toggle("error", st.boot === "error");
+    start.hidden = st.boot !== "choose";
+    groupWorkspace.hidden = mode !== "groupwise";
+    pairWorkspace.hidden = mode !== "pairwise";
+    status.hidden = !s || st.boot !== "ready";
+
+    if (st.boot === "choose") {
+      renderStart(start, { envs: st.envs, sessions: st.sessions, busy: st.busy }, {
+        open: (sid) => void controller.open(sid),
+        create: (body) => void controller.create(body),
+      });
+    }
+    if (s && st.boot === "ready") {
+      renderStatus(status, { session: s, sessionAt: st.sessionAt, connection: st.connection, busy: st.busy }, {
+        pause: () => void controller.control("pause"),
+        resume: () => void controller.control("resume"),
+        endRound: () => void controller.control("end-round"),
+        sessions: () => void controller.showStart(),
+      });
+      const progress = { session: s, exportUrl: api.exportUrl(s.id), busy: st.busy };
+      const retry = { retry: () => void controller.control("retry") };
+      if (mode === "groupwise") {
+        renderGroupwise(st);
+        renderProgress(progressA, progress, retry);
+      } else {
+        renderPair(st);
+        renderProgress(progressB, progress, retry);
+      }
+    }
+    renderToast(toast, st.toast, st.judgements.length > 0 && s?.phase === "ready", {
+      dismiss: (id) => dispatch({ type: "dismiss-toast", id }),
+      undo: () => void controller.undo(),
+    });
+  }
+
+  function renderGroupwise(st: State): void {
+    const s = st.session!;
+    const round = st.round;
+    const open = s.phase === "ready" && round !== null && round.round === s.round;
+    const placeholder =
+      s.phase === "preparing"
+        ? `The behaviours of round ${s.round + 1} are being prepared…`
+        : s.phase === "failed"
+          ? "No behaviours to show: the worker failed."
+          : "Loading the behaviours…";
+    renderExploration(
+      exploration,
+      {
+        round,
+        placeholder,
+        groups: st.groups,
+        target: st.target,
+        hover: st.hover,
+        suggestions: topK(st.suggestions, st.view.k),
+        maxK: st.suggestions.length,
+        history: historyEdges(st.judgements),
+        compared: compared(st.judgements),
+        view: st.view,
+        clipUrl: api.clipUrl,
+      },
+      {
+        select: (click, other) => dispatch({ type: "select", click, other, at: Date.now() }),
+        hover: (id) => dispatch({ type: "hover", id, from: id ? "chart" : null }),
+        target: (group) => dispatch({ type: "target", group }),
+        view: (patch) => dispatch({ type: "view", patch }),
+      },
+    );
+    const { A, B } = st.groups;
+    const hint = !open
+      ? "The round is not open for answers."
+      : st.submitting
+        ? "Saving your answer…"
+        : !A.length && !B.length
+          ? "Fill both groups to answer."
+          : !A.length
+            ? "Fill group A to answer."
+            : !B.length
+              ? "Fill group B to answer."
+              : "";
+    renderComparison(
+      comparison,
+      {
+        groups: st.groups,
+        target: st.target,
+        clipOf: clipsOf(round?.tree),
+        highlighted: highlighted(st.hover, round?.tree),
+        speed: st.view.speed,
+        canAnswer: hint === "",
+        answerHint: hint,
+        submitting: st.submitting,
+        origin: st.origin,
+        suggestionStatus: st.suggestionStatus,
+        canSuggest: open,
+        canUndo: open && st.judgements.length > 0,
+        undoing: st.undoing,
+      },
+      {
+        remove: (id) => dispatch({ type: "remove", id, at: Date.now() }),
+        move: (id) => dispatch({ type: "move", id, at: Date.now() }),
+        hover: (id) => dispatch({ type: "hover", id, from: id ? "clip" : null }),
+        answer: (label) => void controller.answer(label),
+        next: () => void controller.suggest(false),
+        clear: () => dispatch({ type: "clear" }),
+        undo: () => void controller.undo(),
+        speed: (rate) => dispatch({ type: "view", patch: { speed: rate } }),
+        target: (group) => dispatch({ type: "target", group }),
+        restart: () => void startTogether([...comparison.querySelectorAll("video")], st.view.speed),
+      },
+    );
+  }
+
+  function renderPair(st: State): void {
+    const s = st.session!;
+    const open = s.phase === "ready";
+    const pw = st.pairwise;
+    renderPairwise(
+      pairwise,
+      {
+        current: pw.current,
+        following: pw.following,
+        clipUrl: api.clipUrl,
+        canAnswer: open && pw.current !== null,
+        hint: open ? "" : "The round is not open for answers.",
+        submitting: st.submitting,
+        loading: pw.loading,
+        exhausted: pw.exhausted,
+        canUndo: open && st.judgements.length > 0 && !st.undoing,
+        speed: st.view.speed,
+      },
+      {
+        answer: (label) => controller.answerPair(label),
+        skip: () => controller.skipPair(),
+        undo: () => void controller.undo(),
+        speed: (rate) => dispatch({ type: "view", patch: { speed: rate } }),
+      },
+    );
+  }
+
+  let frame = 0;
+  store.subscribe(() => {
+    if (!frame) frame = requestAnimationFrame(() => {
+      frame = 0;
+      render();
+    });
+  });
+
+  document.addEventListener("keydown", (e) => {
+    const st = store.getState();
+    const s = st.session;
+    if (st.boot !== "ready" || !s) return;
+    const target = e.target as HTMLElement | null;
+    const input: KeyInput = {
+      key: e.key,
+      ctrlKey: e.ctrlKey,
+      metaKey: e.metaKey,
+      altKey: e.altKey,
+      repeat: e.repeat,
+      inField: !!target?.closest?.("input, select, textarea, [contenteditable]"),
+      inChart: !!target?.closest?.(".chart-svg"),
+    };
+    const cmd = keyCommand(input, s.mode);
+    if (!cmd) return;
+    e.preventDefault();
+    switch (cmd.type) {
+      case "answer":
+        if (s.mode === "pairwise") controller.answerPair(cmd.label);
+        else void controller.answer(cmd.label);
+        break;
+      case "skip":
+        controller.skipPair();
+        break;
+      case "undo":
+        void controller.undo();
+        break;
+      case "switch-group":
+        dispatch({ type: "target", group: "switch" });
+        break;
+      case "target":
+        dispatch({ type: "target", group: cmd.group });
+        break;
+      case "next-suggestion":
+        void controller.suggest(false);
+        break;
+    }
+  });
+
+  render();
+  void controller.boot(params.get("session"));
+  return { store, controller };
+}

@@ -1,0 +1,130 @@
+/**
+ * An in-memory stand-in for the server, for the demo page (web/bench.html?demo=groupwise or
+ * ?demo=pairwise): lets the whole UI be looked at and screenshot without a session. Clips
+ * are SVG posters (there are no videos).
+ */
+import type { Api, JudgementOut, SessionState } from "../api";
+import type { SyntheticRound } from "./synthetic";
+
+const HUES = [28, 200, 140, 280, 350, 60, 170, 230];
+
+function poster(id: string): string {
+  const i = Number(id.replace(/\D/g, "")) || 0;
+  const hue = HUES[i % HUES.length]!;
+  const x = 20 + ((i * 37) % 60);
+  const y = 20 + ((i * 53) % 60);
+  const svg =
+    `<svg xmlns="http://www.w3.org/2000/svg" viewBox="0 0 100 100">` +
+    `<rect width="100" height="100" fill="hsl(${hue},25%,88%)"/>` +
+    `<g stroke="hsl(${hue},15%,75%)" stroke-width="0.6">` +
+    [20, 40, 60, 80].map((v) => `<line x1="${v}" y1="0" x2="${v}" y2="100"/><line x1="0" y1="${v}" x2="100" y2="${v}"/>`).join("") +
+    `</g><circle cx="${x}" cy="${y}" r="7" fill="hsl(${hue},60%,40%)"/>` +
+    `<rect x="${100 - x}" y="${100 - y}" width="12" height="12" fill="hsl(${(hue + 180) % 360},55%,45%)"/></svg>`;
+  return `data:image/svg+xml,${encodeURIComponent(svg)}`;
+}
+
+export function fakeApi(
+  round: SyntheticRound,
+  mode: "groupwise" | "pairwise",
+  state: Partial<SessionState> = {},
+): Api {
+  let judgements = round.judgements.slice();
+  let nextId = Math.max(0, ...judgements.map((j) => j.id)) + 1;
+  let used = 0;
+  const session: SessionState = {
+    id: "s-demo",
+    env: "GridWorld",
+    mode,
+    annotator: "",
+    settings: {
+      pool_size: round.leaves.length,
+      fragment_length: 30,
+      round_seconds: 600,
+      comparisons_per_round: 20,
+      ppo_steps_per_round: 20000,
+      rounds: 5,
+      suggestions: round.suggestions.length,
+      seed: 0,
+      eval_episodes: 5,
+      exploration_fraction: 0.25,
+      frame_size: 240,
+      render_workers: 1,
+      ppo: {},
+      reward: {},
+    } as SessionState["settings"],
+    round: 1,
+    rounds: 5,
+    phase: "ready",
+    progress: { phase: "", fraction: 0, message: "" },
+    error: null,
+    timer: { elapsed_s: 95, budget_s: 600, paused: false, running: true },
+    counts: { comparisons_round: judgements.length, pairs_round: 0, comparisons_total: 24, pairs_total: 103 },
+    created_at: new Date().toISOString(),
+    ...state,
+  };
+  const pq = (a: string, b: string) => ({
+    left: a,
+    right: b,
+    left_clip: `${a}.mp4`,
+    right_clip: `${b}.mp4`,
+    left_poster: `${a}.jpg`,
+    right_poster: `${b}.jpg`,
+  });
+  const api: Api = {
+    invalidate: () => undefined,
+    envs: async () => ["GridWorld", "Hopper", "HalfCheetah"],
+    sessions: async () => [session],
+    createSession: async () => session,
+    session: async () => ({ ...session }),
+    tree: async () => ({ round: 1, levels: round.levels, tree: round.tree, medoids: round.medoids, compared: [] }),
+    edges: async (_s, _r, k) => round.suggestions.slice(0, k),
+    judgements: async () => judgements.map((j) => ({ ...j, round: 1 })),
+    nextSuggestion: async () => {
+      const a = round.candidates[(used * 2) % round.candidates.length]!;
+      const b = round.candidates[(used * 2 + 1) % round.candidates.length]!;
+      used++;
+      return { suggestion: { left: a.leaves, right: b.leaves, left_node: a.id, right_node: b.id, score: 0.8 } };
+    },
+    pairwiseNext: async () => ({ pair: pq("b4", "b90"), following: pq("b17", "b33") }),
+    skipPair: async () => ({ pair: pq("b17", "b33"), following: pq("b5", "b61") }),
+    submitJudgement: async (_sid, body) => {
+      const n = Math.max(body.left.length, body.right.length);
+      const value = body.label === "left" ? 1 : body.label === "right" ? 0 : 0.5;
+      const j: JudgementOut = {
+        ...body,
+        id: nextId++,
+        created_at: new Date().toISOString(),
+        undone: false,
+        pairs: Array.from({ length: n }, (_, i) => ({
+          a: body.left[i % body.left.length]!,
+          b: body.right[i % body.right.length]!,
+          label: value,
+        })),
+      };
+      judgements = [...judgements, j];
+      return j;
+    },
+    undoJudgement: async (_sid, id) => {
+      const j = judgements.find((x) => x.id === id)!;
+      judgements = judgements.filter((x) => x.id !== id);
+      return { ...j, undone: true };
+    },
+    control: async (_sid, action) => {
+      if (action === "pause") session.timer.paused = true;
+      if (action === "resume") session.timer.paused = false;
+      session.timer.running = !session.timer.paused;
+      if (action === "end-round") {
+        session.phase = "training";
+        session.progress = { phase: "ppo", fraction: 0.42, message: "PPO 8,400 / 20,000 steps" };
+      }
+      return { ...session };
+    },
+    clipUrl: (clip) => (clip.endsWith(".jpg") || clip.endsWith(".mp4") ? poster(clip) : clip),
+    exportUrl: () => "#",
+    events: (_sid, handlers) => {
+      setTimeout(() => handlers.open?.(), 0);
+      return () => undefined;
+    },
+  };
+  return api;
+}

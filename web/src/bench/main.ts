@@ -1,0 +1,158 @@
+/**
+ * Dev-only entry (bench.html, built by `npm run build:bench`, never shipped in dist/):
+ * - default: `window.bench.run(n)` times the exploration view on a synthetic round
+ *   (benchmarks/web_render.py drives it in Chromium);
+ * - `?demo=groupwise` / `?demo=pairwise`: the whole app on an in-memory fake server.
+ */
+import "../styles.css";
+import type { SessionState } from "../api";
+import { startApp } from "../app";
+import { DEFAULT_BETA } from "../lib/edges";
+import { type Groups, EMPTY_GROUPS } from "../lib/selection";
+import { buildTree } from "../lib/tree";
+import { comparedLeaves } from "../state";
+import type { RoundData } from "../state";
+import { type ExplorationData, type ExplorationHandlers, renderExploration } from "../views/exploration";
+import { fakeApi } from "./fake-api";
+import { rng, syntheticRound } from "./synthetic";
+
+const params = new URLSearchParams(window.location.search);
+const demo = params.get("demo");
+
+const frame = () => new Promise<number>((r) => requestAnimationFrame((t) => r(t)));
+const afterPaint = () => new Promise<void>((r) => requestAnimationFrame(() => setTimeout(r, 0)));
+
+function quantile(xs: number[], q: number): number {
+  const s = [...xs].sort((a, b) => a - b);
+  return s[Math.min(s.length - 1, Math.floor(q * s.length))] ?? Number.NaN;
+}
+
+export interface BenchResult {
+  leaves: number;
+  arcs: number;
+  suggestions: number;
+  history: number;
+  /** Synchronous render + style/layout flush of the first render (ms). */
+  firstRenderMs: number;
+  /** From the start of the first render to after the next frame was painted (ms). */
+  firstPaintMs: number;
+  /** … to after the frame with the edges (drawn one frame after the arcs) was painted. */
+  edgesPaintMs: number;
+  updateMedianMs: number;
+  updateP95Ms: number;
+  hoverMedianMs: number;
+  /** Mean interval between frames with one selection update per frame (ms). */
+  frameMs: number;
+  /** The same with one hover (edge highlight) per frame. */
+  hoverFrameMs: number;
+}
+
+async function run(n: number, suggestions = 100, history = 400, updates = 40): Promise<BenchResult> {
+  const synth = syntheticRound(n, { suggestions, history, seed: n });
+  const host = document.getElementById("app")!;
+  host.replaceChildren();
+  await afterPaint();
+  const element = document.createElement("section");
+  // The left column of the app at 1366 × 768.
+  element.style.cssText = "position: fixed; left: 12px; top: 60px; bottom: 12px; width: 640px;";
+  host.append(element);
+  const round: RoundData = { sid: "bench", round: 0, tree: buildTree(synth.tree, synth.levels), medoids: synth.medoids };
+  let data: ExplorationData = {
+    round,
+    placeholder: "",
+    groups: EMPTY_GROUPS,
+    target: "A",
+    hover: { id: null, from: null },
+    suggestions: synth.suggestions,
+    maxK: synth.suggestions.length,
+    history: synth.judgements.flatMap((j) => j.pairs),
+    compared: comparedLeaves(synth.judgements),
+    view: { showSuggestions: true, showHistory: true, k: suggestions, beta: DEFAULT_BETA, speed: 1 },
+    clipUrl: (c) => c,
+  };
+  const handlers: ExplorationHandlers = { select() {}, hover() {}, target() {}, view() {} };
+  const flush = () => void document.body.offsetHeight;
+
+  const t0 = performance.now();
+  renderExploration(element, data, handlers);
+  flush();
+  const firstRenderMs = performance.now() - t0;
+  await afterPaint();
+  const firstPaintMs = performance.now() - t0;
+  const canvas = element.querySelector("canvas")!;
+  while (!canvas.dataset.drawnAt) await frame();
+  await afterPaint();
+  const edgesPaintMs = performance.now() - t0;
+
+  const rand = rng(7);
+  const cands = synth.candidates;
+  const groupsAt = (): Groups => {
+    const a = cands[Math.floor(rand() * cands.length)]!.leaves;
+    const b = cands[Math.floor(rand() * cands.length)]!.leaves.filter((x) => !a.includes(x));
+    return { A: a, B: b };
+  };
+  const times: number[] = [];
+  for (let i = 0; i < updates; i++) {
+    data = { ...data, groups: groupsAt() };
+    const t = performance.now();
+    renderExploration(element, data, handlers);
+    flush();
+    times.push(performance.now() - t);
+    await frame();
+  }
+  const hovers: number[] = [];
+  for (let i = 0; i < 20; i++) {
+    const id = synth.leaves[Math.floor(rand() * n)]!;
+    data = { ...data, hover: { id, from: "chart" } };
+    const t = performance.now();
+    renderExploration(element, data, handlers);
+    flush();
+    hovers.push(performance.now() - t);
+    await frame();
+  }
+  data = { ...data, hover: { id: null, from: null } };
+  // One update per frame: the mean frame interval shows whether updates fit in a frame.
+  const stamps: number[] = [await frame()];
+  for (let i = 0; i < 30; i++) {
+    data = { ...data, groups: groupsAt() };
+    renderExploration(element, data, handlers);
+    stamps.push(await frame());
+  }
+  const frameMs = (stamps[stamps.length - 1]! - stamps[0]!) / (stamps.length - 1);
+  const hoverStamps: number[] = [await frame()];
+  for (let i = 0; i < 30; i++) {
+    const id = synth.leaves[Math.floor(rand() * n)]!;
+    data = { ...data, hover: { id, from: "chart" } };
+    renderExploration(element, data, handlers);
+    hoverStamps.push(await frame());
+  }
+  const hoverFrameMs = (hoverStamps[hoverStamps.length - 1]! - hoverStamps[0]!) / (hoverStamps.length - 1);
+  return {
+    leaves: n,
+    arcs: element.querySelectorAll(".arc").length,
+    suggestions: Number(element.querySelector("canvas")?.dataset.suggestions ?? 0),
+    history: Number(element.querySelector("canvas")?.dataset.history ?? 0),
+    firstRenderMs,
+    firstPaintMs,
+    edgesPaintMs,
+    updateMedianMs: quantile(times, 0.5),
+    updateP95Ms: quantile(times, 0.95),
+    hoverMedianMs: quantile(hovers, 0.5),
+    frameMs,
+    hoverFrameMs,
+  };
+}
+
+if (demo === "groupwise" || demo === "pairwise") {
+  const n = Number(params.get("n") ?? 120);
+  const synth = syntheticRound(n, { suggestions: 100, history: Number(params.get("history") ?? 24), seed: 3 });
+  // ?phase=training|preparing|failed|finished shows the progress panel of that phase.
+  const phase = params.get("phase") as SessionState["phase"] | null;
+  const state: Partial<SessionState> = phase ? { phase } : {};
+  if (phase === "failed") state.error = "training round 1 failed: CUDA out of memory (see the server log)";
+  if (phase === "training") state.progress = { phase: "reward", fraction: 0.35, message: "reward model epoch 7 / 20" };
+  startApp(document.getElementById("app")!, { api: fakeApi(synth, demo, state), search: "?session=s-demo" });
+} else {
+  (window as unknown as { bench: { run: typeof run } }).bench = { run };
+  document.title = "groupwise bench (ready)";
+}

@@ -1,0 +1,68 @@
+/**
+ * Keyboard map (SPEC §9): ← left better, → right better, ↑ equal, ↓ skip (pairwise), with the
+ * left-hand alternatives A / D / W / S; G switches the group that clicks fill (1 / 2 pick
+ * A / B), N asks for the next suggestion, U or Ctrl+Z undoes the last answer.
+ *
+ * Keys typed into form fields are left alone, auto-repeat never answers twice, and arrows
+ * pressed inside the chart belong to the chart's own navigation.
+ */
+import type { GroupId } from "./selection";
+
+export type KeyCommand =
+  | { type: "answer"; label: "left" | "right" | "equal" }
+  | { type: "skip" }
+  | { type: "switch-group" }
+  | { type: "target"; group: GroupId }
+  | { type: "next-suggestion" }
+  | { type: "undo" };
+
+export interface KeyInput {
+  key: string;
+  ctrlKey?: boolean;
+  metaKey?: boolean;
+  altKey?: boolean;
+  repeat?: boolean;
+  /** The event target is a text field, select or other form input. */
+  inField?: boolean;
+  /** The event target is inside the radial chart (arrows navigate arcs there). */
+  inChart?: boolean;
+}
+
+const ANSWERS: Record<string, "left" | "right" | "equal"> = {
+  ArrowLeft: "left",
+  a: "left",
+  ArrowRight: "right",
+  d: "right",
+  ArrowUp: "equal",
+  w: "equal",
+};
+
+export function keyCommand(e: KeyInput, mode: "groupwise" | "pairwise"): KeyCommand | null {
+  if (e.inField) return null;
+  const key = e.key.length === 1 ? e.key.toLowerCase() : e.key;
+  if (e.ctrlKey || e.metaKey) return key === "z" && !e.altKey && !e.repeat ? { type: "undo" } : null;
+  if (e.altKey) return null;
+  if (e.inChart && key.startsWith("Arrow")) return null;
+  if (e.repeat) return null;
+  const label = ANSWERS[key];
+  if (label) return { type: "answer", label };
+  if (mode === "pairwise") {
+    if (key === "ArrowDown" || key === "s") return { type: "skip" };
+    if (key === "u") return { type: "undo" };
+    return null;
+  }
+  switch (key) {
+    case "g":
+      return { type: "switch-group" };
+    case "1":
+      return { type: "target", group: "A" };
+    case "2":
+      return { type: "target", group: "B" };
+    case "n":
+      return { type: "next-suggestion" };
+    case "u":
+      return { type: "undo" };
+    default:
+      return null;
+  }
+}

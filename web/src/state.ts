@@ -1,0 +1,312 @@
+/**
+ * The one store of the page: a plain state object, a pure reducer, subscribe/dispatch.
+ * Every view derives from `State`; nothing else holds app state (views keep only DOM).
+ */
+import type {
+  Edge,
+  JudgementOut,
+  PairQuery,
+  SessionState,
+  Suggestion,
+} from "./api";
+import {
+  type ArcClick,
+  EMPTY_GROUPS,
+  type GroupId,
+  type Groups,
+  clickArc,
+  moveLeaf,
+  otherGroup,
+  removeLeaf,
+} from "./lib/selection";
+import type { Tree } from "./lib/tree";
+import { DEFAULT_BETA } from "./lib/edges";
+
+export type Source = "suggested" | "explored";
+
+export interface Toast {
+  id: number;
+  kind: "ok" | "error" | "info";
+  text: string;
+  /** Offer "Undo" (the last answer). */
+  undo?: boolean;
+}
+
+export interface RoundData {
+  sid: string;
+  round: number;
+  tree: Tree;
+  medoids: Record<string, string[]>;
+}
+
+/** How the current groups came about: SPEC §8 logs source, time taken and edits. */
+export interface Origin {
+  source: Source;
+  /** Group changes since the groups were last set as a whole (prefill, answer, undo). */
+  edits: number;
+  /** When the groups became non-empty (ms), for `seconds` of the judgement. */
+  startedAt: number | null;
+  suggestion: Suggestion | null;
+}
+
+export interface ViewSettings {
+  showSuggestions: boolean;
+  showHistory: boolean;
+  /** How many suggestion edges to draw. */
+  k: number;
+  /** Bundling strength of the edges. */
+  beta: number;
+  /** Playback rate of the clips. */
+  speed: number;
+}
+
+export interface PairwiseState {
+  current: PairQuery | null;
+  following: PairQuery | null;
+  loading: boolean;
+  /** Pairs answered or skipped on this page ("left:right"): never shown again. */
+  done: string[];
+  /** When `current` was shown (ms). */
+  shownAt: number | null;
+  /** True once the server said there is no pair left. */
+  exhausted: boolean;
+}
+
+export interface State {
+  boot: "loading" | "choose" | "ready" | "error";
+  bootError: string | null;
+  envs: string[];
+  sessions: SessionState[];
+  session: SessionState | null;
+  /** When `session` arrived (ms), to run the round's timer between updates. */
+  sessionAt: number;
+  round: RoundData | null;
+  suggestions: Edge[];
+  /** This round's judgements, oldest first, undone ones removed. */
+  judgements: JudgementOut[];
+  groups: Groups;
+  /** The group plain clicks fill. */
+  target: GroupId;
+  origin: Origin;
+  suggestionStatus: "idle" | "loading" | "none";
+  view: ViewSettings;
+  hover: { id: string | null; from: "chart" | "clip" | null };
+  submitting: boolean;
+  undoing: boolean;
+  /** A control request (pause, resume, end round, retry, create) is in flight. */
+  busy: boolean;
+  toast: Toast | null;
+  connection: "connecting" | "open" | "lost";
+  pairwise: PairwiseState;
+}
+
+export const FRESH_ORIGIN: Origin = { source: "explored", edits: 0, startedAt: null, suggestion: null };
+
+export const initialState: State = {
+  boot: "loading",
+  bootError: null,
+  envs: [],
+  sessions: [],
+  session: null,
+  sessionAt: 0,
+  round: null,
+  suggestions: [],
+  judgements: [],
+  groups: EMPTY_GROUPS,
+  target: "A",
+  origin: FRESH_ORIGIN,
+  suggestionStatus: "idle",
+  view: { showSuggestions: true, showHistory: true, k: 100, beta: DEFAULT_BETA, speed: 1 },
+  hover: { id: null, from: null },
+  submitting: false,
+  undoing: false,
+  busy: false,
+  toast: null,
+  connection: "connecting",
+  pairwise: {
+    current: null,
+    following: null,
+    loading: false,
+    done: [],
+    shownAt: null,
+    exhausted: false,
+  },
+};
+
+export type Action =
+  | { type: "boot"; boot: State["boot"]; error?: string }
+  | { type: "envs"; envs: string[] }
+  | { type: "sessions"; sessions: SessionState[] }
+  | { type: "session"; session: SessionState; at: number }
+  | { type: "round-data"; round: RoundData }
+  | { type: "suggestions"; edges: Edge[] }
+  | { type: "judgements"; judgements: JudgementOut[] }
+  | { type: "judgement-stored"; judgement: JudgementOut }
+  | { type: "judgement-undone"; id: number }
+  | { type: "select"; click: Omit<ArcClick, "target">; other: boolean; at: number }
+  | { type: "remove"; id: string; at: number }
+  | { type: "move"; id: string; at: number }
+  | { type: "clear" }
+  | { type: "set-groups"; groups: Groups; origin: Origin }
+  | { type: "target"; group: GroupId | "switch" }
+  | { type: "suggestion-status"; status: State["suggestionStatus"] }
+  | { type: "view"; patch: Partial<ViewSettings> }
+  | { type: "hover"; id: string | null; from: "chart" | "clip" | null }
+  | { type: "submitting"; value: boolean }
+  | { type: "answered"; judgement: JudgementOut }
+  | { type: "undoing"; value: boolean }
+  | { type: "busy"; value: boolean }
+  | { type: "toast"; kind: Toast["kind"]; text: string; undo?: boolean }
+  | { type: "dismiss-toast"; id?: number }
+  | { type: "connection"; value: State["connection"] }
+  | { type: "pairwise"; patch: Partial<PairwiseState> };
+
+let toastId = 0;
+
+function withGroups(state: State, groups: Groups, at: number): State {
+  const empty = groups.A.length === 0 && groups.B.length === 0;
+  if (empty) return { ...state, groups, origin: FRESH_ORIGIN };
+  const o = state.origin;
+  return {
+    ...state,
+    groups,
+    origin: { ...o, edits: o.edits + 1, startedAt: o.startedAt ?? at },
+  };
+}
+
+function toast(state: State, kind: Toast["kind"], text: string, undo = false): State {
+  return { ...state, toast: { id: ++toastId, kind, text, ...(undo ? { undo } : {}) } };
+}
+
+function upsert(list: JudgementOut[], j: JudgementOut): JudgementOut[] {
+  if (list.some((x) => x.id === j.id)) return list;
+  return [...list, j].sort((a, b) => a.id - b.id);
+}
+
+export function reduce(state: State, action: Action): State {
+  switch (action.type) {
+    case "boot":
+      return { ...state, boot: action.boot, bootError: action.error ?? null };
+    case "envs":
+      return { ...state, envs: action.envs };
+    case "sessions":
+      return { ...state, sessions: action.sessions };
+    case "session":
+      return { ...state, session: action.session, sessionAt: action.at };
+    case "round-data": {
+      const sameRound =
+        state.round?.sid === action.round.sid && state.round?.round === action.round.round;
+      return sameRound
+        ? { ...state, round: action.round }
+        : {
+            ...state,
+            round: action.round,
+            suggestions: [],
+            judgements: [],
+            groups: EMPTY_GROUPS,
+            origin: FRESH_ORIGIN,
+            suggestionStatus: "idle",
+            hover: { id: null, from: null },
+          };
+    }
+    case "suggestions":
+      return { ...state, suggestions: action.edges };
+    case "judgements":
+      return { ...state, judgements: action.judgements.filter((j) => !j.undone) };
+    case "judgement-stored":
+      if (state.round && action.judgement.round !== state.round.round) return state;
+      return { ...state, judgements: upsert(state.judgements, action.judgement) };
+    case "judgement-undone":
+      return { ...state, judgements: state.judgements.filter((j) => j.id !== action.id) };
+    case "select": {
+      const target = action.other ? otherGroup(state.target) : state.target;
+      const r = clickArc(state.groups, { ...action.click, target });
+      if (r.message) return toast(state, "info", r.message);
+      return r.changed ? withGroups(state, r.groups, action.at) : state;
+    }
+    case "remove":
+    case "move": {
+      const r = (action.type === "remove" ? removeLeaf : moveLeaf)(state.groups, action.id);
+      if (r.message) return toast(state, "info", r.message);
+      return r.changed ? withGroups(state, r.groups, action.at) : state;
+    }
+    case "clear":
+      return { ...state, groups: EMPTY_GROUPS, origin: FRESH_ORIGIN };
+    case "set-groups":
+      return { ...state, groups: action.groups, origin: action.origin };
+    case "target":
+      return {
+        ...state,
+        target: action.group === "switch" ? otherGroup(state.target) : action.group,
+      };
+    case "suggestion-status":
+      return { ...state, suggestionStatus: action.status };
+    case "view":
+      return { ...state, view: { ...state.view, ...action.patch } };
+    case "hover":
+      if (state.hover.id === action.id && state.hover.from === action.from) return state;
+      return { ...state, hover: { id: action.id, from: action.from } };
+    case "submitting":
+      return { ...state, submitting: action.value };
+    case "answered": {
+      const j = action.judgement;
+      const next: State = {
+        ...state,
+        submitting: false,
+        judgements: upsert(state.judgements, j),
+        groups: EMPTY_GROUPS,
+        origin: FRESH_ORIGIN,
+        suggestionStatus: "idle",
+      };
+      const what =
+        j.label === "equal" ? "equal" : j.label === "left" ? "left better" : "right better";
+      const pairs = j.pairs.length === 1 ? "1 preference pair" : `${j.pairs.length} preference pairs`;
+      return toast(next, "ok", `Saved: ${what} · ${pairs}.`, true);
+    }
+    case "undoing":
+      return { ...state, undoing: action.value };
+    case "busy":
+      return { ...state, busy: action.value };
+    case "toast":
+      return toast(state, action.kind, action.text, action.undo ?? false);
+    case "dismiss-toast":
+      if (!state.toast || (action.id !== undefined && state.toast.id !== action.id)) return state;
+      return { ...state, toast: null };
+    case "connection":
+      return state.connection === action.value ? state : { ...state, connection: action.value };
+    case "pairwise":
+      return { ...state, pairwise: { ...state.pairwise, ...action.patch } };
+  }
+}
+
+export type Listener = (state: State, previous: State) => void;
+
+export interface Store {
+  getState(): State;
+  dispatch(action: Action): void;
+  subscribe(listener: Listener): () => void;
+}
+
+export function createStore(initial: State = initialState): Store {
+  let state = initial;
+  const listeners = new Set<Listener>();
+  return {
+    getState: () => state,
+    dispatch(action) {
+      const previous = state;
+      state = reduce(state, action);
+      if (state !== previous) for (const l of [...listeners]) l(state, previous);
+    },
+    subscribe(listener) {
+      listeners.add(listener);
+      return () => listeners.delete(listener);
+    },
+  };
+}
+
+/** Behaviours of this round already in a judgement (history), for the "not compared" marks. */
+export function comparedLeaves(judgements: readonly JudgementOut[]): Set<string> {
+  const out = new Set<string>();
+  for (const j of judgements) for (const id of [...j.left, ...j.right]) out.add(id);
+  return out;
+}

@@ -1,0 +1,66 @@
+/** Looping, muted clips that start together (SPEC §9: synchronised start, adjustable speed). */
+import { h } from "./dom";
+
+export function clipVideo(src: string, poster: string | undefined, label: string): HTMLVideoElement {
+  const video = h("video", {
+    muted: true,
+    loop: true,
+    playsinline: true,
+    preload: "auto",
+    poster,
+    "aria-label": label,
+  });
+  video.muted = true;
+  video.src = src;
+  return video;
+}
+
+const READY_TIMEOUT_MS = 2500;
+
+function whenReady(video: HTMLVideoElement): Promise<void> {
+  if (video.readyState >= HTMLMediaElement.HAVE_FUTURE_DATA) return Promise.resolve();
+  return new Promise((resolve) => {
+    const done = () => {
+      video.removeEventListener("canplay", done);
+      video.removeEventListener("error", done);
+      resolve();
+    };
+    video.addEventListener("canplay", done);
+    video.addEventListener("error", done);
+  });
+}
+
+let generation = 0;
+
+/**
+ * Rewinds the videos and starts them in the same frame once all can play (or after a
+ * timeout, so one broken clip does not hold the others). A later call cancels an earlier
+ * one still waiting.
+ */
+export async function startTogether(videos: HTMLVideoElement[], rate: number): Promise<void> {
+  const mine = ++generation;
+  for (const v of videos) {
+    v.pause();
+    v.playbackRate = rate;
+    if (v.readyState > 0) v.currentTime = 0;
+  }
+  const timeout = new Promise<void>((r) => setTimeout(r, READY_TIMEOUT_MS));
+  await Promise.race([Promise.all(videos.map(whenReady)), timeout]);
+  if (mine !== generation) return;
+  for (const v of videos) {
+    if (v.readyState > 0) v.currentTime = 0;
+    v.playbackRate = rate;
+    void v.play().catch(() => undefined);
+  }
+}
+
+export function setRate(videos: Iterable<HTMLVideoElement>, rate: number): void {
+  for (const v of videos) if (v.playbackRate !== rate) v.playbackRate = rate;
+}
+
+/** Releases a video's decoder before it is dropped. */
+export function unloadVideo(video: HTMLVideoElement): void {
+  video.pause();
+  video.removeAttribute("src");
+  video.load();
+}

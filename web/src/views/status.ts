@@ -1,0 +1,159 @@
+/**
+ * The status bar: session, round and phase, the round's timer (pause / resume), counters of
+ * comparisons and preference pairs (this round and in total), and "end round".
+ */
+import type { SessionState } from "../api";
+import { clock, elapsedNow } from "../lib/format";
+import type { State } from "../state";
+import { attr, h, memo, text } from "./dom";
+
+export interface StatusData {
+  session: SessionState | null;
+  sessionAt: number;
+  connection: State["connection"];
+  /** A control request (pause, end round…) is in flight. */
+  busy: boolean;
+}
+
+export interface StatusHandlers {
+  pause(): void;
+  resume(): void;
+  endRound(): void;
+  sessions(): void;
+}
+
+interface View {
+  meta: HTMLElement;
+  round: HTMLElement;
+  phase: HTMLElement;
+  timer: HTMLElement;
+  pause: HTMLButtonElement;
+  comparisons: HTMLElement;
+  pairs: HTMLElement;
+  end: HTMLButtonElement;
+  conn: HTMLElement;
+  data: StatusData | null;
+  handlers: StatusHandlers | null;
+  confirmUntil: number;
+}
+
+const views = new WeakMap<Element, View>();
+const CONFIRM_MS = 4000;
+
+/** "Round 2 of 5" (rounds count from 1 for people; the server counts from 0). */
+export function roundText(s: Pick<SessionState, "round" | "rounds">): string {
+  return `Round ${Math.min(s.round + 1, s.rounds)} of ${s.rounds}`;
+}
+
+export function renderStatus(element: HTMLElement, data: StatusData, handlers: StatusHandlers): void {
+  const view = memo(views, element, () => build(element));
+  view.data = data;
+  view.handlers = handlers;
+  const s = data.session;
+  element.hidden = false;
+  text(view.meta, s ? `${s.env} · ${s.mode}` : "");
+  view.meta.title = s ? `session ${s.id}` : "";
+  text(view.round, s ? roundText(s) : "");
+  text(view.phase, s ? s.phase : "");
+  view.phase.className = `phase phase-${s?.phase ?? "none"}`;
+  if (s) {
+    const c = s.counts;
+    const budget = s.settings.comparisons_per_round;
+    text(view.comparisons, `${c.comparisons_round}${budget ? ` / ${budget}` : ""}`);
+    view.comparisons.nextElementSibling!.textContent = `${c.comparisons_total} total`;
+    text(view.pairs, String(c.pairs_round));
+    view.pairs.nextElementSibling!.textContent = `${c.pairs_total} total`;
+  }
+  const ready = s?.phase === "ready";
+  view.pause.disabled = !ready || data.busy;
+  const paused = s?.timer.paused ?? false;
+  text(view.pause, paused ? "Resume" : "Pause");
+  attr(view.pause, "aria-label", paused ? "Resume the round timer" : "Pause the round timer");
+  view.end.disabled = !ready || data.busy;
+  if (!ready) resetConfirm(view);
+  text(view.conn, data.connection === "open" ? "live" : data.connection === "lost" ? "reconnecting…" : "connecting…");
+  view.conn.className = `conn conn-${data.connection}`;
+  tick(view);
+}
+
+function resetConfirm(view: View): void {
+  view.confirmUntil = 0;
+  view.end.classList.remove("confirm");
+  text(view.end, "End round");
+}
+
+function tick(view: View): void {
+  const s = view.data?.session;
+  if (!s) {
+    text(view.timer, "");
+    return;
+  }
+  const elapsed = elapsedNow(s.timer, s.phase === "ready" ? Date.now() - view.data!.sessionAt : 0);
+  if (s.phase !== "ready") view.timer.classList.remove("late");
+  const budget = s.timer.budget_s;
+  text(view.timer, budget > 0 ? `${clock(Math.min(elapsed, budget))} / ${clock(budget)}` : clock(elapsed));
+  view.timer.classList.toggle("paused", s.timer.paused);
+  view.timer.classList.toggle("late", budget > 0 && budget - elapsed < 30 && s.phase === "ready");
+  if (view.confirmUntil && Date.now() > view.confirmUntil) resetConfirm(view);
+}
+
+function build(element: HTMLElement): View {
+  const meta = h("span", { class: "meta" });
+  const round = h("span", { class: "round" });
+  const phase = h("span", { class: "phase" });
+  const timer = h("span", { class: "timer num", role: "timer", "aria-label": "Round time" });
+  const pause = h("button", { type: "button", class: "ghost small" }, "Pause");
+  const comparisons = h("span", { class: "num" });
+  const pairs = h("span", { class: "num" });
+  const end = h("button", { type: "button", class: "end-round" }, "End round");
+  const conn = h("span", { class: "conn", role: "status" });
+  const sessions = h("button", { type: "button", class: "brand", title: "Sessions" }, "groupwise");
+  element.classList.add("statusbar");
+  element.replaceChildren(
+    sessions,
+    meta,
+    h("span", { class: "sep", "aria-hidden": "true" }),
+    round,
+    phase,
+    h("span", { class: "timer-wrap" }, timer, pause),
+    h(
+      "dl",
+      { class: "counts" },
+      h("div", {}, h("dt", {}, "Comparisons"), h("dd", {}, comparisons, h("span", { class: "total num" }))),
+      h("div", {}, h("dt", {}, "Pairs"), h("dd", {}, pairs, h("span", { class: "total num" }))),
+    ),
+    conn,
+    end,
+  );
+  const view: View = {
+    meta,
+    round,
+    phase,
+    timer,
+    pause,
+    comparisons,
+    pairs,
+    end,
+    conn,
+    data: null,
+    handlers: null,
+    confirmUntil: 0,
+  };
+  pause.addEventListener("click", () => {
+    if (view.data?.session?.timer.paused) view.handlers?.resume();
+    else view.handlers?.pause();
+  });
+  end.addEventListener("click", () => {
+    if (view.confirmUntil > Date.now()) {
+      resetConfirm(view);
+      view.handlers?.endRound();
+      return;
+    }
+    view.confirmUntil = Date.now() + CONFIRM_MS;
+    end.classList.add("confirm");
+    text(end, "Click again to end the round");
+  });
+  sessions.addEventListener("click", () => view.handlers?.sessions());
+  window.setInterval(() => tick(view), 500);
+  return view;
+}

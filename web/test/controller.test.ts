@@ -1,0 +1,102 @@
+import { describe, expect, it, vi } from "vitest";
+import type { Api } from "../src/api";
+import { fakeApi } from "../src/bench/fake-api";
+import { syntheticRound } from "../src/bench/synthetic";
+import { createController } from "../src/controller";
+import { createStore } from "../src/state";
+
+const round = syntheticRound(40, { suggestions: 20, history: 0, seed: 5 });
+
+function setup(mode: "groupwise" | "pairwise", patch: Partial<Api> = {}) {
+  const api = { ...fakeApi(round, mode), ...patch } as Api;
+  const store = createStore();
+  const controller = createController(store, api, { storage: null });
+  return { api, store, controller };
+}
+
+function deferred<T>() {
+  let resolve!: (v: T) => void;
+  const promise = new Promise<T>((r) => (resolve = r));
+  return { promise, resolve };
+}
+
+describe("controller (groupwise)", () => {
+  it("pre-fills a suggestion when both groups are empty", async () => {
+    const { store, controller } = setup("groupwise");
+    await controller.boot("s-demo");
+    const st = store.getState();
+    expect(st.round?.tree.leaves).toHaveLength(40);
+    expect(st.groups.A.length).toBeGreaterThan(0);
+    expect(st.origin.source).toBe("suggested");
+  });
+
+  it("never overwrites groups chosen while the suggestion was on its way", async () => {
+    const gate = deferred<void>();
+    const base = fakeApi(round, "groupwise");
+    const { store, controller } = setup("groupwise", {
+      nextSuggestion: async (...args) => {
+        await gate.promise;
+        return base.nextSuggestion(...args);
+      },
+    });
+    const booted = controller.boot("s-demo");
+    await vi.waitFor(() => expect(store.getState().suggestionStatus).toBe("loading"));
+    store.dispatch({ type: "select", click: { leaves: ["b1"], isLeaf: true, add: false }, other: false, at: 1 });
+    gate.resolve();
+    await booted;
+    expect(store.getState().groups).toEqual({ A: ["b1"], B: [] });
+  });
+
+  it("sends one judgement per answer, with source, edits and time", async () => {
+    const { api, store, controller } = setup("groupwise");
+    const submit = vi.spyOn(api, "submitJudgement");
+    await controller.boot("s-demo");
+    store.dispatch({ type: "clear" });
+    store.dispatch({ type: "select", click: { leaves: ["b1", "b2"], isLeaf: false, add: false }, other: false, at: Date.now() });
+    store.dispatch({ type: "select", click: { leaves: ["b3"], isLeaf: true, add: false }, other: true, at: Date.now() });
+    await Promise.all([controller.answer("right"), controller.answer("right"), controller.answer("left")]);
+    expect(submit).toHaveBeenCalledTimes(1);
+    const body = submit.mock.calls[0]![1];
+    expect(body).toMatchObject({ left: ["b1", "b2"], right: ["b3"], label: "right", source: "explored", edits: 2, round: 1 });
+    expect(body.client_id).toMatch(/^[0-9a-f-]{36}$/);
+    const st = store.getState();
+    expect(st.judgements.at(-1)?.label).toBe("right");
+    expect(st.toast?.text).toBe("Saved: right better · 2 preference pairs.");
+  });
+
+  it("undo deletes the last judgement and brings its groups back", async () => {
+    const { api, store, controller } = setup("groupwise");
+    const undo = vi.spyOn(api, "undoJudgement");
+    await controller.boot("s-demo");
+    store.dispatch({ type: "set-groups", groups: { A: ["b4"], B: ["b5", "b6"] }, origin: { source: "suggested", edits: 0, startedAt: 0, suggestion: null } });
+    await controller.answer("equal");
+    const id = store.getState().judgements.at(-1)!.id;
+    await controller.undo();
+    expect(undo).toHaveBeenCalledWith("s-demo", id);
+    expect(store.getState().judgements.some((j) => j.id === id)).toBe(false);
+    expect(store.getState().groups).toEqual({ A: ["b4"], B: ["b5", "b6"] });
+    expect(store.getState().origin.source).toBe("suggested");
+  });
+});
+
+describe("controller (pairwise)", () => {
+  it("shows the following pair at once and sends the answer behind it", async () => {
+    const gate = deferred<void>();
+    const base = fakeApi(round, "pairwise");
+    const { store, controller } = setup("pairwise", {
+      submitJudgement: async (...args) => {
+        await gate.promise;
+        return base.submitJudgement(...args);
+      },
+    });
+    await controller.boot("s-demo");
+    const first = store.getState().pairwise.current!;
+    const following = store.getState().pairwise.following!;
+    controller.answerPair("left");
+    // on screen before the server has even answered
+    expect(store.getState().pairwise.current).toEqual(following);
+    gate.resolve();
+    await vi.waitFor(() => expect(store.getState().judgements.at(-1)?.left).toEqual([first.left]));
+    expect(store.getState().pairwise.done).toContain(`${first.left}:${first.right}`);
+  });
+});
