@@ -1,5 +1,6 @@
 # groupwise: `make run` and `make test` set up everything they need (idempotently) and
-# then do their job. Setup lands in .venv/ and is redone only when pyproject.toml changes.
+# then do their job. Setup lands in .venv/ and web/node_modules/ and is redone only when
+# pyproject.toml or web/package-lock.json changes; the web UI is rebuilt when web/ changes.
 
 PYTHON ?= python3
 VENV := .venv
@@ -9,17 +10,26 @@ STAMPS := .make-stamps
 # unpinned torch would pull gigabytes of CUDA wheels).
 TORCH := torch==2.13.0
 
-RUN_ENV ?= GridWorld
-RUN_OUT ?= runs/quickstart
+RUN_ENV ?= Hopper
+RUN_DATA ?= data
+WEB_BUILD := web/dist/index.html
+WEB_SOURCES := $(shell find web/src web/index.html web/vite.config.ts web/tsconfig.json \
+	-type f 2>/dev/null)
 
-.PHONY: run test test-slow bench lint setup clean
+.PHONY: run test test-web test-slow bench lint setup clean
 
-run: $(STAMPS)/python
-	$(BIN)/groupwise train --env $(RUN_ENV) --oracle pairwise --comparisons 60 --rounds 3 \
-		--steps 30000 --seed 0 --out $(RUN_OUT) --resume
+# the interactive app on 127.0.0.1 (prints the URL); the session resumes on the next run
+run: $(STAMPS)/python $(WEB_BUILD)
+	$(BIN)/groupwise serve --env $(RUN_ENV) --data $(RUN_DATA)
 
-test: $(STAMPS)/dev
-	$(BIN)/python -m pytest -n 2 --dist loadfile -q
+# unit and integration tests two at a time, then the browser tests one at a time (each runs
+# a server with its training worker and a Chromium: two at once only fight for the cores)
+test: $(STAMPS)/dev $(WEB_BUILD) test-web
+	$(BIN)/python -m pytest -n 2 --dist loadfile -q -m "not slow and not e2e"
+	GROUPWISE_E2E_REQUIRED=1 $(BIN)/python -m pytest -q tests/e2e
+
+test-web: $(STAMPS)/web
+	cd web && npm test
 
 test-slow: $(STAMPS)/dev
 	$(BIN)/python -m pytest -m slow -q -s
@@ -32,11 +42,23 @@ lint: $(STAMPS)/dev
 	$(BIN)/ruff format --check src tests benchmarks
 	$(BIN)/mypy
 
-setup: $(STAMPS)/dev
+setup: $(STAMPS)/dev $(WEB_BUILD)
 
 $(STAMPS)/system: scripts/system-deps.sh
 	bash scripts/system-deps.sh
 	@mkdir -p $(STAMPS) && touch $@
+
+# Debian's Chromium for the browser tests (never `playwright install`: no browser downloads)
+$(STAMPS)/system-dev: scripts/system-deps.sh
+	bash scripts/system-deps.sh chromium
+	@mkdir -p $(STAMPS) && touch $@
+
+$(STAMPS)/web: web/package.json web/package-lock.json
+	cd web && npm ci --no-audit --no-fund
+	@mkdir -p $(STAMPS) && touch $@
+
+$(WEB_BUILD): $(STAMPS)/web $(WEB_SOURCES)
+	cd web && npm run build
 
 $(STAMPS)/venv:
 	$(PYTHON) -m venv $(VENV)
@@ -48,9 +70,9 @@ $(STAMPS)/python: $(STAMPS)/system $(STAMPS)/venv pyproject.toml
 	$(BIN)/pip install -q -e .
 	@touch $@
 
-$(STAMPS)/dev: $(STAMPS)/python
+$(STAMPS)/dev: $(STAMPS)/python $(STAMPS)/system-dev
 	$(BIN)/pip install -q -e '.[dev]'
 	@touch $@
 
 clean:
-	rm -rf $(VENV) $(STAMPS) runs
+	rm -rf $(VENV) $(STAMPS) runs web/node_modules web/dist

@@ -22,6 +22,7 @@ import argparse
 import functools
 import http.server
 import os
+import sys
 import socketserver
 import statistics
 import subprocess
@@ -132,7 +133,7 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument(
         "--chromium", default=os.environ.get("GROUPWISE_CHROMIUM", "/usr/bin/chromium")
     )
-    args = parser.parse_args(argv)
+    args = parser.parse_args([] if argv is None else argv)
     rows = run(args.sizes, args.repeats, args.chromium)
     print(
         "Exploration view, 100 suggestion + 400 history edges, Chromium (software raster),"
@@ -143,4 +144,4 @@ def main(argv: list[str] | None = None) -> None:
 
 
 if __name__ == "__main__":
-    main()
+    main(sys.argv[1:])

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 
 from groupwise.config import LoopConfig, PPOConfig, RewardConfig, RunConfig
 
+
 @dataclass(frozen=True)
 class EnvBudget:
     """PPO env steps of one cell."""
@@ -218,7 +219,5 @@ SMOKE = StudyProfile(
     hidden=True,
 )
 
-PROFILES: dict[str, StudyProfile] = {
-    p.name: p for p in (PAPER, LOCAL, SESSION, QUICK, SMOKE)
-}
+PROFILES: dict[str, StudyProfile] = {p.name: p for p in (PAPER, LOCAL, SESSION, QUICK, SMOKE)}
 """Every profile by name; `StudyProfile.hidden` ones are for tests."""

@@ -52,9 +52,7 @@ def test_invalid_judgements_are_rejected(left, right, label, message):
         Judgement(left, right, label)
 
 
-@given(
-    count=st.integers(0, 30), limit=st.integers(0, 40), seed=st.integers(0, 2**32 - 1)
-)
+@given(count=st.integers(0, 30), limit=st.integers(0, 40), seed=st.integers(0, 2**32 - 1))
 def test_cap_pairs_keeps_at_most_the_limit_in_order(count, limit, seed):
     pairs = [Pair(i, i + 100, 1.0) for i in range(count)]
     kept = cap_pairs(pairs, limit, np.random.default_rng(seed))

@@ -18,7 +18,7 @@ def test_rewards_come_from_the_reward_fn_on_the_obs_the_action_saw():
     venv.seed(3)
     obs = venv.reset()
     actions = np.array([1, 4])
-    next_obs, rewards, dones, infos = venv.step(actions)
+    next_obs, rewards, _dones, infos = venv.step(actions)
     np.testing.assert_allclose(rewards, obs[:, 0] * 100 + actions)
     np.testing.assert_array_equal(seen[0][0], obs)
     np.testing.assert_array_equal(seen[0][1], encode_actions(base.action_space, actions))
