@@ -22,10 +22,10 @@ import argparse
 import functools
 import http.server
 import os
-import sys
 import socketserver
 import statistics
 import subprocess
+import sys
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager
