@@ -37,9 +37,9 @@ Processes. The kernel runs on numba's threading layer, OpenMP where available. n
 terminates a child forked from a process that has used the OpenMP layer, so a process
 that computes distances should start its workers with "spawn" or "forkserver". Starting
 that layer sets the OpenMP thread count of the whole process, torch's OpenMP runtime
-included (a process that had asked torch for one thread found it on every core, and two
-study cells on two cores took 145 s instead of ~15 s), so every kernel launch restores the
-OpenMP limits it found (threadpoolctl).
+included (a process that had asked torch for one thread found it on every core: two quick
+GridWorld groupwise cells side by side on two cores took 108 s each instead of 27 s), so
+every kernel launch restores the OpenMP limits it found (threadpoolctl).
 """
 
 import time

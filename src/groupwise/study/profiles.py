@@ -15,7 +15,7 @@ the rounds, the PPO step budgets per env and the evaluation. Five ship:
 - ``local``: the largest budget that runs the same 90 cells in a night (≤ 10 h; 8–9 h
   extrapolated from measured cells) on two cores; the arithmetic is in `LOCAL`'s docstring.
 - ``session``: the paper's protocol on GridWorld, MountainCarContinuous and Reacher with a
-  tenth of ``local``'s PPO budgets: about an hour on two cores (the study in ``docs/results``).
+  fifth of ``local``'s PPO budgets: about an hour on two cores (the study in ``docs/results``).
 - ``quick``: GridWorld and MountainCarContinuous, 2 seeds, tiny budgets: a few minutes on two
   cores, for CI and for trying the pipeline.
 - ``smoke`` (hidden): the tiniest cell that still runs every phase, for the tests.
@@ -184,8 +184,9 @@ SESSION = StudyProfile(
     ppo=PPOConfig(tensorboard=False),
 )
 """The study that fits in one working session: the paper's protocol (400 comparisons in 5
-rounds, three DMs, five seeds) on the three cheapest envs, with PPO budgets a tenth of
-`LOCAL`'s. 45 cells × (80–160 k steps) = 4.8 M steps."""
+rounds, three DMs, five seeds) on the three cheapest envs, with a fifth of `LOCAL`'s PPO
+budgets. 45 cells × (80–160 k steps) = 4.8 M steps. Measured: 74 min for the 45 cells on 2
+workers, on a machine shared with other test runs."""
 
 QUICK = StudyProfile(
     name="quick",
