@@ -12,6 +12,7 @@ import gymnasium as gym
 import numpy as np
 import torch
 from stable_baselines3 import PPO
+from stable_baselines3.common.logger import Logger
 from stable_baselines3.common.running_mean_std import RunningMeanStd
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecMonitor, VecNormalize
 
@@ -81,6 +82,9 @@ class PPOAgent:
             return
         self.model.set_random_seed(seed)
         self.model.set_env(self.venv, force_reset=True)
+        if self.model.tensorboard_log is None:
+            # without one, SB3 makes an empty /tmp/SB3-<time> folder on every learn call
+            self.model.set_logger(Logger(folder=None, output_formats=[]))
         self.model.learn(
             total_timesteps=steps,
             callback=ProgressCallback(steps, show_progress, report),

@@ -1,3 +1,6 @@
+import dataclasses
+import tempfile
+
 import numpy as np
 
 from groupwise.config import PPOConfig
@@ -41,3 +44,17 @@ def test_training_on_the_same_seed_is_deterministic():
         agent.learn(256, seed=7)
         results.append(agent.act(np.zeros((3, 2), np.float32), np.random.default_rng(0), True))
     np.testing.assert_array_equal(results[0], results[1])
+
+
+def test_learning_without_tensorboard_writes_nothing_to_the_temp_dir(tmp_path, monkeypatch):
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    agent = PPOAgent(make, SMALL, seed=0)
+    agent.learn(128, seed=1)
+    agent.learn(128, seed=2)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_learning_with_tensorboard_logs_under_the_run_dir(tmp_path):
+    agent = PPOAgent(make, dataclasses.replace(SMALL, tensorboard=True), 0, log_dir=tmp_path)
+    agent.learn(128, seed=1)
+    assert list(tmp_path.glob("ppo_*/events.out.tfevents.*"))
