@@ -118,6 +118,9 @@ class LoopConfig:
     every pair."""
     max_group_size: int = 8
     """Largest group the group DMs compare (paper §6: 8 keeps comparisons humanly possible)."""
+    interactive_gap: float = 1.0
+    """The "interactive-distinct" DM compares only groups whose mean true returns differ by at
+    least this many per-behaviour noise sds (L·σ); the spec's Interactive-DM uses 0."""
     teacher_gamma: float = 0.9
     """Myopic imperfect teachers ("<dm>-myopic"): discount per step back from the last (B-Pref)."""
     teacher_mistake: float = 0.1
@@ -154,6 +157,7 @@ class LoopConfig:
             (0.0 <= self.teacher_mistake <= 1.0, "teacher mistake must be in [0, 1]"),
             (0.0 <= self.teacher_skip_quantile <= 1.0, "teacher skip quantile must be in [0, 1]"),
             (self.teacher_equal_fraction >= 0, "teacher equal fraction must be >= 0"),
+            (self.interactive_gap >= 0, "interactive gap must be >= 0"),
             (self.seed >= 0, "seed must be >= 0"),
         ]
         for ok, message in checks:

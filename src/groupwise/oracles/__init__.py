@@ -1,6 +1,8 @@
 """Simulated decision-makers, registered by name (SPEC §7).
 
-"pairwise", "groupwise" and "interactive" are the paper's three DMs; "<dm>-<imperfection>"
+"pairwise", "groupwise" and "interactive" are the paper's three DMs; "interactive-distinct" is
+the Interactive-DM that compares only groups at least `LoopConfig.interactive_gap` noise sds
+apart in mean true return (beyond the spec, see `interactive.py`); "<dm>-<imperfection>"
 (e.g. "groupwise-myopic", "pairwise-mistake") answers the same queries with a B-Pref-style
 imperfect teacher (`imperfect.TEACHERS`: myopic, mistake, skip, equal).
 """
@@ -49,6 +51,11 @@ ORACLES: dict[str, Callable[[LoopConfig], Oracle]] = {
     "pairwise": lambda cfg: PairwiseDM(sigma=cfg.noise_sigma, candidates=cfg.candidate_pairs),
     "groupwise": lambda cfg: _QUERIES["groupwise"](cfg, _teacher(cfg)),
     "interactive": lambda cfg: _QUERIES["interactive"](cfg, _teacher(cfg)),
+    "interactive-distinct": lambda cfg: InteractiveDM(
+        _teacher(cfg),
+        max_group=cfg.max_group_size,
+        min_gap=cfg.interactive_gap * cfg.fragment_length * cfg.noise_sigma,
+    ),
     **{f"{dm}-{kind}": _imperfect(dm, kind) for dm in _QUERIES for kind in TEACHERS},
 }
 

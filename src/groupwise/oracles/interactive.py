@@ -11,10 +11,16 @@ favours big groups) and walks the ranking from best to worst (`chain_pairs`):
 - a behaviour is available while it has been used in fewer than 2 comparisons.
 
 So neighbours in quality are compared (best vs second, second vs third, ...), and the chain
-runs down to the worst groups. The higher-ranked group is always the left one. When the
-chain has more comparisons than the round's queries, an evenly spaced subset is asked, so
-the comparisons still span the range. Each comparison is answered with the noisy group
-decision, and a skipped one uses up its query.
+runs down to the worst groups. With `min_gap` > 0 (the "interactive-distinct" DM, beyond the
+spec) the partner must also be at least `min_gap` lower in mean true return: a person who
+skips comparisons they can see are too close to call. Neighbours in quality differ by far
+less than the perception noise, so the spec's walk mostly asks near-ties that the group
+decision then skips for interference (measured in docs/results/session).
+
+The higher-ranked group is always the left one. When the chain has more comparisons than
+the round's queries, an evenly spaced subset is asked, so the comparisons still span the
+range. Each comparison is answered with the noisy group decision, and a skipped one uses up
+its query.
 """
 
 from collections.abc import Sequence
@@ -31,16 +37,19 @@ from groupwise.types import FloatArray
 
 
 def chain_pairs(
-    groups: Sequence[Sequence[int]], scores: FloatArray, max_uses: int = 2
+    groups: Sequence[Sequence[int]], scores: FloatArray, max_uses: int = 2, min_gap: float = 0.0
 ) -> list[tuple[int, int]]:
     """Comparisons (higher, lower) as indices into `groups`, best first (module docstring).
 
     groups: G groups of behaviour indices; scores: (G,) their rank key, higher is better
-    (ties keep the list order).
+    (ties keep the list order); min_gap: the least score difference of a comparison.
     """
     if max_uses < 1:
         raise ValueError(f"max uses must be >= 1, got {max_uses}")
-    order = np.argsort(-np.asarray(scores, dtype=np.float64), kind="stable").tolist()
+    if min_gap < 0:
+        raise ValueError(f"min gap must be >= 0, got {min_gap}")
+    key = np.asarray(scores, dtype=np.float64)
+    order = np.argsort(-key, kind="stable").tolist()
     sets = [frozenset(int(i) for i in g) for g in groups]
     uses: dict[int, int] = {}
 
@@ -52,7 +61,12 @@ def chain_pairs(
         if not available(g):
             continue
         partner = next(
-            (h for h in order[pos + 1 :] if not sets[g] & sets[h] and available(h)), None
+            (
+                h
+                for h in order[pos + 1 :]
+                if key[g] - key[h] >= min_gap and not sets[g] & sets[h] and available(h)
+            ),
+            None,
         )
         if partner is None:
             continue
@@ -82,6 +96,8 @@ class InteractiveDM:
     min_group: int = 2
     max_group: int = 8
     max_uses: int = 2
+    min_gap: float = 0.0
+    """The least difference in mean true return between compared groups (0: the spec's walk)."""
 
     def gather(self, pool: Pool, n_queries: int, rng: np.random.Generator) -> list[Judgement]:
         if n_queries <= 0 or len(pool) < 2:
@@ -90,7 +106,7 @@ class InteractiveDM:
         true = pool.true_returns
         means = np.array([true[list(c.members)].mean() for c in candidates])
         members = [c.members for c in candidates]
-        pairs = chain_pairs(members, means, self.max_uses)
+        pairs = chain_pairs(members, means, self.max_uses, self.min_gap)
         asked = [pairs[k] for k in evenly_spaced(len(pairs), n_queries)]
         judgements = (self.teacher.judge(pool, members[g], members[h], rng) for g, h in asked)
         return [j for j in judgements if j is not None]

@@ -1,6 +1,7 @@
 from collections import Counter
 
 import numpy as np
+import pytest
 
 from groupwise.oracles.group_decision import Perception, Teacher
 from groupwise.oracles.groupwise import pool_candidates
@@ -34,6 +35,20 @@ def test_chain_pairs_each_behaviour_at_most_twice_and_disjoint():
         assert means[g] >= means[h]  # best to worst: the left group ranks higher
     lefts = [means[g] for g, _ in pairs]
     assert lefts == sorted(lefts, reverse=True)
+
+
+def test_chain_pairs_with_a_min_gap_skips_partners_too_close_to_call():
+    groups = [(0,), (1,), (2,), (3,), (4,)]
+    means = [10.0, 9.0, 6.0, 5.5, 1.0]
+    assert chain_pairs(groups, means) == [(0, 1), (1, 2), (2, 3), (3, 4)]
+    # a gap of 3: 10 passes over 9 (1 lower) to 6; 9 takes 6 (exactly 3 lower), now used
+    # twice, so 6 starts nothing; 5.5 takes 1
+    assert chain_pairs(groups, means, min_gap=3.0) == [(0, 2), (1, 2), (3, 4)]
+    # each once: 9 passes over the used 6 to 5.5; nothing is left for 1
+    assert chain_pairs(groups, means, max_uses=1, min_gap=3.0) == [(0, 2), (1, 3)]
+    assert chain_pairs(groups, means, min_gap=20.0) == []
+    with pytest.raises(ValueError, match="min gap"):
+        chain_pairs(groups, means, min_gap=-1.0)
 
 
 def test_evenly_spaced():
@@ -74,6 +89,18 @@ def test_pairs_neighbours_by_mean_return_best_to_worst(make_pool):
         (_members(1), _members(3)),
     ]
     assert all(j.label == LEFT_BETTER and j.edits == 0 for j in judgements)
+
+
+def test_distinct_walk_compares_only_groups_far_enough_apart(make_pool):
+    pool = _cluster_pool(make_pool)
+    # means 30 > 25 > 20 > 5: with a gap of 8, c0 passes over c2 (5 lower) to c1 (10 lower);
+    # c2 passes over c1 (5 lower) to c3; c1 (used once) takes c3 (used once) as well
+    judgements = InteractiveDM(NOISE_FREE, min_gap=8.0).gather(pool, 10, np.random.default_rng(0))
+    assert [(set(j.left), set(j.right)) for j in judgements] == [
+        (_members(0), _members(1)),
+        (_members(2), _members(3)),
+        (_members(1), _members(3)),
+    ]
 
 
 def test_more_pairs_than_queries_keep_the_ends(make_pool):
