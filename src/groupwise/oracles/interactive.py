@@ -15,7 +15,13 @@ runs down to the worst groups. With `min_gap` > 0 (the "interactive-distinct" DM
 spec) the partner must also be at least `min_gap` lower in mean true return: a person who
 skips comparisons they can see are too close to call. Neighbours in quality differ by far
 less than the perception noise, so the spec's walk mostly asks near-ties that the group
-decision then skips for interference (measured in docs/results/session).
+decision then skips for interference or labels by chance. Measured on the `session` profile
+(5 seeds, 400 queries; spec walk → a gap of one noise sd): label error 0.45 → 0.08
+(GridWorld), 0.40 → 0.02 (MountainCar), 0.35 → 0.12 (Reacher), but judgements 136 → 27,
+41 → 23, 153 → 21, so final return rose on MountainCar (3 536 → 11 852) and fell on
+GridWorld (299 → 273) and Reacher (−747 → −1 396). Either way the chain finds far fewer
+comparisons than the round has queries: the candidates (nested tree nodes, each behaviour
+used twice) run out, and that, not the labels, is what limits this DM.
 
 The higher-ranked group is always the left one. When the chain has more comparisons than
 the round's queries, an evenly spaced subset is asked, so the comparisons still span the
