@@ -10,8 +10,9 @@ policy there (measured 2026-11-23, seeds 0/1/2, random 338, true-reward PPO 881)
 384 / 319 at the spec's noise and 427 / 588 / 315 with a near-noise-free teacher (σ = 0.05).
 The bottleneck is the reward model, not the labels: with 400 noise-free comparisons the loop
 reached 317, while PPO on a reward fitted offline to 400 (2,000) noise-free pairs of random
-fragments reached 498 (741). GridWorld's per-step reward is a distance that 30-step pair
-labels pin down only slowly; the session study (400 comparisons, 80k steps) got 416 ± 86.
+fragments, trained 30 (10) epochs instead of the loop's 3 per round, reached 498 (741).
+GridWorld's per-step reward is a distance that 30-step pair labels pin down only slowly; the
+session study's Pairwise-DM (400 comparisons, 80k steps) got 416 ± 86.
 """
 
 import numpy as np

@@ -19,9 +19,9 @@ decision then skips for interference or labels by chance. Measured on the `sessi
 (5 seeds, 400 queries; spec walk → a gap of one noise sd): label error 0.45 → 0.08
 (GridWorld), 0.40 → 0.02 (MountainCar), 0.35 → 0.12 (Reacher), but judgements 136 → 27,
 41 → 23, 153 → 21, so final return rose on MountainCar (3 536 → 11 852) and fell on
-GridWorld (299 → 273) and Reacher (−747 → −1 396). Either way the chain finds far fewer
-comparisons than the round has queries: the candidates (nested tree nodes, each behaviour
-used twice) run out, and that, not the labels, is what limits this DM.
+GridWorld (299 → 273) and Reacher (−747 → −1 396). Either way most of the 400 queries
+yield no judgement; we think the chain runs out of candidates (nested tree nodes, each
+behaviour used twice) before the round's queries do, but asked vs skipped was not counted.
 
 The higher-ranked group is always the left one. When the chain has more comparisons than
 the round's queries, an evenly spaced subset is asked, so the comparisons still span the
