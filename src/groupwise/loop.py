@@ -25,12 +25,12 @@ from groupwise.checkpoint import (
     latest_checkpoint,
     write_checkpoint,
 )
-from groupwise.clips.fragments import most_uncertain, stack_fragments, tile_fragments
+from groupwise.fragments import most_uncertain, stack_fragments, tile_fragments
 from groupwise.config import RunConfig
 from groupwise.envs import make_env
 from groupwise.envs.spaces import action_dim, observation_dim
 from groupwise.oracles import ORACLES, Oracle
-from groupwise.pool import Pool
+from groupwise.pool import BehaviourPool
 from groupwise.preferences.dataset import PreferenceDataset, wrong_labels
 from groupwise.preferences.pairs import PAIR_DERIVATIONS, Pair, cap_pairs
 from groupwise.query.groups import step_variance
@@ -138,7 +138,7 @@ def build_pool(
     size: int,
     cfg: RunConfig,
     rng: np.random.Generator,
-) -> Pool:
+) -> BehaviourPool:
     """Sample episodes, tile them into fragments and keep the `size` most uncertain ones."""
     length = cfg.loop.fragment_length
     probe = make()
@@ -154,7 +154,7 @@ def build_pool(
     step = ensemble.step_rewards(obs, acts)  # (K, M, L): one forward pass for both uses
     returns = np.ascontiguousarray(step.sum(axis=-1).T)  # (M, K), as ensemble.returns
     keep = most_uncertain(returns.var(axis=1), size)
-    return Pool(
+    return BehaviourPool(
         round_index,
         tuple(fragments[i] for i in keep),
         returns[keep],
@@ -308,7 +308,7 @@ def write_records(path: Path, records: list[RoundRecord]) -> None:
     tmp.replace(path)
 
 
-def _label_errors(pool: Pool, pairs: list[Pair]) -> float:
+def _label_errors(pool: BehaviourPool, pairs: list[Pair]) -> float:
     if not pairs:
         return float("nan")
     true = pool.true_returns

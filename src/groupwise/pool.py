@@ -4,12 +4,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from groupwise.clips.fragments import Fragment
+from groupwise.fragments import Fragment
 from groupwise.types import FloatArray
 
 
 @dataclass(frozen=True)
-class Pool:
+class BehaviourPool:
     """The behaviours of one round.
 
     `predicted_returns` is computed once per round (SPEC §5) and shared by every query

@@ -57,7 +57,7 @@ from groupwise.behaviour import (
     pool_features,
     to_json,
 )
-from groupwise.clips.fragments import Fragment, Trajectory, most_uncertain, tile_fragments
+from groupwise.fragments import Fragment, Trajectory, most_uncertain, tile_fragments
 from groupwise.clips.render import RenderPool, plan_jobs
 from groupwise.clips.replay import FrameSettings, make_render_env
 from groupwise.clips.store import ClipStore

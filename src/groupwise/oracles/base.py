@@ -4,7 +4,7 @@ from typing import Protocol
 
 import numpy as np
 
-from groupwise.pool import Pool
+from groupwise.pool import BehaviourPool
 from groupwise.preferences.judgement import Judgement
 
 
@@ -15,4 +15,4 @@ class Oracle(Protocol):
     shorter than `n_queries`.
     """
 
-    def gather(self, pool: Pool, n_queries: int, rng: np.random.Generator) -> list[Judgement]: ...
+    def gather(self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator) -> list[Judgement]: ...

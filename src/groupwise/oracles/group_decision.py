@@ -33,7 +33,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from groupwise.oracles.noise import perceived_returns
-from groupwise.pool import Pool
+from groupwise.pool import BehaviourPool
 from groupwise.preferences.judgement import EQUAL, LEFT_BETTER, RIGHT_BETTER, Judgement, Source
 from groupwise.types import FloatArray
 
@@ -97,7 +97,7 @@ class Perception:
         if not 0.0 < self.gamma <= 1.0:
             raise ValueError(f"myopic discount must be in (0, 1], got {self.gamma}")
 
-    def __call__(self, pool: Pool, indices: Sequence[int], rng: np.random.Generator) -> FloatArray:
+    def __call__(self, pool: BehaviourPool, indices: Sequence[int], rng: np.random.Generator) -> FloatArray:
         """(n,) perceived returns of pool behaviours `indices`, fresh noise for each."""
         idx = np.asarray(indices, dtype=np.int64)
         if self.gamma == 1.0:
@@ -172,7 +172,7 @@ class Teacher:
 
     def judge(
         self,
-        pool: Pool,
+        pool: BehaviourPool,
         left: Sequence[int],
         right: Sequence[int],
         rng: np.random.Generator,

@@ -10,13 +10,13 @@ import numpy as np
 
 from groupwise.behaviour import TreeConfig, build_tree, dtw_matrix, group_candidates, pool_features
 from groupwise.oracles.group_decision import Teacher
-from groupwise.pool import Pool
+from groupwise.pool import BehaviourPool
 from groupwise.preferences.judgement import Judgement
 from groupwise.query.groups import GroupCandidate, return_variance, suggest_groups
 
 
 def pool_candidates(
-    pool: Pool,
+    pool: BehaviourPool,
     tree: TreeConfig | None = None,
     levels: tuple[int, ...] = (1, 2),
     min_size: int = 2,
@@ -55,7 +55,7 @@ class GroupwiseDM:
     max_uses: int = 2
     refill: bool = True
 
-    def gather(self, pool: Pool, n_queries: int, rng: np.random.Generator) -> list[Judgement]:
+    def gather(self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator) -> list[Judgement]:
         if n_queries <= 0 or len(pool) < 2:
             return []
         candidates = pool_candidates(pool, self.tree, self.levels, self.min_group, self.max_group)

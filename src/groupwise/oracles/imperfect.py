@@ -24,7 +24,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from groupwise.oracles.group_decision import Perception, Query, Teacher, decide
-from groupwise.pool import Pool
+from groupwise.pool import BehaviourPool
 from groupwise.preferences.judgement import EQUAL, Judgement
 from groupwise.query.pairwise import select_pairs
 
@@ -144,7 +144,7 @@ class TeacherPairwiseDM:
     teacher: Teacher = field(default_factory=Teacher)
     candidates: int = 10
 
-    def gather(self, pool: Pool, n_queries: int, rng: np.random.Generator) -> list[Judgement]:
+    def gather(self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator) -> list[Judgement]:
         if n_queries <= 0 or len(pool) < 2:
             return []
         pairs = select_pairs(pool.predicted_returns, n_queries, self.candidates, rng)

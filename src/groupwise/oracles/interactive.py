@@ -37,7 +37,7 @@ import numpy as np
 from groupwise.behaviour import TreeConfig
 from groupwise.oracles.group_decision import Teacher
 from groupwise.oracles.groupwise import pool_candidates
-from groupwise.pool import Pool
+from groupwise.pool import BehaviourPool
 from groupwise.preferences.judgement import Judgement
 from groupwise.types import FloatArray
 
@@ -105,7 +105,7 @@ class InteractiveDM:
     min_gap: float = 0.0
     """The least difference in mean true return between compared groups (0: the spec's walk)."""
 
-    def gather(self, pool: Pool, n_queries: int, rng: np.random.Generator) -> list[Judgement]:
+    def gather(self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator) -> list[Judgement]:
         if n_queries <= 0 or len(pool) < 2:
             return []
         candidates = pool_candidates(pool, self.tree, self.levels, self.min_group, self.max_group)

@@ -5,7 +5,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from groupwise.oracles.noise import perceived_returns, preference
-from groupwise.pool import Pool
+from groupwise.pool import BehaviourPool
 from groupwise.preferences.judgement import Judgement, Source
 from groupwise.query.pairwise import select_pairs
 
@@ -22,7 +22,7 @@ class PairwiseDM:
     candidates: int = 10
     beta: float | None = None
 
-    def gather(self, pool: Pool, n_queries: int, rng: np.random.Generator) -> list[Judgement]:
+    def gather(self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator) -> list[Judgement]:
         if n_queries <= 0 or len(pool) < 2:
             return []
         pairs = select_pairs(pool.predicted_returns, n_queries, self.candidates, rng)

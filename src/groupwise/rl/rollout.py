@@ -10,7 +10,7 @@ from collections.abc import Callable
 import gymnasium as gym
 import numpy as np
 
-from groupwise.clips.fragments import Trajectory
+from groupwise.fragments import Trajectory
 from groupwise.envs.spaces import encode_actions
 from groupwise.rl.policy import Policy, random_actions
 

@@ -33,7 +33,7 @@ import numpy as np
 from sqlalchemy.orm import Session as OrmSession
 
 from groupwise.checkpoint import STATE_FILE, checkpoint_dir
-from groupwise.clips.fragments import stack_fragments
+from groupwise.fragments import stack_fragments
 from groupwise.clips.render import RenderPool
 from groupwise.clips.store import ClipStore
 from groupwise.config import LoopConfig, PPOConfig, RewardConfig, RunConfig

@@ -7,7 +7,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from groupwise.clips.fragments import Trajectory, tile_fragments
+from groupwise.fragments import Trajectory, tile_fragments
 from groupwise.clips.render import ClipJob, plan_jobs, run_job
 from groupwise.clips.replay import (
     FrameSettings,

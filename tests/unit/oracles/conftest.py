@@ -5,8 +5,8 @@ from collections.abc import Sequence
 import numpy as np
 import pytest
 
-from groupwise.clips.fragments import Fragment
-from groupwise.pool import Pool
+from groupwise.fragments import Fragment
+from groupwise.pool import BehaviourPool
 
 LENGTH = 10
 
@@ -17,7 +17,7 @@ def build_pool(
     k: int = 3,
     seed: int = 0,
     step_variance: bool = True,
-) -> Pool:
+) -> BehaviourPool:
     """A pool whose behaviour i has true return returns[i] (spread evenly over its steps).
 
     With `clusters`, behaviour i's observations sit near the corner `clusters[i]` of a
@@ -45,7 +45,7 @@ def build_pool(
             )
         )
     variance = rng.uniform(0.1, 1.0, size=n) if step_variance else None
-    return Pool(0, tuple(fragments), rng.normal(size=(n, k)), variance)
+    return BehaviourPool(0, tuple(fragments), rng.normal(size=(n, k)), variance)
 
 
 @pytest.fixture

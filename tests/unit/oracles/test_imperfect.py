@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from groupwise.clips.fragments import Fragment
+from groupwise.fragments import Fragment
 from groupwise.config import LoopConfig
 from groupwise.oracles import ORACLES
 from groupwise.oracles.group_decision import Perception, Teacher, decide
@@ -13,7 +13,7 @@ from groupwise.oracles.imperfect import (
     SkipWhenBothBelow,
     TeacherPairwiseDM,
 )
-from groupwise.pool import Pool
+from groupwise.pool import BehaviourPool
 from groupwise.preferences.dataset import wrong_labels
 from groupwise.preferences.judgement import EQUAL, LEFT_BETTER, RIGHT_BETTER, Judgement
 from groupwise.preferences.pairs import covering_pairs
@@ -85,7 +85,7 @@ def test_myopic_teacher_prefers_what_happens_last():
         Fragment(np.zeros((10, 2)), np.zeros((10, 1)), rewards, episode=i, start=0, reset_seed=0)
         for i, rewards in enumerate([early, late])
     )
-    pool = Pool(0, fragments, np.zeros((2, 3)))
+    pool = BehaviourPool(0, fragments, np.zeros((2, 3)))
     rng = np.random.default_rng(0)
     assert Teacher(Perception(0.0)).judge(pool, (0,), (1,), rng).label == LEFT_BETTER
     assert Teacher(Perception(0.0, gamma=0.9)).judge(pool, (0,), (1,), rng).label == RIGHT_BETTER

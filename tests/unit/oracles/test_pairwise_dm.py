@@ -1,12 +1,12 @@
 import numpy as np
 
-from groupwise.clips.fragments import Fragment
+from groupwise.fragments import Fragment
 from groupwise.oracles.noise import perceived_returns, preference
 from groupwise.oracles.pairwise import PairwiseDM
-from groupwise.pool import Pool
+from groupwise.pool import BehaviourPool
 
 
-def _pool(returns: list[float], k: int = 3) -> Pool:
+def _pool(returns: list[float], k: int = 3) -> BehaviourPool:
     fragments = tuple(
         Fragment(
             obs=np.zeros((30, 2), dtype=np.float32),
@@ -19,7 +19,7 @@ def _pool(returns: list[float], k: int = 3) -> Pool:
         for i, r in enumerate(returns)
     )
     rng = np.random.default_rng(0)
-    return Pool(0, fragments, rng.normal(size=(len(returns), k)))
+    return BehaviourPool(0, fragments, rng.normal(size=(len(returns), k)))
 
 
 def test_noise_has_the_specified_scale():

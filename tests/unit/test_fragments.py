@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from groupwise.clips.fragments import Trajectory, most_uncertain, stack_fragments, tile_fragments
+from groupwise.fragments import Trajectory, most_uncertain, stack_fragments, tile_fragments
 
 
 def _trajectory(length: int, episode: int = 0) -> Trajectory:
