@@ -122,21 +122,17 @@ def stratified_bootstrap_ci(
 
 
 def welch_t_test(a: FloatArray, b: FloatArray) -> TTest:
-    """Two-sided Welch t-test (unequal variances) of the finite values of `a` and `b`.
+    """Two-sided Welch t-test (unequal variances) of the finite values of `a` and `b`
+    (`scipy.stats.ttest_ind` with ``equal_var=False``).
 
-    t = (ā − b̄) / √(s²a/na + s²b/nb), Welch–Satterthwaite degrees of freedom. NaN when
-    either side has fewer than two values or both have zero variance.
+    NaN (t, df and p) when either side has fewer than two values or both are constant:
+    SciPy would answer those with a NaN t but df = 1, and warn.
     """
     x, y = _finite(a), _finite(b)
-    if x.size < 2 or y.size < 2:
+    if x.size < 2 or y.size < 2 or (np.ptp(x) == 0 and np.ptp(y) == 0):
         return TTest(math.nan, math.nan, math.nan)
-    va, vb = x.var(ddof=1) / x.size, y.var(ddof=1) / y.size
-    if va + vb == 0:
-        return TTest(math.nan, math.nan, math.nan)
-    t = (x.mean() - y.mean()) / math.sqrt(va + vb)
-    df = (va + vb) ** 2 / (va**2 / (x.size - 1) + vb**2 / (y.size - 1))
-    p = 2.0 * stats.t.sf(abs(t), df)
-    return TTest(float(t), float(df), float(p))
+    result = stats.ttest_ind(x, y, equal_var=False)
+    return TTest(float(result.statistic), float(result.df), float(result.pvalue))
 
 
 def relative_difference(a: float, b: float) -> float:

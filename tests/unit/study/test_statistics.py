@@ -97,7 +97,12 @@ def test_welch_t_test_ignores_missing_runs_and_refuses_too_few():
     assert welch_t_test(a, b).t == pytest.approx(expected.statistic)
     assert all(math.isnan(v) for v in vars(welch_t_test(np.array([1.0]), b)).values())
     constant = welch_t_test(np.ones(3), np.ones(4))
-    assert math.isnan(constant.t)
+    assert all(math.isnan(v) for v in vars(constant).values())
+    # one constant side is fine: the other's variance carries the test
+    one_constant = welch_t_test(np.ones(3), b)
+    assert one_constant.t == pytest.approx(
+        stats.ttest_ind(np.ones(3), b, equal_var=False).statistic
+    )
 
 
 def test_mean_and_sample_sd():
