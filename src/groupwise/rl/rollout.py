@@ -1,17 +1,27 @@
-"""Sampling whole episodes from a policy, with random exploration mixed in (SPEC §3.1).
+"""Sampling episodes from a policy, with random exploration mixed in (SPEC §3.1).
 
-All our envs have a fixed horizon, so a batch of episodes is stepped in lockstep and the
-policy sees one batched observation per step. Sampling uses its own env instances, never
-the ones PPO trains on.
+The episodes of a batch are stepped together, so the policy sees one batched observation per
+step, but each episode runs until its own end: the env terminates it, truncates it (its time
+limit), or it reaches `max_steps`. An env whose episode has ended is not stepped again and
+the policy is asked only about the episodes still running. The groupwise envs have fixed
+horizons, so there every episode of a batch has the same length; any other Gymnasium env
+(e.g. ``Hopper-v5``, which ends when the hopper falls) gives episodes of their own lengths.
+
+`sample_episodes_for_windows` samples as many episodes as it takes to tile a number of
+L-step windows from them, whatever the episodes' lengths turn out to be. Sampling uses its own
+env instances, never the ones PPO trains on.
 """
 
+import math
 from collections.abc import Callable
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
 
-from groupwise.fragments import Trajectory
 from groupwise.envs.spaces import encode_actions
+from groupwise.envs.true_reward import TRUE_REWARD_KEY
+from groupwise.fragments import Trajectory
 from groupwise.rl.policy import Policy, random_actions
 
 EnvFactory = Callable[[], gym.Env]
@@ -21,6 +31,11 @@ EXPLORATION_SEGMENT = 10
 turns in stretches, like imitation's ExplorationWrapper, so random behaviour is visible in a
 clip rather than single jittered steps)."""
 
+GIVE_UP_EPISODES = 16
+"""Episodes `sample_episodes_for_windows` samples without a single window among them before it
+concludes that the env's episodes are too short for the window length (a random Hopper-v5
+falls after 9-73 steps; 16 such episodes show their spread)."""
+
 
 def exploration_mask(
     n_episodes: int, horizon: int, fraction: float, rng: np.random.Generator
@@ -28,7 +43,8 @@ def exploration_mask(
     """(n_episodes, horizon) bool mask of steps that take a random action.
 
     A two-state Markov switch whose stationary share of random steps is `fraction`, with
-    random stretches of mean length `EXPLORATION_SEGMENT`.
+    random stretches of mean length `EXPLORATION_SEGMENT`. Column t is step t of each
+    episode; the columns after an episode's end are not used.
     """
     if not 0.0 <= fraction < 1.0:
         raise ValueError(f"exploration fraction must be in [0, 1), got {fraction}")
@@ -54,69 +70,194 @@ def sample_trajectories(
     exploration_fraction: float = 0.0,
     max_steps: int | None = None,
 ) -> list[Trajectory]:
-    """Run `n_episodes` whole episodes of `policy` and return them.
+    """Run `n_episodes` episodes of `policy` side by side and return them, numbered 0 … n − 1.
 
-    Episodes end at the env's truncation (its fixed horizon) or after `max_steps`. Each
-    episode is reset with a seed drawn from `rng`, stored in the trajectory for replay.
+    Each episode lasts until the env terminates or truncates it, or for `max_steps` steps,
+    whichever comes first, so episodes may differ in length. Each is reset with a seed drawn
+    from `rng`, stored in the trajectory for replay.
+
+    Raises:
+        ValueError: `n_episodes` < 1, or the env has no time limit (its spec sets no
+            ``max_episode_steps``) and `max_steps` is not given.
     """
+    if n_episodes < 1:
+        raise ValueError(f"need at least one episode, got {n_episodes}")
+    return _sample_batch(make_env, policy, n_episodes, rng, exploration_fraction, max_steps, 0)
+
+
+def sample_episodes_for_windows(
+    make_env: EnvFactory,
+    policy: Policy,
+    n_windows: int,
+    length: int,
+    rng: np.random.Generator,
+    exploration_fraction: float = 0.0,
+    batch: int | None = None,
+    max_episodes: int | None = None,
+    max_steps: int | None = None,
+) -> list[Trajectory]:
+    """Sample episodes until tiling them into `length`-step windows gives >= `n_windows`.
+
+    The windows are those of `fragments.tile_fragments`: ``len(episode) // length`` per
+    episode, none crossing an episode's end. Episodes are sampled in batches (see
+    `sample_trajectories`); the first batch is sized as if every episode lasted the env's
+    horizon (its time limit, or `max_steps` if smaller), ``ceil(n_windows / (horizon //
+    length))`` episodes, which is all it takes for a fixed-horizon env; later batches are
+    sized from the windows per episode seen so far. `batch` caps the episodes stepped side by
+    side; `max_episodes` caps the episodes sampled in all, and when it stops the sampling the
+    episodes may hold fewer than `n_windows` windows. The returned episodes are numbered
+    0 … E − 1 across batches (pools key fragments by episode and start step).
+
+    Raises:
+        ValueError: a non-positive count; the env has no time limit and `max_steps` is not
+            given; episodes cannot last `length` steps; or `GIVE_UP_EPISODES` episodes (or
+            `max_episodes`, if fewer) hold no window at all (the message says how many steps
+            they lasted).
+    """
+    for name, value in (("n_windows", n_windows), ("length", length)):
+        if value < 1:
+            raise ValueError(f"{name} must be >= 1, got {value}")
+    for name, cap in (("batch", batch), ("max_episodes", max_episodes)):
+        if cap is not None and cap < 1:
+            raise ValueError(f"{name} must be >= 1 or None, got {cap}")
+    probe = make_env()
+    try:
+        limit = _step_limit(probe, max_steps)
+        env_name = _env_name(probe)
+    finally:
+        probe.close()
+    if limit < length:
+        raise ValueError(
+            f"episodes of {env_name} last at most {limit} steps, fewer than one window of "
+            f"{length} steps"
+        )
+    trajectories: list[Trajectory] = []
+    windows = 0
+    wanted = math.ceil(n_windows / (limit // length))
+    while windows < n_windows:
+        room = math.inf if max_episodes is None else max_episodes - len(trajectories)
+        if room <= 0:
+            break
+        size = int(min(wanted, batch or wanted, room))
+        trajectories += _sample_batch(
+            make_env, policy, size, rng, exploration_fraction, max_steps, len(trajectories)
+        )
+        windows = sum(len(t) // length for t in trajectories)
+        if windows == 0:
+            if len(trajectories) >= min(GIVE_UP_EPISODES, max_episodes or math.inf):
+                raise ValueError(_too_short(env_name, trajectories, length))
+            wanted = GIVE_UP_EPISODES - len(trajectories)
+        else:
+            wanted = math.ceil((n_windows - windows) * len(trajectories) / windows)
+    return trajectories
+
+
+def evaluate(
+    make_env: EnvFactory,
+    policy: Policy,
+    n_episodes: int,
+    rng: np.random.Generator,
+    max_steps: int | None = None,
+) -> np.ndarray:
+    """True (env) return of each of `n_episodes` whole episodes of `policy`, (n_episodes,).
+
+    Each episode's return sums all its steps, until its own end (see `sample_trajectories`).
+    """
+    trajectories = sample_trajectories(make_env, policy, n_episodes, rng, max_steps=max_steps)
+    return np.array([t.true_rewards.sum() for t in trajectories])
+
+
+def _sample_batch(
+    make_env: EnvFactory,
+    policy: Policy,
+    n_episodes: int,
+    rng: np.random.Generator,
+    exploration_fraction: float,
+    max_steps: int | None,
+    first_episode: int,
+) -> list[Trajectory]:
     envs = [make_env() for _ in range(n_episodes)]
     try:
-        return _run_lockstep(envs, policy, rng, exploration_fraction, max_steps)
+        limit = _step_limit(envs[0], max_steps)
+        return _run(envs, policy, rng, exploration_fraction, limit, first_episode)
     finally:
         for env in envs:
             env.close()
 
 
-def _run_lockstep(
+def _run(
     envs: list[gym.Env],
     policy: Policy,
     rng: np.random.Generator,
     exploration_fraction: float,
-    max_steps: int | None,
+    limit: int,
+    first_episode: int,
 ) -> list[Trajectory]:
     space = envs[0].action_space
     seeds = rng.integers(0, 2**31 - 1, size=len(envs))
     current = np.stack([env.reset(seed=int(s))[0] for env, s in zip(envs, seeds, strict=True)])
-    horizon = max_steps or _horizon(envs[0])
-    explore = exploration_mask(len(envs), horizon, exploration_fraction, rng)
-    obs, actions, rewards = [], [], []
-    for t in range(horizon):
+    explore = exploration_mask(len(envs), limit, exploration_fraction, rng)
+    obs: list[list[np.ndarray]] = [[] for _ in envs]
+    actions: list[list[Any]] = [[] for _ in envs]
+    rewards: list[list[float]] = [[] for _ in envs]
+    running = np.arange(len(envs))  # the envs whose episodes have not ended, in order
+    for t in range(limit):
         action = np.asarray(policy.act(current.astype(np.float32), rng))
-        if explore[:, t].any():
+        random = explore[running, t]
+        if random.any():
             action = action.copy()
-            action[explore[:, t]] = random_actions(space, int(explore[:, t].sum()), rng)
-        results = [env.step(a) for env, a in zip(envs, action, strict=True)]
-        obs.append(current)
-        actions.append(action)
-        rewards.append([info.get("true_reward", r) for _, r, _, _, info in results])
-        current = np.stack([r[0] for r in results])
-        if any(term or trunc for _, _, term, trunc, _ in results):
+            action[random] = random_actions(space, int(random.sum()), rng)
+        still, following = [], []
+        for i, before, a in zip(running.tolist(), current, action, strict=True):
+            after, reward, terminated, truncated, info = envs[i].step(a)
+            obs[i].append(before)
+            actions[i].append(a)
+            rewards[i].append(float(info.get(TRUE_REWARD_KEY, reward)))
+            if not (terminated or truncated):
+                still.append(i)
+                following.append(after)
+        if not still:
             break
-    obs_arr = np.stack(obs, axis=1)
-    act_arr = np.stack(actions, axis=1)
-    rew_arr = np.asarray(rewards, dtype=np.float64).T
-    return [
-        Trajectory(
-            obs=obs_arr[i].reshape(obs_arr.shape[1], -1).astype(np.float32),
-            acts=encode_actions(space, act_arr[i]),
-            actions=act_arr[i],
-            true_rewards=rew_arr[i],
-            reset_seed=int(seeds[i]),
-            episode=i,
+        running, current = np.array(still), np.stack(following)
+    trajectories = []
+    for i, seed in enumerate(seeds):
+        steps = len(obs[i])
+        raw = np.asarray(actions[i])
+        trajectories.append(
+            Trajectory(
+                obs=np.asarray(obs[i]).reshape(steps, -1).astype(np.float32),
+                acts=encode_actions(space, raw),
+                actions=raw,
+                true_rewards=np.asarray(rewards[i], dtype=np.float64),
+                reset_seed=int(seed),
+                episode=first_episode + i,
+            )
         )
-        for i in range(len(envs))
-    ]
+    return trajectories
 
 
-def _horizon(env: gym.Env) -> int:
-    if env.spec is None or env.spec.max_episode_steps is None:
-        raise ValueError(f"{env} has no fixed horizon: pass max_steps")
-    return int(env.spec.max_episode_steps)
+def _step_limit(env: gym.Env, max_steps: int | None) -> int:
+    """Most steps an episode of `env` lasts: its time limit or `max_steps`, the smaller."""
+    if max_steps is not None and max_steps < 1:
+        raise ValueError(f"max_steps must be >= 1 or None, got {max_steps}")
+    time_limit = env.spec.max_episode_steps if env.spec is not None else None
+    if time_limit is None and max_steps is None:
+        raise ValueError(
+            f"env {_env_name(env)} has no fixed horizon (its registration sets no "
+            "max_episode_steps), so an episode might never end: pass max_steps, or register "
+            "the env with max_episode_steps"
+        )
+    return int(min(s for s in (time_limit, max_steps) if s is not None))
 
 
-def evaluate(
-    make_env: EnvFactory, policy: Policy, n_episodes: int, rng: np.random.Generator
-) -> np.ndarray:
-    """True (env) return of each of `n_episodes` episodes of `policy`, shape (n_episodes,)."""
-    trajectories = sample_trajectories(make_env, policy, n_episodes, rng)
-    return np.array([t.true_rewards.sum() for t in trajectories])
+def _env_name(env: gym.Env) -> str:
+    return env.spec.id if env.spec is not None else type(env.unwrapped).__name__
+
+
+def _too_short(env_name: str, trajectories: list[Trajectory], length: int) -> str:
+    lengths = np.array([len(t) for t in trajectories])
+    return (
+        f"{len(lengths)} episodes of {env_name} lasted {lengths.min()}-{lengths.max()} steps "
+        f"(median {np.median(lengths):g}), none long enough for one window of {length} steps: "
+        "use a shorter fragment length, or an env or policy whose episodes last longer"
+    )
