@@ -1,6 +1,7 @@
 """Fixed-horizon envs for RLHF (SPEC §2): registrations, GridWorld, dense MountainCar, rendering.
 
 Importing this package registers the ``groupwise/*-v0`` ids with Gymnasium (idempotently).
+`make_env` also makes any other Gymnasium env, by id or as ``"module:Env-v0"``.
 """
 
 from groupwise.envs.registry import (

@@ -5,9 +5,12 @@ not leak reward information, SPEC §2): ``terminated`` is always False and ``tru
 True exactly at step `horizon`. The per-step true reward is the env's reward and is also in
 ``info["true_reward"]``. Ids live under the ``groupwise/`` namespace, e.g.
 ``groupwise/Hopper-v0``; `make_standard_env` gives the unmodified Gymnasium env for
-evaluating a trained policy the way the rest of the field does.
+evaluating a trained policy the way the rest of the field does. `make_env` also makes any
+other Gymnasium env, by id or as ``"module:Env-v0"``; such envs may terminate early and may
+have no time limit at all (`horizon` is then None).
 """
 
+import importlib
 from dataclasses import dataclass
 from typing import Any
 
@@ -109,29 +112,44 @@ def register_envs() -> None:
 
 
 def resolve_id(name: str) -> str:
-    """The Gymnasium id for a short name in `ENVS` or for any registered Gymnasium id.
+    """The Gymnasium id for a short name in `ENVS`, a registered Gymnasium id, or
+    ``"module:Env-v0"``, the form `gymnasium.make` accepts for an env that importing its
+    module registers (the module is imported here, so the bare id it returns can be made).
 
     Raises:
-        ValueError: `name` is neither.
+        ValueError: `name` is none of these, its module cannot be imported, or importing it
+            registers no such id.
     """
     if name in ENVS:
         return ENVS[name].gym_id
     register_envs()
     if name in gym.registry:
         return name
+    module, colon, gym_id = name.partition(":")
+    if colon and module and gym_id:
+        try:
+            importlib.import_module(module)
+        except ImportError as error:
+            raise ValueError(f"env {name!r}: cannot import module {module!r} ({error})") from None
+        if gym_id in gym.registry:
+            return gym_id
+        raise ValueError(f"env {name!r}: importing {module!r} registered no env {gym_id!r}")
     raise ValueError(
-        f"unknown env {name!r}: use one of {', '.join(ENVS)} or a registered Gymnasium id"
+        f"unknown env {name!r}: use one of {', '.join(ENVS)}, a registered Gymnasium id, or "
+        "'module:Env-v0' for an env that importing its module registers"
     )
 
 
 def make_env(name: str, render_mode: str | None = None, **kwargs: Any) -> gym.Env[Any, Any]:
-    """Make an env by short name (see `ENVS`) or by any registered Gymnasium id.
+    """Make an env by short name (see `ENVS`), registered Gymnasium id or ``"module:Env-v0"``
+    (see `resolve_id`).
 
     Gymnasium MuJoCo envs that are not ours also get `FastMujocoRendering` (fixed camera)
     when rendered offscreen. `kwargs` go to the env's constructor (for ours: width, height).
 
     Raises:
-        ValueError: unknown name (the message lists the known short names).
+        ValueError: unknown name (the message lists the known short names), or a module that
+            cannot be imported or does not register the id.
     """
     gym_id = resolve_id(name)
     env = gym.make(gym_id, render_mode=render_mode, **kwargs)
@@ -159,10 +177,11 @@ def make_standard_env(
 
 
 def horizon(name: str) -> int | None:
-    """Episode length of an env, by short name or Gymnasium id.
+    """Most steps an episode of an env lasts, by short name, Gymnasium id or "module:id".
 
-    Exact for the groupwise envs; for other ids it is the registered ``max_episode_steps``
-    (None when there is none), and those envs may also end earlier.
+    Exact for the groupwise envs; for other ids it is the registered ``max_episode_steps``,
+    and those envs may end earlier (terminate). None when there is no time limit: such an
+    env can be sampled only for a given number of steps (`rl.rollout`'s `max_steps`).
 
     Raises:
         ValueError: unknown name.

@@ -1,5 +1,9 @@
 """The registry: spaces, horizons, no early termination, true reward, seeding, names."""
 
+import sys
+from collections.abc import Iterator
+from pathlib import Path
+
 import gymnasium as gym
 import numpy as np
 import pytest
@@ -13,6 +17,8 @@ from groupwise.envs import (
     register_envs,
     resolve_id,
 )
+from groupwise.rl.policy import RandomPolicy
+from groupwise.rl.rollout import sample_episodes_for_windows, sample_trajectories
 
 SPACES = {
     "Hopper": (11, (3,)),
@@ -159,3 +165,73 @@ def test_unknown_name_raises_a_one_line_value_error_listing_known_names() -> Non
         horizon("NoSuchEnv-v0")
     with pytest.raises(ValueError):
         make_standard_env("NoSuchEnv-v0")
+
+
+TOY_MODULE = "groupwise_toy_envs"
+TOY_SOURCE = '''
+"""Importing this module registers two toy envs, as a user's own env package would."""
+
+import gymnasium as gym
+import numpy as np
+
+
+class Still(gym.Env):
+    observation_space = gym.spaces.Box(-1.0, 1.0, shape=(1,), dtype=np.float32)
+    action_space = gym.spaces.Discrete(2)
+
+    def __init__(self, render_mode=None):
+        self.render_mode = render_mode
+
+    def reset(self, *, seed=None, options=None):
+        super().reset(seed=seed)
+        return np.zeros(1, dtype=np.float32), {}
+
+    def step(self, action):
+        return np.zeros(1, dtype=np.float32), float(action), False, False, {}
+
+
+gym.register("Still-v0", entry_point=__name__ + ":Still", max_episode_steps=7)
+gym.register("Endless-v0", entry_point=__name__ + ":Still")  # no time limit
+'''
+
+
+@pytest.fixture
+def toy_module(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[str]:
+    """A module on sys.path that registers "Still-v0" and "Endless-v0" when imported."""
+    (tmp_path / f"{TOY_MODULE}.py").write_text(TOY_SOURCE)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    yield TOY_MODULE
+    sys.modules.pop(TOY_MODULE, None)
+    for gym_id in ("Still-v0", "Endless-v0"):
+        gym.registry.pop(gym_id, None)
+
+
+def test_module_colon_id_imports_the_module_that_registers_the_env(toy_module: str) -> None:
+    assert "Still-v0" not in gym.registry
+    assert resolve_id(f"{toy_module}:Still-v0") == "Still-v0"
+    env = make_env(f"{toy_module}:Still-v0")
+    assert env.spec is not None and env.spec.id == "Still-v0"
+    assert horizon(f"{toy_module}:Still-v0") == 7
+    assert make_standard_env(f"{toy_module}:Still-v0").spec.id == "Still-v0"
+    with pytest.raises(ValueError, match="registered no env 'Gone-v0'"):
+        make_env(f"{toy_module}:Gone-v0")
+    with pytest.raises(ValueError, match="cannot import module 'no_such_module_here'"):
+        make_env("no_such_module_here:Still-v0")
+
+
+def test_env_without_a_time_limit_needs_max_steps(toy_module: str) -> None:
+    name = f"{toy_module}:Endless-v0"
+    assert horizon(name) is None
+    policy = RandomPolicy(make_env(name).action_space)
+    with pytest.raises(ValueError, match=r"Endless-v0 has no fixed horizon.*pass max_steps"):
+        sample_trajectories(lambda: make_env(name), policy, 2, np.random.default_rng(0))
+    episodes = sample_trajectories(
+        lambda: make_env(name), policy, 2, np.random.default_rng(0), max_steps=12
+    )
+    assert [len(t) for t in episodes] == [12, 12]
+    with pytest.raises(ValueError, match="no fixed horizon"):
+        sample_episodes_for_windows(lambda: make_env(name), policy, 4, 3, np.random.default_rng(0))
+    episodes = sample_episodes_for_windows(
+        lambda: make_env(name), policy, 8, 3, np.random.default_rng(0), max_steps=12
+    )
+    assert [len(t) for t in episodes] == [12, 12]  # 4 windows each
