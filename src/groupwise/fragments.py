@@ -15,7 +15,7 @@ from groupwise.types import FloatArray, IntArray
 
 @dataclass(frozen=True)
 class Trajectory:
-    """One whole episode of a fixed-horizon env.
+    """One whole episode, from reset to its own end (time limit, termination or a step cap).
 
     `reset_seed` reproduces the episode: reset the env with it and replay `actions`
     (the raw env actions) to re-render any window of it.
@@ -68,8 +68,10 @@ class Fragment:
 def tile_fragments(trajectories: Sequence[Trajectory], length: int) -> list[Fragment]:
     """Cut every trajectory into consecutive, non-overlapping windows of `length` steps.
 
-    A trailing remainder shorter than `length` is dropped, so every fragment has exactly
-    one clip of exactly `length` frames.
+    Each trajectory is tiled on its own, ``len(trajectory) // length`` windows, so no window
+    crosses an episode's end. A trailing remainder shorter than `length` is dropped (a
+    trajectory shorter than `length` gives none), so every fragment has exactly one clip of
+    exactly `length` frames.
     """
     if length < 1:
         raise ValueError(f"fragment length must be >= 1, got {length}")

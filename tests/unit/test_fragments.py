@@ -1,3 +1,5 @@
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -26,6 +28,19 @@ def test_tiling_gives_non_overlapping_windows_and_drops_the_remainder():
     np.testing.assert_array_equal(second.acts[:, 0], [30, 40, 50])
     assert second.true_return == 3 + 4 + 5
     assert len({f.key for f in fragments}) == len(fragments)
+
+
+def test_windows_never_cross_the_end_of_an_episode():
+    lengths = [2, 9, 3, 13, 5]  # episodes of their own lengths, as terminating envs give
+    episodes = [
+        dataclasses.replace(t, obs=t.obs + 100 * t.episode)  # 100 × episode + step
+        for t in (_trajectory(n, episode=i) for i, n in enumerate(lengths))
+    ]
+    fragments = tile_fragments(episodes, length=3)
+    assert [sum(f.episode == i for f in fragments) for i in range(5)] == [0, 3, 1, 4, 1]
+    for f in fragments:
+        assert f.start + f.length <= lengths[f.episode]
+        np.testing.assert_array_equal(f.obs[:, 0], 100 * f.episode + f.start + np.arange(3))
 
 
 def test_stack_shapes():
