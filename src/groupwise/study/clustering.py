@@ -15,8 +15,7 @@ policies, `windows` windows each), their DTW distances computed on z-scored [obs
 - **t-SNE**: scikit-learn's t-SNE on the precomputed distances (squared, as t-SNE's Gaussian
   kernel takes squared distances; random init, perplexity min(30, (N − 1) / 3)), then DBSCAN.
 
-DBSCAN (our own, on scipy's connected components: it is a few lines, exact, and avoids
-scikit-learn's threaded neighbour search, which is slow on a busy 2-core machine):
+DBSCAN (`sklearn.cluster.DBSCAN` on the embedding's precomputed distances):
 ``min_samples = 2`` (a cluster needs two behaviours, as HC's "more than one leaf"), noise
 points (outliers) dropped. eps is chosen per embedding: DBSCAN is run for
 `eps_candidates` values of eps, the quantiles 0.25 % … 50 % of the embedding's pairwise
@@ -37,9 +36,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 from scipy import stats
-from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import connected_components
 from scipy.spatial.distance import pdist, squareform
+from sklearn.cluster import DBSCAN
 from tqdm.auto import tqdm
 
 from groupwise.behaviour import BehaviourTree, TreeConfig, build_tree, dtw_matrix, pool_features
@@ -215,30 +213,14 @@ def tsne_embedding(
 def dbscan(distances: FloatArray, eps: float, min_samples: int) -> IntArray:
     """DBSCAN labels (N,) from a square distance matrix (N, N); -1 for noise.
 
-    Core points have at least `min_samples` points (themselves included) within `eps`;
-    clusters are the connected components of core points; a border point joins the
-    cluster of its nearest core point (DBSCAN leaves that choice to visiting order).
-    Cluster ids are numbered by their first point.
+    Core points have at least `min_samples` points (themselves included) within `eps`
+    (inclusive); a border point joins the first cluster that reaches it.
     """
-    d = np.asarray(distances, dtype=np.float64)
-    near = d <= eps
-    core = near.sum(axis=1) >= min_samples
-    labels = np.full(d.shape[0], -1, dtype=np.int64)
-    if not core.any():
-        return labels
-    core_idx = np.flatnonzero(core)
-    graph = csr_matrix(near[np.ix_(core_idx, core_idx)])
-    _, component = connected_components(graph, directed=False)
-    labels[core_idx] = component
-    border = np.flatnonzero(~core & near[:, core].any(axis=1))
-    if border.size:
-        nearest = core_idx[np.argmin(d[np.ix_(border, core_idx)], axis=1)]
-        labels[border] = labels[nearest]
-    _, first = np.unique(labels[labels >= 0], return_index=True)
-    order = np.argsort(np.argsort(first))  # component -> rank of its first point
-    components = np.unique(labels[labels >= 0])
-    renumber = dict(zip(components.tolist(), order.tolist(), strict=True))
-    return np.array([renumber.get(int(x), -1) if x >= 0 else -1 for x in labels])
+    # scikit-learn costs 0.76 ms a call against 0.24 ms for the connected-components DBSCAN
+    # it replaced (N = 50, 2 cores): 0.2 s more per repetition, whose sampling alone takes
+    # 8.2 s on Hopper; the partitions were identical on 8,000 random inputs.
+    model = DBSCAN(eps=eps, min_samples=min_samples, metric="precomputed")
+    return np.asarray(model.fit(np.asarray(distances, dtype=np.float64)).labels_, dtype=np.int64)
 
 
 def dbscan_near_target(
