@@ -49,13 +49,9 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from groupwise.behaviour import TreeConfig
-    from groupwise.study.clustering import (
-        ClusteringStudyConfig,
-        markdown_table,
-        run_clustering_study,
-        to_json,
-    )
     from groupwise.study.clustering_plot import plot_variances
+    from groupwise.study.clustering_report import markdown_table, to_json
+    from groupwise.study.clustering_runner import ClusteringStudyConfig, run_clustering_study
     from groupwise.study.policy_mix import mixed_policies
 
     try:

@@ -7,17 +7,19 @@ import pytest
 from scipy.spatial.distance import pdist, squareform
 
 from groupwise.behaviour import TreeConfig, build_tree
-from groupwise.study.clustering import (
-    METHODS,
-    ClusteringStudyConfig,
-    ClusteringStudyResult,
+from groupwise.study.clustering_methods import (
     classical_mds,
     cluster_count,
     dbscan,
     dbscan_near_target,
     hc_clusters,
     intra_cluster_variance,
-    markdown_table,
+)
+from groupwise.study.clustering_report import markdown_table
+from groupwise.study.clustering_runner import (
+    METHODS,
+    ClusteringStudyConfig,
+    ClusteringStudyResult,
     paired_tests,
 )
 
