@@ -26,10 +26,10 @@ import gymnasium as gym
 import numpy as np
 from tqdm.auto import tqdm
 
-from groupwise.fragments import Fragment, Trajectory
 from groupwise.clips.replay import FrameSettings, even_crop, make_render_env, replay_windows
 from groupwise.clips.store import ClipStore
 from groupwise.clips.video import ClipEncoder, poster_bytes, poster_frame
+from groupwise.fragments import Fragment, Trajectory
 
 logger = logging.getLogger(__name__)
 

@@ -9,11 +9,13 @@ replaying, every observation is compared with the stored one, so a clip that wou
 anything other than its fragment is never made (`ReplayMismatchError`).
 
 A reset with a seed restores everything a frame depends on, so one rendering env can replay
-any number of episodes in any order with the same frames (tested).
+any number of episodes in any order with the same frames (tested). Episodes may differ in
+length (envs that terminate); `episode_arrays` stores the raw actions of episodes of any
+lengths in one file and `episode_actions` gives one episode's back.
 """
 
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -25,6 +27,7 @@ from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
 from groupwise.clips.video import VideoConfig
 from groupwise.envs import make_env
 from groupwise.envs.rendering import DEFAULT_FRAME_SIZE
+from groupwise.fragments import Trajectory
 
 PLANE_GRID_CELLS = 40
 """Most rendering-grid cells a side of a plane in clip frames (see `apply_clip_quality`)."""
@@ -148,6 +151,47 @@ def replay_windows(
         if t + 1 < end:
             obs = env.step(actions[t])[0]
     clock["replay_s"] += time.perf_counter() - tick
+
+
+def episode_arrays(trajectories: Sequence[Trajectory]) -> dict[str, np.ndarray]:
+    """What replaying any window of `trajectories` needs, as arrays for one ``.npz`` file.
+
+    ``episode``, ``reset_seed`` and ``length`` (E,) (steps of each episode) and ``actions``
+    (E, T_max, *action_shape): each episode's raw actions, zero-padded after its length.
+
+    Raises:
+        ValueError: no trajectories.
+    """
+    if not trajectories:
+        raise ValueError("no episodes to store")
+    lengths = np.array([len(t) for t in trajectories], dtype=np.int64)
+    first = np.asarray(trajectories[0].actions)
+    actions = np.zeros((len(trajectories), int(lengths.max()), *first.shape[1:]), first.dtype)
+    for row, t in enumerate(trajectories):
+        actions[row, : len(t)] = t.actions
+    return {
+        "episode": np.array([t.episode for t in trajectories], dtype=np.int64),
+        "reset_seed": np.array([t.reset_seed for t in trajectories], dtype=np.int64),
+        "length": lengths,
+        "actions": actions,
+    }
+
+
+def episode_actions(arrays: Mapping[str, np.ndarray], episode: int) -> np.ndarray:
+    """Episode `episode`'s raw actions (T, *action_shape) from `episode_arrays`' arrays (or
+    an ``np.load`` of their file); arrays without ``length`` are read as unpadded.
+
+    Raises:
+        KeyError: no such episode.
+    """
+    rows = np.flatnonzero(np.asarray(arrays["episode"]) == episode)
+    if len(rows) == 0:
+        raise KeyError(f"no episode {episode} among the stored episodes")
+    row = int(rows[0])
+    actions = np.asarray(arrays["actions"][row])
+    if "length" in arrays:
+        actions = actions[: int(arrays["length"][row])]
+    return actions
 
 
 def _check_observation(obs: Any, stored: np.ndarray, t: int, reset_seed: int) -> None:

@@ -1,17 +1,19 @@
 """Clip frames come from replaying the episode (frame k shows the state of step start + k);
 workers turn them into stored clips."""
 
+import dataclasses
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 
-from groupwise.fragments import Trajectory, tile_fragments
 from groupwise.clips.render import ClipJob, plan_jobs, run_job
 from groupwise.clips.replay import (
     FrameSettings,
     ReplayMismatchError,
+    episode_actions,
+    episode_arrays,
     make_render_env,
     replay_windows,
 )
@@ -19,6 +21,7 @@ from groupwise.clips.store import ClipStore
 from groupwise.clips.video import probe, read_frames
 from groupwise.envs import make_env
 from groupwise.envs.gridworld import draw_grid
+from groupwise.fragments import Trajectory, tile_fragments
 from groupwise.rl.policy import RandomPolicy
 from groupwise.rl.rollout import sample_trajectories
 
@@ -149,3 +152,39 @@ def test_cheaper_clip_geometry_changes_neither_physics_nor_the_picture() -> None
     assert difference.mean() < 0.5
     cheap.close()
     plain.close()
+
+
+def test_windows_of_episodes_of_different_lengths_replay_to_their_ends(tmp_path: Path) -> None:
+    # the standard Hopper-v5 ends when it falls: a random policy's episodes differ in length
+    settings = FrameSettings("Hopper-v5", width=32, height=32)
+    episodes = sample_trajectories(
+        lambda: make_env("Hopper-v5"),
+        RandomPolicy(make_env("Hopper-v5").action_space),
+        6,
+        np.random.default_rng(2),
+    )
+    lengths = [len(t) for t in episodes]
+    assert len(set(lengths)) > 1 and max(lengths) < 1000
+    fragments = tile_fragments(episodes, 3)
+    assert any(f.start + 3 == lengths[f.episode] for f in fragments)  # ends at the fall
+    # the episodes as a pool stores them (padded to the longest) give each one's actions back
+    np.savez(tmp_path / "episodes.npz", **episode_arrays(episodes))
+    stored = np.load(tmp_path / "episodes.npz")
+    np.testing.assert_array_equal(stored["length"], lengths)
+    replayed = [
+        dataclasses.replace(t, actions=episode_actions(stored, t.episode)) for t in episodes
+    ]
+    for t, again in zip(episodes, replayed, strict=True):
+        np.testing.assert_array_equal(again.actions, t.actions)
+    env = make_render_env(settings)
+    jobs = plan_jobs(replayed, fragments, settings, workers=1)
+    rendered = {
+        (job.episode, start): frames
+        for job in jobs
+        for start, frames in replay_windows(
+            env, job.reset_seed, job.actions, job.starts, job.length, job.observations
+        )  # every observation checked against the stored one
+    }
+    assert sorted(rendered) == sorted((f.episode, f.start) for f in fragments)
+    assert all(frames.shape == (3, 32, 32, 3) for frames in rendered.values())
+    env.close()
