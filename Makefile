@@ -6,9 +6,6 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMPS := .make-stamps
-# The CPU build of PyTorch (pip takes it from local disk on the project's machines; an
-# unpinned torch would pull gigabytes of CUDA wheels).
-TORCH := torch==2.13.0
 
 RUN_ENV ?= Hopper
 RUN_DATA ?= data
@@ -63,10 +60,14 @@ $(WEB_BUILD): $(STAMPS)/web $(WEB_SOURCES)
 $(STAMPS)/venv:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/pip install -q --upgrade pip
-	$(BIN)/pip install -q $(TORCH)
 	@mkdir -p $(STAMPS) && touch $@
 
-$(STAMPS)/python: $(STAMPS)/system $(STAMPS)/venv pyproject.toml
+# the CPU build of PyTorch (an unpinned torch would pull gigabytes of CUDA wheels)
+$(STAMPS)/torch: scripts/install-torch.sh | $(STAMPS)/venv
+	bash scripts/install-torch.sh $(BIN)/python
+	@mkdir -p $(STAMPS) && touch $@
+
+$(STAMPS)/python: $(STAMPS)/system $(STAMPS)/torch pyproject.toml
 	$(BIN)/pip install -q -e .
 	@touch $@
 
