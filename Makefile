@@ -6,6 +6,9 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 STAMPS := .make-stamps
+# npm steps run with the venv's bin/ first on PATH: it holds node and npm when the system's
+# node is missing or too old for Vite 8 (scripts/install-node.sh); else the system's is used.
+NPM := PATH="$(CURDIR)/$(BIN):$$PATH" npm
 
 RUN_ENV ?= Hopper
 RUN_DATA ?= data
@@ -26,13 +29,13 @@ test: $(STAMPS)/dev $(WEB_BUILD) test-web
 	GROUPWISE_E2E_REQUIRED=1 $(BIN)/python -m pytest -q tests/e2e
 
 test-web: $(STAMPS)/web
-	cd web && npm test
+	cd web && $(NPM) test
 
 test-slow: $(STAMPS)/dev
 	$(BIN)/python -m pytest -m slow -q -s
 
-bench: $(STAMPS)/dev
-	$(BIN)/python -m benchmarks
+bench: $(STAMPS)/dev $(STAMPS)/web
+	PATH="$(CURDIR)/$(BIN):$$PATH" $(BIN)/python -m benchmarks
 
 lint: $(STAMPS)/dev
 	$(BIN)/ruff check src tests benchmarks
@@ -50,12 +53,18 @@ $(STAMPS)/system-dev: scripts/system-deps.sh
 	bash scripts/system-deps.sh chromium
 	@mkdir -p $(STAMPS) && touch $@
 
-$(STAMPS)/web: web/package.json web/package-lock.json
-	cd web && npm ci --no-audit --no-fund
+# the web UI's npm packages; node is checked first (order-only: a new check of node alone
+# does not redo npm ci)
+$(STAMPS)/web: web/package.json web/package-lock.json | $(STAMPS)/node
+	cd web && $(NPM) ci --no-audit --no-fund
 	@mkdir -p $(STAMPS) && touch $@
 
 $(WEB_BUILD): $(STAMPS)/web $(WEB_SOURCES)
-	cd web && npm run build
+	cd web && $(NPM) run build
+
+$(STAMPS)/node: scripts/install-node.sh | $(STAMPS)/venv
+	bash scripts/install-node.sh $(VENV)
+	@mkdir -p $(STAMPS) && touch $@
 
 $(STAMPS)/venv:
 	$(PYTHON) -m venv $(VENV)
