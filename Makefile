@@ -77,7 +77,7 @@ $(STAMPS)/torch: scripts/install-torch.sh | $(STAMPS)/venv
 	@mkdir -p $(STAMPS) && touch $@
 
 $(STAMPS)/python: $(STAMPS)/system $(STAMPS)/torch pyproject.toml
-	$(BIN)/pip install -q -e .
+	$(BIN)/pip install -q -e '.[app,study]'
 	@touch $@
 
 $(STAMPS)/dev: $(STAMPS)/python $(STAMPS)/system-dev
