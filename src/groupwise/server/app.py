@@ -18,13 +18,14 @@ from collections.abc import AsyncIterator
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
+from starlette.middleware.trustedhost import TrustedHostMiddleware
 
 from groupwise.server.config import AppConfig
 from groupwise.server.context import AppContext
 from groupwise.server.routes import clips, events, judgements, meta, pairwise, rounds, sessions
 from groupwise.server.routes import transfer as transfer_routes
 from groupwise.server.routes.frontend import mount_frontend
-from groupwise.server.security import GuardMiddleware
+from groupwise.server.security import GuardMiddleware, trusted_hosts
 from groupwise.server.transfer import UnsupportedMediaError
 from groupwise.storage import ConflictError, InvalidError, NotFoundError, StorageError
 
@@ -66,11 +67,10 @@ def create_app(config: AppConfig) -> FastAPI:
         redoc_url=None,
     )
     app.state.context = context
+    app.add_middleware(GuardMiddleware, token=config.token, max_body_bytes=config.max_body_bytes)
+    # Added last, so it runs first: a foreign Host is refused before anything else is checked.
     app.add_middleware(
-        GuardMiddleware,
-        token=config.token,
-        allowed_hosts=config.allowed_hosts,
-        max_body_bytes=config.max_body_bytes,
+        TrustedHostMiddleware, allowed_hosts=trusted_hosts(config.allowed_hosts), www_redirect=False
     )
     app.add_exception_handler(StorageError, _storage_error)  # type: ignore[arg-type]
     app.add_exception_handler(RequestValidationError, _validation_error)  # type: ignore[arg-type]

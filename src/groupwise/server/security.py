@@ -1,16 +1,17 @@
-"""The app's guard, a small pure-ASGI middleware (docs/app.md, "Security").
+"""The app's guards (docs/app.md, "Security").
 
 For every HTTP request, in this order:
 
-1. **Host**: with `allowed_hosts`, a Host header naming anything else → 400. A loopback
-   server thereby refuses pages that reach it through DNS rebinding (a foreign name
-   resolving to 127.0.0.1): without CORS a foreign page cannot read the answers, but
-   could still send requests.
-2. **Token**: with a token, every ``/api`` and ``/clips`` request needs
+1. **Host**: Starlette's `TrustedHostMiddleware`, configured by `trusted_hosts`: with
+   `allowed_hosts`, a Host header naming anything else → 400 (plain text "Invalid host
+   header"). A loopback server thereby refuses pages that reach it through DNS rebinding (a
+   foreign name resolving to 127.0.0.1): without CORS a foreign page cannot read the
+   answers, but could still send requests.
+2. **Token** (`GuardMiddleware`): with a token, every ``/api`` and ``/clips`` request needs
    ``Authorization: Bearer <token>`` or ``?token=<token>`` (for ``<video src>``) → else 401.
    Compared in constant time. The built web UI's files stay public (they hold no data).
-3. **Body size**: a body over `max_body_bytes` → 413, whether announced by Content-Length
-   or streamed in chunks (counted as it arrives).
+3. **Body size** (`GuardMiddleware`): a body over `max_body_bytes` → 413, whether announced
+   by Content-Length or streamed in chunks (counted as it arrives).
 
 No CORS headers are ever added.
 """
@@ -41,28 +42,23 @@ async def _send_error(send: Send, status: int, detail: str, extra: dict[str, str
     await send({"type": "http.response.body", "body": body})
 
 
-def _host_name(host: str) -> str:
-    """The name part of a Host header: ``[::1]:8000`` → ``::1``, ``a.b:80`` → ``a.b``."""
-    host = host.strip().lower()
-    if host.startswith("["):
-        return host[1 : host.find("]")] if "]" in host else host
-    return host.rsplit(":", 1)[0] if host.count(":") == 1 else host
+def trusted_hosts(allowed_hosts: tuple[str, ...] | None) -> list[str]:
+    """`TrustedHostMiddleware`'s patterns for `AppConfig.allowed_hosts` (None: any host).
+
+    Starlette compares an IPv6 literal with its brackets (``Host: [::1]:8000`` is ``[::1]``),
+    so ``::1`` becomes ``[::1]``.
+    """
+    if allowed_hosts is None:
+        return ["*"]
+    return [f"[{h}]" if ":" in h and not h.startswith("[") else h for h in allowed_hosts]
 
 
 class GuardMiddleware:
-    """Host check, token check and body limit (module docstring)."""
+    """Token check and body limit (module docstring); the Host check is Starlette's."""
 
-    def __init__(
-        self,
-        app: ASGIApp,
-        *,
-        token: str | None,
-        allowed_hosts: tuple[str, ...] | None,
-        max_body_bytes: int,
-    ) -> None:
+    def __init__(self, app: ASGIApp, *, token: str | None, max_body_bytes: int) -> None:
         self.app = app
         self.token = token
-        self.allowed = None if allowed_hosts is None else {h.lower() for h in allowed_hosts}
         self.max_body_bytes = max_body_bytes
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
@@ -70,9 +66,6 @@ class GuardMiddleware:
             await self.app(scope, receive, send)
             return
         headers = Headers(scope=scope)
-        if self.allowed is not None and _host_name(headers.get("host", "")) not in self.allowed:
-            await _send_error(send, 400, "this server answers only to its loopback names", {})
-            return
         if self.token is not None and scope["path"].startswith(PROTECTED_PREFIXES):
             if not self._authorised(scope, headers):
                 await _send_error(
