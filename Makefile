@@ -1,6 +1,7 @@
 # groupwise: `make run` and `make test` set up everything they need (idempotently) and
 # then do their job. Setup lands in .venv/ and web/node_modules/ and is redone only when
-# pyproject.toml or web/package-lock.json changes; the web UI is rebuilt when web/ changes.
+# pyproject.toml or web/package-lock.json changes; the web UI is rebuilt into the package
+# (src/groupwise/static/, shipped as package data) when web/ changes.
 
 PYTHON ?= python3
 VENV := .venv
@@ -12,11 +13,11 @@ NPM := PATH="$(CURDIR)/$(BIN):$$PATH" npm
 
 RUN_ENV ?= Hopper
 RUN_DATA ?= data
-WEB_BUILD := web/dist/index.html
+WEB_BUILD := src/groupwise/static/index.html
 WEB_SOURCES := $(shell find web/src web/index.html web/vite.config.ts web/tsconfig.json \
 	-type f 2>/dev/null)
 
-.PHONY: run test test-web test-slow bench lint setup clean
+.PHONY: run test test-web test-slow bench lint setup web clean
 
 # the interactive app on 127.0.0.1 (prints the URL); the session resumes on the next run
 run: $(STAMPS)/python $(WEB_BUILD)
@@ -43,6 +44,9 @@ lint: $(STAMPS)/dev
 	$(BIN)/mypy
 
 setup: $(STAMPS)/dev $(WEB_BUILD)
+
+# the web UI alone, built into the package (scripts/check-install.sh)
+web: $(WEB_BUILD)
 
 $(STAMPS)/system: scripts/system-deps.sh
 	bash scripts/system-deps.sh
@@ -85,4 +89,4 @@ $(STAMPS)/dev: $(STAMPS)/python $(STAMPS)/system-dev
 	@touch $@
 
 clean:
-	rm -rf $(VENV) $(STAMPS) runs web/node_modules web/dist
+	rm -rf $(VENV) $(STAMPS) runs web/node_modules web/dist src/groupwise/static

@@ -4,7 +4,8 @@ One `groupwise serve` subprocess per test process (real SQLite, real training wo
 temporary data directory), driven with Playwright for Python in Debian's Chromium; no
 browser is downloaded. Each test makes its own small GridWorld session.
 
-Needs: `web/dist` built (`cd web && npm ci && npm run build`), the Python package
+Needs: the web UI built into the package (`src/groupwise/static`, by `make` or
+`cd web && npm ci && npm run build`), the Python package
 `playwright` (its driver only; never `playwright install`), and Chromium at
 `$GROUPWISE_CHROMIUM` (default /usr/bin/chromium). Missing any of them skips the tests,
 unless `GROUPWISE_E2E_REQUIRED=1` (as `make test` sets): then it fails them.
@@ -28,8 +29,10 @@ from typing import Any
 
 import pytest
 
+from groupwise.server.config import default_static_dir
+
 REPO = Path(__file__).resolve().parents[2]
-DIST = REPO / "web" / "dist"
+DIST = default_static_dir()  # what the server serves: src/groupwise/static in a checkout
 CHROMIUM = Path(os.environ.get("GROUPWISE_CHROMIUM", "/usr/bin/chromium"))
 SHOTS = Path(os.environ.get("GROUPWISE_E2E_SCREENSHOTS", Path(__file__).parent / "screenshots"))
 CHROMIUM_ARGS = [
@@ -140,7 +143,7 @@ def _playwright() -> Any:
 @pytest.fixture(scope="session")
 def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
     if not (DIST / "index.html").is_file():
-        _missing("web/dist is not built: cd web && npm ci && npm run build")
+        _missing(f"the web UI is not built ({DIST}): cd web && npm ci && npm run build")
     data = tmp_path_factory.mktemp("groupwise-data")
     log = data / "server.log"
     port = _free_port()

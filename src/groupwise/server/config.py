@@ -13,8 +13,9 @@ MAX_BODY_BYTES = 1 << 20
 
 
 def default_static_dir() -> Path:
-    """``<repo>/web/dist``, found relative to the package (``src/groupwise`` → repo)."""
-    return Path(groupwise.__file__).resolve().parents[2] / "web" / "dist"
+    """The web UI inside the package, ``groupwise/static/`` (package data; in a checkout
+    ``src/groupwise/static/``, written by ``cd web && npm run build`` or ``make``)."""
+    return Path(groupwise.__file__).resolve().parent / "static"
 
 
 @dataclass(frozen=True)
