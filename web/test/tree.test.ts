@@ -24,6 +24,15 @@ describe("buildTree", () => {
     expect(t.nodes.get("b1")!.poster).toBe("y.jpg");
   });
 
+  it("links parents, children and depths", () => {
+    const t = buildTree(PADDED);
+    const padding = t.nodes.get("b3@1")!;
+    expect([padding.depth, padding.isLeaf, padding.parent!.id]).toEqual([2, false, "b3@2"]);
+    expect(padding.children.map((c) => c.id)).toEqual(["b3"]);
+    expect(t.root.children.map((c) => c.id)).toEqual(["m5", "b3@2"]);
+    expect(t.leafIndex.get("b4")).toBe(3);
+  });
+
   it("refuses duplicate ids", () => {
     const dup = { id: "root", level: 1, children: [FOUR.children[0]!, FOUR.children[0]!] };
     expect(() => buildTree(dup)).toThrow(/duplicate node id m1/);
@@ -38,6 +47,8 @@ describe("treePath", () => {
     expect(ids("b0", "b3")).toEqual(["b0", "m1", "root", "m2", "b3"]);
     expect(ids("b0", "b1")).toEqual(["b0", "m1", "b1"]);
     expect(ids("b3", "b2")).toEqual(["b3", "m2", "b2"]);
+    expect(ids("b1", "b1")).toEqual(["b1"]);
+    expect(() => ids("b1", "b9")).toThrow(/unknown node b9/);
   });
 
   it("lists ancestors nearest first", () => {

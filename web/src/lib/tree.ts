@@ -5,7 +5,11 @@
  * `level` (leaves 0, the root `levels`) and ordered `children`; a leaf's `clip` and `poster`
  * either on the node or in its `extra` object (`behaviour.to_json`). Child order is kept: it
  * is the dendrogram's leaf order, so similar behaviours sit side by side.
+ *
+ * d3-hierarchy does the walking (depth, leaf order, the path through the lowest common
+ * ancestor); `TreeNode` is the views' flat, id-keyed face of its nodes.
  */
+import { type HierarchyNode, hierarchy } from "d3-hierarchy";
 
 export interface TreeJson {
   id: string;
@@ -43,75 +47,54 @@ export interface Tree {
   leafIndex: Map<string, number>;
 }
 
+type Hierarchy = HierarchyNode<TreeJson>;
+const hierarchyOf = new WeakMap<TreeNode, Hierarchy>();
+const nodeOf = new WeakMap<Hierarchy, TreeNode>();
+
 /** Indexes a tree; throws on a duplicate node id (ids must be unique per round). */
 export function buildTree(json: TreeJson, levels?: number): Tree {
   const nodes = new Map<string, TreeNode>();
-  const leaves: TreeNode[] = [];
-
-  function visit(j: TreeJson, parent: TreeNode | null, depth: number): TreeNode {
+  const top = hierarchy(json, (j) => j.children);
+  top.eachBefore((d) => {
+    const j = d.data;
     if (nodes.has(j.id)) throw new Error(`duplicate node id ${j.id} in the tree`);
-    const isLeaf = j.children.length === 0;
+    const parent = d.parent ? nodeOf.get(d.parent)! : null;
     const node: TreeNode = {
       id: j.id,
       level: j.level,
       parent,
       children: [],
-      leaves: [],
-      depth,
-      isLeaf,
+      leaves: d.leaves().map((leaf) => leaf.data.id),
+      depth: d.depth,
+      isLeaf: !d.children,
     };
-    nodes.set(j.id, node);
-    if (isLeaf) {
-      node.leaves = [j.id];
+    if (node.isLeaf) {
       if (j.behaviour !== undefined && j.behaviour !== null) node.behaviour = j.behaviour;
       const clip = j.clip ?? j.extra?.clip;
       const poster = j.poster ?? j.extra?.poster;
       if (clip) node.clip = clip;
       if (poster) node.poster = poster;
-      leaves.push(node);
-    } else {
-      for (const child of j.children) {
-        const c = visit(child, node, depth + 1);
-        node.children.push(c);
-        for (const leaf of c.leaves) node.leaves.push(leaf);
-      }
     }
-    return node;
-  }
-
-  const root = visit(json, null, 0);
+    parent?.children.push(node);
+    nodes.set(j.id, node);
+    hierarchyOf.set(node, d);
+    nodeOf.set(d, node);
+  });
+  const root = nodeOf.get(top)!;
+  const leaves = top.leaves().map((d) => nodeOf.get(d)!);
   const leafIndex = new Map(leaves.map((leaf, i) => [leaf.id, i]));
   return { root, levels: levels ?? root.level, nodes, leaves, leafIndex };
 }
 
 /** The path of nodes from leaf `a` up to the lowest common ancestor and down to `b`. */
 export function treePath(tree: Tree, a: string, b: string): TreeNode[] {
-  let x = tree.nodes.get(a);
-  let y = tree.nodes.get(b);
+  const x = tree.nodes.get(a);
+  const y = tree.nodes.get(b);
   if (!x || !y) throw new Error(`unknown node ${x ? b : a}`);
-  const up: TreeNode[] = [];
-  const down: TreeNode[] = [];
-  while (x.depth > y.depth) {
-    up.push(x);
-    x = x.parent!;
-  }
-  while (y.depth > x.depth) {
-    down.push(y);
-    y = y.parent!;
-  }
-  while (x !== y) {
-    up.push(x);
-    down.push(y);
-    x = x.parent!;
-    y = y.parent!;
-  }
-  up.push(x); // the lowest common ancestor, once
-  return up.concat(down.reverse());
+  return hierarchyOf.get(x)!.path(hierarchyOf.get(y)!).map((d) => nodeOf.get(d)!);
 }
 
 /** Ancestors of a node, nearest first, root last (the node itself excluded). */
 export function ancestors(node: TreeNode): TreeNode[] {
-  const out: TreeNode[] = [];
-  for (let p = node.parent; p; p = p.parent) out.push(p);
-  return out;
+  return hierarchyOf.get(node)!.ancestors().slice(1).map((d) => nodeOf.get(d)!);
 }
