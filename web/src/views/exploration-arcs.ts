@@ -1,0 +1,152 @@
+/**
+ * The exploration view's rings: one SVG arc per tree node (a focusable button), their group
+ * tints and labels, the marks of behaviours not compared yet, and the hover outline. A
+ * selection only retints the arcs whose counts change.
+ */
+import { arc as d3arc } from "d3-shape";
+import { GROUP_COLOURS, groupTint, neutralFill } from "../lib/colour";
+import { type Arc, midAngle, polar, radialLayout } from "../lib/layout";
+import { groupCounts } from "../lib/selection";
+import { ancestors } from "../lib/tree";
+import type { TreeNode } from "../lib/tree";
+import type { RoundData } from "../state";
+import { attr, s, text } from "./dom";
+import { type Chart, type ExplorationData, VIEWBOX } from "./exploration-chart";
+
+const arcPath = d3arc<Arc>()
+  .innerRadius((d) => d.r0)
+  .outerRadius((d) => d.r1)
+  .startAngle((d) => d.a0)
+  .endAngle((d) => d.a1);
+
+/** Draws one arc per node of the round's tree (or clears the chart without a round). */
+export function buildArcs(chart: Chart, round: RoundData | null): void {
+  chart.round = round;
+  chart.arcEls.clear();
+  chart.ancestorIds.clear();
+  chart.counts = new Map();
+  chart.focusId = null;
+  chart.outline.replaceChildren();
+  chart.preview.hide();
+  if (!round) {
+    chart.layout = null;
+    chart.arcsG.replaceChildren();
+    text(chart.subtitle, "");
+    return;
+  }
+  const layout = radialLayout(round.tree, { radius: VIEWBOX / 2 - 20 });
+  chart.layout = layout;
+  const frag = document.createDocumentFragment();
+  for (const a of layout.arcs) {
+    const node = a.node;
+    const el = document.createElementNS("http://www.w3.org/2000/svg", "path");
+    el.setAttribute("d", arcPath(a) ?? "");
+    el.setAttribute("class", node.isLeaf ? "arc leaf" : "arc node");
+    el.setAttribute("data-id", node.id);
+    el.setAttribute("role", "button");
+    el.setAttribute("tabindex", "-1");
+    el.setAttribute("fill", neutralFill(a.ring));
+    frag.append(el);
+    chart.arcEls.set(node.id, el);
+  }
+  chart.arcsG.replaceChildren(frag);
+  for (const leaf of round.tree.leaves) {
+    chart.ancestorIds.set(leaf.id, ancestors(leaf).map((n) => n.id));
+  }
+  const first = layout.rings[0]?.[0];
+  if (first) setFocusable(chart, first.node.id);
+  const n = round.tree.leaves.length;
+  text(chart.subtitle, `round ${round.round + 1} · ${n} behaviours · ${layout.levels} levels`);
+}
+
+/** The one arc reached by Tab (a roving tabindex). */
+export function setFocusable(chart: Chart, id: string): void {
+  if (chart.focusId) chart.arcEls.get(chart.focusId)?.setAttribute("tabindex", "-1");
+  chart.focusId = id;
+  chart.arcEls.get(id)?.setAttribute("tabindex", "0");
+}
+
+function arcLabel(node: TreeNode, c: { A: number; B: number } | undefined, compared: ReadonlySet<string>): string {
+  const n = node.leaves.length;
+  if (node.isLeaf || n === 1) {
+    // A padding node (one child) stands for the same single behaviour one level up.
+    const id = node.leaves[0]!;
+    const where = c?.A ? ", in group A" : c?.B ? ", in group B" : "";
+    const level = node.isLeaf ? "" : `, level ${node.level}`;
+    return `behaviour ${id}${level}${where}${compared.has(id) ? "" : ", not compared yet"}`;
+  }
+  const parts = [`cluster of ${n} behaviours, level ${node.level}`];
+  if (c?.A) parts.push(`${c.A} in group A`);
+  if (c?.B) parts.push(`${c.B} in group B`);
+  return parts.join(", ");
+}
+
+/** Fills and labels the arcs from the groups; only changed arcs unless `all`. */
+export function updateTints(chart: Chart, data: ExplorationData, all: boolean, relabelLeaves: boolean): void {
+  if (!chart.round || !chart.layout) return;
+  const next = groupCounts(data.groups, (leaf) => chart.ancestorIds.get(leaf) ?? []);
+  // Only arcs whose counts changed are touched (a selection update stays O(selected · depth)).
+  const ids = all ? [...chart.arcEls.keys()] : [...new Set([...chart.counts.keys(), ...next.keys()])];
+  for (const id of ids) {
+    const el = chart.arcEls.get(id);
+    const a = chart.layout.byId.get(id);
+    if (!el || !a) continue;
+    const c = next.get(id);
+    const node = a.node;
+    const fill = node.isLeaf
+      ? c?.A
+        ? GROUP_COLOURS.A
+        : c?.B
+          ? "url(#hatch-B)"
+          : neutralFill(0)
+      : groupTint(neutralFill(a.ring), c?.A ?? 0, c?.B ?? 0, node.leaves.length);
+    attr(el, "fill", fill);
+    attr(el, "aria-label", arcLabel(node, c, data.compared));
+  }
+  if (relabelLeaves && !all) {
+    for (const a of chart.layout.arcs) {
+      if (a.node.leaves.length !== 1) continue;
+      const el = chart.arcEls.get(a.node.id);
+      if (el) attr(el, "aria-label", arcLabel(a.node, next.get(a.node.id), data.compared));
+    }
+  }
+  chart.counts = next;
+}
+
+/** A dot inside each behaviour's arc that no judgement has compared yet. */
+export function updateMarks(chart: Chart, compared: ReadonlySet<string>): void {
+  const layout = chart.layout;
+  if (!chart.round || !layout) {
+    chart.marks.removeAttribute("d");
+    return;
+  }
+  const n = chart.round.tree.leaves.length;
+  const r = layout.discRadius - 7;
+  const dot = Math.max(1, Math.min(3.2, ((Math.PI * r) / Math.max(1, n)) * 0.55));
+  let d = "";
+  for (const leaf of chart.round.tree.leaves) {
+    if (compared.has(leaf.id)) continue;
+    const arc = layout.byId.get(leaf.id);
+    if (!arc) continue;
+    const [x, y] = polar(midAngle(arc), r);
+    d += `M${(x - dot).toFixed(1)},${y.toFixed(1)}a${dot},${dot} 0 1,0 ${2 * dot},0a${dot},${dot} 0 1,0 ${-2 * dot},0`;
+  }
+  chart.marks.setAttribute("d", d);
+}
+
+/** Outlines the hovered arc and its ancestors. */
+export function updateOutline(chart: Chart, id: string | null): void {
+  chart.outline.replaceChildren();
+  const layout = chart.layout;
+  if (!id || !layout) return;
+  const a = layout.byId.get(id);
+  if (!a) return;
+  const nodes = [a.node, ...ancestors(a.node)];
+  for (const n of nodes) {
+    const arc = layout.byId.get(n.id);
+    if (!arc) continue;
+    chart.outline.append(
+      s("path", { d: arcPath(arc) ?? "", class: n === a.node ? "hover-arc" : "hover-ancestor" }),
+    );
+  }
+}
