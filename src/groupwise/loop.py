@@ -1,10 +1,14 @@
 """The RLHF loop (SPEC §3), readable top to bottom.
 
-Per round: sample a pool from the current policy → gather comparisons from the oracle →
-derive preference pairs → fit the reward ensemble on the cumulative dataset → train PPO on
-the learned reward → evaluate on the true reward → checkpoint. Every round draws its
-randomness from a generator derived from (seed, round), so a session resumed from a
-checkpoint repeats exactly what an uninterrupted one does.
+Per round (`run_round`): sample a pool from the current policy (`sample_pool`) → gather
+comparisons (a query strategy proposes, a teacher answers: `oracles.Feedback`) → derive
+preference pairs (`derive_pairs`, `limit_pairs`) → `train_round`: fit the reward ensemble on
+the cumulative dataset → train the agent on the learned reward → evaluate on the true reward
+→ checkpoint. The interactive app runs the same phases apart in time (`server/jobs.py`:
+`sample_pool` when a round is prepared, `train_round` once a person ends it), and
+`comparisons.PreferenceComparisons` runs `run_round` over a user's own env and agent.
+Every round draws its randomness from a generator derived from (seed, round), so a session
+resumed from a checkpoint repeats exactly what an uninterrupted one does.
 """
 
 import csv
@@ -15,30 +19,30 @@ import time
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 from tqdm.auto import tqdm
 
+from groupwise import sampling
 from groupwise.checkpoint import (
     DATASET_FILE,
     REWARD_FILE,
     latest_checkpoint,
     write_checkpoint,
 )
-from groupwise.fragments import most_uncertain, stack_fragments, tile_fragments
-from groupwise.config import RunConfig
+from groupwise.config import LoopConfig, RunConfig
 from groupwise.envs import make_env
-from groupwise.envs.spaces import action_dim, observation_dim
 from groupwise.oracles import ORACLES, Oracle
 from groupwise.pool import BehaviourPool
-from groupwise.preferences.dataset import PreferenceDataset, wrong_labels
+from groupwise.preferences.dataset import PreferenceDataset
+from groupwise.preferences.judgement import Judgement
 from groupwise.preferences.pairs import PAIR_DERIVATIONS, Pair, cap_pairs
-from groupwise.query.groups import step_variance
 from groupwise.query.schedule import comparisons_per_round
 from groupwise.reward import RewardEnsemble, fit
-from groupwise.rl.policy import Policy
+from groupwise.rl.agents import Agent
 from groupwise.rl.ppo import PPOAgent
-from groupwise.rl.rollout import EnvFactory, evaluate, sample_trajectories
+from groupwise.rl.rollout import EnvFactory, evaluate
 
 log = logging.getLogger(__name__)
 
@@ -78,37 +82,56 @@ class RoundRecord:
 
 @dataclass
 class Session:
-    """The mutable state of one RLHF run: what a checkpoint saves."""
+    """The mutable state of one RLHF run: what a checkpoint saves.
+
+    `Session.create` wires our own PPO (`groupwise train`, the study, the app); a user's
+    own env factory and agent come in through `groupwise.comparisons.PreferenceComparisons`.
+    """
 
     cfg: RunConfig
     make_env: EnvFactory
     ensemble: RewardEnsemble
-    agent: PPOAgent
+    agent: Agent
     dataset: PreferenceDataset
     records: list[RoundRecord]
 
     @classmethod
-    def create(cls, cfg: RunConfig, out: Path) -> "Session":
+    def create(cls, cfg: RunConfig, out: Path | None) -> "Session":
         loop = cfg.loop
         make = _env_factory(loop.env)
-        probe = make()
-        obs_dim, act_dim = observation_dim(probe.observation_space), action_dim(probe.action_space)
-        probe.close()
-        init_rng = np.random.default_rng(np.random.SeedSequence([loop.seed, 2**20]))
-        ensemble = RewardEnsemble(obs_dim, act_dim, cfg.reward, init_rng)
+        ensemble = RewardEnsemble.for_env(make, cfg.reward, init_rng(loop.seed))
         agent = PPOAgent(
-            make, cfg.ppo, seed=loop.seed, reward_fn=ensemble.mean_reward, log_dir=out / "tb"
+            make,
+            cfg.ppo,
+            seed=loop.seed,
+            reward_fn=ensemble.mean_reward,
+            log_dir=None if out is None else out / "tb",
         )
-        dataset = PreferenceDataset.empty(loop.fragment_length, obs_dim, act_dim)
+        return cls.of(cfg, make, ensemble, agent)
+
+    @classmethod
+    def of(
+        cls, cfg: RunConfig, make: EnvFactory, ensemble: RewardEnsemble, agent: Agent
+    ) -> "Session":
+        """A fresh session over given parts (no feedback yet)."""
+        dataset = PreferenceDataset.empty(
+            cfg.loop.fragment_length, ensemble.obs_dim, ensemble.act_dim
+        )
         return cls(cfg, make, ensemble, agent, dataset, [])
 
     @property
     def next_round(self) -> int:
         return len(self.records)
 
+    @property
+    def ppo(self) -> PPOAgent:
+        if not isinstance(self.agent, PPOAgent):
+            raise TypeError("checkpoints need groupwise's own PPOAgent")
+        return self.agent
+
     def save(self, out: Path) -> None:
         def files(directory: Path) -> None:
-            self.agent.save(directory)
+            self.ppo.save(directory)
             self.ensemble.save(directory / REWARD_FILE)
             self.dataset.save(directory / DATASET_FILE)
 
@@ -119,10 +142,15 @@ class Session:
         write_checkpoint(out, self.next_round - 1, state, files)
 
     def restore(self, directory: Path, state: dict) -> None:
-        self.agent.load(directory)
+        self.ppo.load(directory)
         self.ensemble.load_state(directory / REWARD_FILE)
         self.dataset = PreferenceDataset.load(directory / DATASET_FILE)
         self.records = [RoundRecord(**row) for row in state["records"]]
+
+
+def init_rng(seed: int) -> np.random.Generator:
+    """The generator of the reward ensemble's initial weights."""
+    return np.random.default_rng(np.random.SeedSequence([seed, 2**20]))
 
 
 def round_rng(seed: int, round_index: int) -> np.random.Generator:
@@ -130,93 +158,130 @@ def round_rng(seed: int, round_index: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence([seed, round_index]))
 
 
-def build_pool(
+class RoundStreams(NamedTuple):
+    """A round's independent random streams, one per phase (the app runs them apart)."""
+
+    sample: np.random.Generator
+    feedback: np.random.Generator
+    pairs: np.random.Generator
+    fit: np.random.Generator
+    ppo: np.random.Generator
+
+
+def round_streams(seed: int, round_index: int) -> RoundStreams:
+    return RoundStreams(*round_rng(seed, round_index).spawn(5))
+
+
+def eval_rng(seed: int) -> np.random.Generator:
+    """The evaluation's generator: the same reset seeds after every round."""
+    return np.random.default_rng(np.random.SeedSequence([seed, 2**21]))
+
+
+def pool_size(loop: LoopConfig, n_comparisons: int) -> int:
+    """N = pool_factor × the round's comparisons, at least 2, at most `pool_cap`."""
+    return min(loop.pool_cap, max(2, math.ceil(loop.pool_factor * n_comparisons)))
+
+
+def sample_pool(
+    session: Session,
     round_index: int,
-    make: EnvFactory,
-    policy: Policy,
-    ensemble: RewardEnsemble,
     size: int,
-    cfg: RunConfig,
     rng: np.random.Generator,
+    oversample: float = POOL_OVERSAMPLE,
 ) -> BehaviourPool:
-    """Sample episodes, tile them into fragments and keep the `size` most uncertain ones."""
-    length = cfg.loop.fragment_length
-    probe = make()
-    horizon = probe.spec.max_episode_steps if probe.spec is not None else None
-    probe.close()
-    if not horizon or horizon < length:
-        raise ValueError(f"env horizon {horizon} is shorter than the fragment length {length}")
-    windows = horizon // length
-    episodes = max(1, math.ceil(size * POOL_OVERSAMPLE / windows))
-    trajectories = sample_trajectories(make, policy, episodes, rng, cfg.loop.exploration_fraction)
-    fragments = tile_fragments(trajectories, length)
-    obs, acts = stack_fragments(fragments)
-    step = ensemble.step_rewards(obs, acts)  # (K, M, L): one forward pass for both uses
-    returns = np.ascontiguousarray(step.sum(axis=-1).T)  # (M, K), as ensemble.returns
-    keep = most_uncertain(returns.var(axis=1), size)
-    return BehaviourPool(
-        round_index,
-        tuple(fragments[i] for i in keep),
-        returns[keep],
-        step_variance(step[:, keep]),
+    """The round's pool from the current policy: the `size` of `oversample` × `size` windows
+    the ensemble is most uncertain about (`sampling.sample_pool`)."""
+    loop = session.cfg.loop
+    return sampling.sample_pool(
+        session.make_env,
+        session.agent.policy(),
+        size,
+        loop.fragment_length,
+        rng,
+        round_index=round_index,
+        exploration_fraction=loop.exploration_fraction,
+        oversample=oversample,
+        ensemble=session.ensemble,
     )
 
 
-def run_round(
-    session: Session, oracle: Oracle, n_comparisons: int, steps: int, show_progress: bool
-) -> RoundRecord:
-    """One full round; appends its record to the session and returns it."""
-    cfg, loop = session.cfg, session.cfg.loop
-    index = session.next_round
-    rng = round_rng(loop.seed, index)
-    sample_rng, feedback_rng, pair_rng, fit_rng, ppo_rng = rng.spawn(5)
-    timer = _PhaseTimer()
+def derive_pairs(
+    judgements: list[Judgement], loop: LoopConfig, rng: np.random.Generator
+) -> list[Pair]:
+    """Each judgement's preference pairs by `loop.pair_derivation` (SPEC §6)."""
+    derive = PAIR_DERIVATIONS[loop.pair_derivation]
+    return [pair for j in judgements for pair in derive(j, rng)]
 
-    with timer("sample"):
-        pool_size = min(loop.pool_cap, max(2, math.ceil(loop.pool_factor * n_comparisons)))
-        pool = build_pool(
-            index,
-            session.make_env,
-            session.agent.policy(),
-            session.ensemble,
-            pool_size,
-            cfg,
-            sample_rng,
-        )
-    with timer("feedback"):
-        judgements = oracle.gather(pool, n_comparisons, feedback_rng)
-        derive = PAIR_DERIVATIONS[loop.pair_derivation]
-        pairs = [pair for j in judgements for pair in derive(j, pair_rng)]
-        if loop.pair_cap is not None:
-            pairs = cap_pairs(pairs, math.floor(loop.pair_cap * n_comparisons), pair_rng)
-        before = len(session.dataset)
-        session.dataset.add(pool.fragments, pairs, index)
-        round_errors = _label_errors(pool, pairs)
+
+def limit_pairs(
+    pairs: list[Pair], loop: LoopConfig, n_comparisons: int, rng: np.random.Generator
+) -> list[Pair]:
+    """A round's pairs, capped at ⌊pair_cap × comparisons⌋ when `loop.pair_cap` is set."""
+    if loop.pair_cap is None:
+        return pairs
+    return cap_pairs(pairs, math.floor(loop.pair_cap * n_comparisons), rng)
+
+
+def train_round(
+    session: Session,
+    round_index: int,
+    *,
+    comparisons: int,
+    judgements: int,
+    steps: int,
+    streams: RoundStreams,
+    seconds: dict[str, float],
+    show_progress: bool = False,
+    report: Callable[[str, int, int], None] | None = None,
+) -> RoundRecord:
+    """The second half of every round, headless or in the app: fit the reward ensemble on
+    the session's dataset (round 0 with `initial_epoch_multiplier` × the epochs), train the
+    agent for `steps` on the learned reward, evaluate it on the true reward, and append the
+    round's record. `seconds` holds the sample and feedback phases' wall times; `report`
+    hears ("reward" | "ppo" | "eval", done, total)."""
+    cfg = session.cfg
+    timer = _PhaseTimer(seconds)
+
+    def tell(phase: str, done: int, total: int) -> None:
+        if report is not None:
+            report(phase, done, total)
+
     with timer("reward"):
-        multiplier = cfg.reward.initial_epoch_multiplier if index == 0 else 1.0
+        tell("reward", 0, len(session.dataset))
+        multiplier = cfg.reward.initial_epoch_multiplier if round_index == 0 else 1.0
         epochs = max(1, round(cfg.reward.epochs * multiplier))
-        report = fit(session.ensemble, session.dataset, cfg.reward, fit_rng, epochs)
+        fit_report = fit(session.ensemble, session.dataset, cfg.reward, streams.fit, epochs)
     with timer("ppo"):
-        seed = int(ppo_rng.integers(2**31 - 1))
-        session.agent.learn(steps, seed, show_progress=show_progress)
-    with timer("eval"):
-        returns = evaluate(
-            session.make_env,
-            session.agent.policy(deterministic=True),
-            loop.eval_episodes,
-            np.random.default_rng(np.random.SeedSequence([loop.seed, 2**21])),
+        seed = int(streams.ppo.integers(2**31 - 1))
+        session.agent.learn(
+            steps,
+            seed,
+            show_progress=show_progress,
+            report=None if report is None else lambda done, total: tell("ppo", done, total),
         )
+    with timer("eval"):
+        returns = np.full(1, np.nan)
+        if cfg.loop.eval_episodes > 0:
+            tell("eval", 0, cfg.loop.eval_episodes)
+            returns = evaluate(
+                session.make_env,
+                session.agent.policy(deterministic=True),
+                cfg.loop.eval_episodes,
+                eval_rng(cfg.loop.seed),
+            )
+    dataset = session.dataset
+    this_round = dataset.rounds == round_index
     record = RoundRecord(
-        round=index,
-        comparisons=n_comparisons,
-        judgements=len(judgements),
-        pairs=len(session.dataset) - before,
-        pairs_total=len(session.dataset),
-        label_error_rate=round_errors,
-        label_error_rate_total=session.dataset.label_error_rate(),
-        reward_loss=report.loss,
-        reward_accuracy=report.accuracy,
-        reward_val_accuracy=report.validation_accuracy,
+        round=round_index,
+        comparisons=comparisons,
+        judgements=judgements,
+        pairs=int(this_round.sum()),
+        pairs_total=len(dataset),
+        label_error_rate=dataset.label_error_rate(this_round),
+        label_error_rate_total=dataset.label_error_rate(),
+        reward_loss=fit_report.loss,
+        reward_accuracy=fit_report.accuracy,
+        reward_val_accuracy=fit_report.validation_accuracy,
         env_steps=session.agent.num_timesteps,
         true_return_mean=float(returns.mean()),
         true_return_std=float(returns.std()),
@@ -224,6 +289,44 @@ def run_round(
     )
     session.records.append(record)
     return record
+
+
+def run_round(
+    session: Session, oracle: Oracle, n_comparisons: int, steps: int, show_progress: bool
+) -> RoundRecord:
+    """One full round: sample → pool → feedback → pairs → `train_round`."""
+    loop = session.cfg.loop
+    index = session.next_round
+    streams = round_streams(loop.seed, index)
+    timer = _PhaseTimer()
+    with timer("sample"):
+        pool = sample_pool(session, index, pool_size(loop, n_comparisons), streams.sample)
+    with timer("feedback"):
+        judgements = oracle.gather(pool, n_comparisons, streams.feedback)
+        pairs = derive_pairs(judgements, loop, streams.pairs)
+        pairs = limit_pairs(pairs, loop, n_comparisons, streams.pairs)
+        session.dataset.add(pool.fragments, pairs, index)
+    return train_round(
+        session,
+        index,
+        comparisons=n_comparisons,
+        judgements=len(judgements),
+        steps=steps,
+        streams=streams,
+        seconds=timer.seconds,
+        show_progress=show_progress,
+    )
+
+
+def round_plan(loop: LoopConfig) -> list[tuple[int, int]]:
+    """(comparisons, PPO steps) of each round; a last (0, final_steps) row when set."""
+    schedule = comparisons_per_round(
+        loop.comparisons, loop.rounds, loop.initial_fraction, loop.schedule
+    )
+    plan = [(n, loop.steps // loop.rounds) for n in schedule]
+    if loop.final_steps > 0:
+        plan.append((0, loop.final_steps))
+    return plan
 
 
 def run_session(
@@ -258,12 +361,7 @@ def run_session(
         session.restore(directory, state)
         log.info("resuming %s after round %d", out, state["round"])
     oracle = oracle or ORACLES[loop.oracle](loop)
-    schedule = comparisons_per_round(
-        loop.comparisons, loop.rounds, loop.initial_fraction, loop.schedule
-    )
-    plan = [(n, loop.steps // loop.rounds) for n in schedule]
-    if loop.final_steps > 0:
-        plan.append((0, loop.final_steps))
+    plan = round_plan(loop)
 
     bar = tqdm(
         total=len(plan),
@@ -292,7 +390,7 @@ def run_session(
                 on_round(record)
     finally:
         bar.close()
-        session.agent.close()
+        session.ppo.close()
     return session.records
 
 
@@ -308,14 +406,6 @@ def write_records(path: Path, records: list[RoundRecord]) -> None:
     tmp.replace(path)
 
 
-def _label_errors(pool: BehaviourPool, pairs: list[Pair]) -> float:
-    if not pairs:
-        return float("nan")
-    true = pool.true_returns
-    a, b = (np.array([p.a for p in pairs]), np.array([p.b for p in pairs]))
-    return float(wrong_labels(true[a], true[b], np.array([p.label for p in pairs])).mean())
-
-
 def _env_factory(name: str) -> EnvFactory:
     make_env(name).close()  # fail early, with the registry's message, on an unknown env
     return lambda: make_env(name)
@@ -324,8 +414,8 @@ def _env_factory(name: str) -> EnvFactory:
 class _PhaseTimer:
     """Wall time per named phase: `with timer("ppo"): ...`, then `timer.seconds`."""
 
-    def __init__(self) -> None:
-        self.seconds: dict[str, float] = {}
+    def __init__(self, seconds: dict[str, float] | None = None) -> None:
+        self.seconds: dict[str, float] = dict(seconds or {})
 
     def __call__(self, phase: str) -> "_PhaseTimer":
         self._phase = phase

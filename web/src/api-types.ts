@@ -514,40 +514,78 @@ export interface components {
             undone: boolean;
         };
         /**
-         * PPOSettings
-         * @description Overrides of `groupwise.config.PPOConfig` (None keeps the study's default).
+         * PPOConfig
+         * @description Stable-Baselines3 PPO, the study's defaults (SPEC §3).
          */
-        PPOSettings: {
+        PPOConfig: {
             /**
              * Batch Size
-             * @description minibatch size
+             * @default 64
              */
-            batch_size?: number | null;
+            batch_size: number;
+            /**
+             * Clip Range
+             * @default 0.1
+             */
+            clip_range: number;
+            /**
+             * Ent Coef
+             * @default 0.01
+             */
+            ent_coef: number;
+            /**
+             * Gae Lambda
+             * @default 0.95
+             */
+            gae_lambda: number;
+            /**
+             * Gamma
+             * @default 0.97
+             */
+            gamma: number;
             /**
              * Learning Rate
-             * @description Adam step size
+             * @default 0.002
              */
-            learning_rate?: number | null;
+            learning_rate: number;
             /**
              * N Envs
-             * @description parallel envs
+             * @default 8
              */
-            n_envs?: number | null;
+            n_envs: number;
             /**
              * N Epochs
-             * @description epochs per rollout
+             * @default 10
              */
-            n_epochs?: number | null;
+            n_epochs: number;
             /**
              * N Steps
-             * @description steps per env per rollout
+             * @default 256
              */
-            n_steps?: number | null;
+            n_steps: number;
             /**
              * Net Arch
-             * @description hidden layer widths of policy and value nets
+             * @default [
+             *       32,
+             *       32
+             *     ]
              */
-            net_arch?: number[] | null;
+            net_arch: number[];
+            /**
+             * Normalize Obs
+             * @default true
+             */
+            normalize_obs: boolean;
+            /**
+             * Normalize Reward
+             * @default true
+             */
+            normalize_reward: boolean;
+            /**
+             * Tensorboard
+             * @default true
+             */
+            tensorboard: boolean;
         };
         /** PairOut */
         PairOut: {
@@ -607,25 +645,95 @@ export interface components {
             phase: string;
         };
         /**
-         * RewardSettings
-         * @description Overrides of `groupwise.config.RewardConfig` (None keeps the default).
+         * RewardConfig
+         * @description The reward-model ensemble and its Bradley–Terry training (SPEC §3).
          */
-        RewardSettings: {
+        RewardConfig: {
+            /**
+             * Activation
+             * @default relu
+             */
+            activation: string;
+            /**
+             * Batch Size
+             * @default 4
+             */
+            batch_size: number;
+            /**
+             * Bootstrap
+             * @default true
+             */
+            bootstrap: boolean;
             /**
              * Ensemble Size
-             * @description K ensemble members
+             * @default 3
              */
-            ensemble_size?: number | null;
+            ensemble_size: number;
             /**
              * Epochs
-             * @description epochs per fit after round 0
+             * @default 3
              */
-            epochs?: number | null;
+            epochs: number;
+            /**
+             * Hidden Sizes
+             * @default [
+             *       64,
+             *       64
+             *     ]
+             */
+            hidden_sizes: number[];
             /**
              * Initial Epoch Multiplier
-             * @description round 0 trains this many times more epochs
+             * @default 10
              */
-            initial_epoch_multiplier?: number | null;
+            initial_epoch_multiplier: number;
+            /**
+             * Initial L2
+             * @default 0.0001
+             */
+            initial_l2: number;
+            /**
+             * L2 Bounds
+             * @default [
+             *       1.1,
+             *       1.5
+             *     ]
+             */
+            l2_bounds: [
+                number,
+                number
+            ];
+            /**
+             * L2 Factor
+             * @default 1.2
+             */
+            l2_factor: number;
+            /**
+             * L2 Range
+             * @default [
+             *       1e-8,
+             *       0.1
+             *     ]
+             */
+            l2_range: [
+                number,
+                number
+            ];
+            /**
+             * Lr
+             * @default 0.001
+             */
+            lr: number;
+            /**
+             * Min Pairs For Validation
+             * @default 10
+             */
+            min_pairs_for_validation: number;
+            /**
+             * Validation Fraction
+             * @default 0.2
+             */
+            validation_fraction: number;
         };
         /** RoundTree */
         RoundTree: {
@@ -672,11 +780,53 @@ export interface components {
              *       "exploration_fraction": 0.25,
              *       "fragment_length": 30,
              *       "frame_size": 240,
+             *       "pair_derivation": "cover",
              *       "pool_size": 100,
-             *       "ppo": {},
+             *       "ppo": {
+             *         "batch_size": 64,
+             *         "clip_range": 0.1,
+             *         "ent_coef": 0.01,
+             *         "gae_lambda": 0.95,
+             *         "gamma": 0.97,
+             *         "learning_rate": 0.002,
+             *         "n_envs": 8,
+             *         "n_epochs": 10,
+             *         "n_steps": 256,
+             *         "net_arch": [
+             *           32,
+             *           32
+             *         ],
+             *         "normalize_obs": true,
+             *         "normalize_reward": true,
+             *         "tensorboard": true
+             *       },
              *       "ppo_steps_per_round": 20000,
              *       "render_workers": 2,
-             *       "reward": {},
+             *       "reward": {
+             *         "activation": "relu",
+             *         "batch_size": 4,
+             *         "bootstrap": true,
+             *         "ensemble_size": 3,
+             *         "epochs": 3,
+             *         "hidden_sizes": [
+             *           64,
+             *           64
+             *         ],
+             *         "initial_epoch_multiplier": 10,
+             *         "initial_l2": 0.0001,
+             *         "l2_bounds": [
+             *           1.1,
+             *           1.5
+             *         ],
+             *         "l2_factor": 1.2,
+             *         "l2_range": [
+             *           1e-8,
+             *           0.1
+             *         ],
+             *         "lr": 0.001,
+             *         "min_pairs_for_validation": 10,
+             *         "validation_fraction": 0.2
+             *       },
              *       "round_seconds": 600,
              *       "rounds": 5,
              *       "seed": 0,
@@ -704,7 +854,7 @@ export interface components {
             eval_episodes: number;
             /**
              * Exploration Fraction
-             * @description share of sampled steps with random actions (SPEC §3.1)
+             * @description share of sampled steps with random actions
              * @default 0.25
              */
             exploration_fraction: number;
@@ -721,16 +871,25 @@ export interface components {
              */
             frame_size: number;
             /**
+             * Pair Cap
+             * @description keep at most pair_cap × comparisons pairs a round
+             */
+            pair_cap?: number | null;
+            /**
+             * Pair Derivation
+             * @description how a group judgement becomes pairs: max(m, n) (cover) or m × n
+             * @default cover
+             * @enum {string}
+             */
+            pair_derivation: "cover" | "cartesian";
+            /**
              * Pool Size
              * @description behaviours per round
              * @default 100
              */
             pool_size: number;
-            /**
-             * @description PPO overrides
-             * @default {}
-             */
-            ppo: components["schemas"]["PPOSettings"];
+            /** @description PPO (SPEC §3) */
+            ppo?: components["schemas"]["PPOConfig"];
             /**
              * Ppo Steps Per Round
              * @description PPO env steps after each round
@@ -743,11 +902,8 @@ export interface components {
              * @default 2
              */
             render_workers: number;
-            /**
-             * @description reward overrides
-             * @default {}
-             */
-            reward: components["schemas"]["RewardSettings"];
+            /** @description reward model */
+            reward?: components["schemas"]["RewardConfig"];
             /**
              * Round Seconds
              * @description round time budget in seconds (0 = no limit)

@@ -63,6 +63,8 @@ from groupwise.behaviour.linkage import (
     linkage_matrix,
     pool_size,
 )
+from groupwise.pool import behaviour_id
+from groupwise.preferences.judgement import MAX_GROUP
 from groupwise.types import FloatArray
 
 NodeKind = Literal["leaf", "merge", "padding"]
@@ -186,7 +188,7 @@ def assign_levels(heights: FloatArray, thresholds: Sequence[float]) -> np.ndarra
 
 
 def _leaf(i: int) -> TreeNode:
-    return TreeNode(id=f"b{i}", level=0, kind="leaf", children=(), leaves=(i,), height=0.0)
+    return TreeNode(id=behaviour_id(i), level=0, kind="leaf", children=(), leaves=(i,), height=0.0)
 
 
 def _pad(node: TreeNode, parent_level: int) -> TreeNode:
@@ -272,7 +274,7 @@ def group_candidates(
     tree: BehaviourTree,
     levels: Sequence[int] = (1, 2),
     min_size: int = 2,
-    max_size: int = 8,
+    max_size: int = MAX_GROUP,
 ) -> list[TreeNode]:
     """Nodes that can be offered as one group (SPEC §4): at one of `levels`, with
     min_size..max_size leaves, in pre-order (left to right, parents before children).

@@ -1,21 +1,28 @@
-"""Simulated decision-makers, registered by name (SPEC §7).
+"""Teachers and the simulated decision-makers, registered by name (SPEC §7).
 
-"pairwise", "groupwise" and "interactive" are the paper's three DMs; "interactive-distinct" is
-the Interactive-DM that compares only groups at least `LoopConfig.interactive_gap` noise sds
-apart in mean true return (beyond the spec, see `interactive.py`); "<dm>-<imperfection>"
-(e.g. "groupwise-myopic", "pairwise-mistake") answers the same queries with a B-Pref-style
-imperfect teacher (`imperfect.TEACHERS`: myopic, mistake, skip, equal).
+A decision-maker (DM) is a query strategy (`groupwise.query.strategies`) answered by a
+teacher: `Feedback(queries, teacher)`. "pairwise", "groupwise" and "interactive" are the
+paper's three DMs; "interactive-distinct" is the Interactive-DM that compares only groups at
+least `LoopConfig.interactive_gap` noise sds apart in mean true return (beyond the spec, see
+`query.interactive`); "<dm>-<imperfection>" (e.g. "groupwise-myopic", "pairwise-mistake")
+answers the same queries with a B-Pref-style imperfect teacher (`imperfect.TEACHERS`:
+myopic, mistake, skip, equal). A person answers through the web page
+(`groupwise.server.web_teacher.WebTeacher`).
 """
 
 from collections.abc import Callable
 
 from groupwise.config import LoopConfig
-from groupwise.oracles.base import Oracle
-from groupwise.oracles.group_decision import Perception, Teacher
-from groupwise.oracles.groupwise import GroupwiseDM
-from groupwise.oracles.imperfect import TEACHERS, Imperfection, TeacherPairwiseDM
-from groupwise.oracles.interactive import InteractiveDM
-from groupwise.oracles.pairwise import PairwiseDM
+from groupwise.oracles.base import Feedback, Oracle, Teacher
+from groupwise.oracles.group_decision import Perception, SimulatedTeacher
+from groupwise.oracles.imperfect import TEACHERS, Imperfection
+from groupwise.oracles.pairwise import PairwiseTeacher
+from groupwise.query.strategies import (
+    GroupSuggestions,
+    InteractiveWalk,
+    PairwiseQueries,
+    QueryStrategy,
+)
 
 
 def _imperfection(cfg: LoopConfig) -> Imperfection:
@@ -27,45 +34,50 @@ def _imperfection(cfg: LoopConfig) -> Imperfection:
     )
 
 
-def _teacher(cfg: LoopConfig) -> Teacher:
-    return Teacher(Perception(cfg.noise_sigma))
-
-
-_QUERIES: dict[str, Callable[[LoopConfig, Teacher], Oracle]] = {
-    "pairwise": lambda cfg, t: TeacherPairwiseDM(t, candidates=cfg.candidate_pairs),
-    "groupwise": lambda cfg, t: GroupwiseDM(t, max_group=cfg.max_group_size),
-    "interactive": lambda cfg, t: InteractiveDM(t, max_group=cfg.max_group_size),
-}
-"""How each DM chooses its queries, given the teacher that answers them."""
-
-
-def _imperfect(dm: str, imperfection: str) -> Callable[[LoopConfig], Oracle]:
-    def make(cfg: LoopConfig) -> Oracle:
-        teacher = TEACHERS[imperfection](cfg.noise_sigma, _imperfection(cfg))
-        return _QUERIES[dm](cfg, teacher)
-
-    return make
-
-
-ORACLES: dict[str, Callable[[LoopConfig], Oracle]] = {
-    "pairwise": lambda cfg: PairwiseDM(sigma=cfg.noise_sigma, candidates=cfg.candidate_pairs),
-    "groupwise": lambda cfg: _QUERIES["groupwise"](cfg, _teacher(cfg)),
-    "interactive": lambda cfg: _QUERIES["interactive"](cfg, _teacher(cfg)),
-    "interactive-distinct": lambda cfg: InteractiveDM(
-        _teacher(cfg),
+STRATEGIES: dict[str, Callable[[LoopConfig], QueryStrategy]] = {
+    "pairwise": lambda cfg: PairwiseQueries(candidates=cfg.candidate_pairs),
+    "groupwise": lambda cfg: GroupSuggestions(max_group=cfg.max_group_size),
+    "interactive": lambda cfg: InteractiveWalk(max_group=cfg.max_group_size),
+    "interactive-distinct": lambda cfg: InteractiveWalk(
         max_group=cfg.max_group_size,
         min_gap=cfg.interactive_gap * cfg.fragment_length * cfg.noise_sigma,
     ),
-    **{f"{dm}-{kind}": _imperfect(dm, kind) for dm in _QUERIES for kind in TEACHERS},
 }
+"""How each DM chooses its queries."""
+
+
+def _dm(strategy: str, teacher: Callable[[LoopConfig], Teacher]) -> Callable[[LoopConfig], Oracle]:
+    return lambda cfg: Feedback(STRATEGIES[strategy](cfg), teacher(cfg))
+
+
+def _paper_teacher(cfg: LoopConfig) -> Teacher:
+    return SimulatedTeacher(Perception(cfg.noise_sigma))
+
+
+def _imperfect(kind: str) -> Callable[[LoopConfig], Teacher]:
+    return lambda cfg: TEACHERS[kind](cfg.noise_sigma, _imperfection(cfg))
+
+
+ORACLES: dict[str, Callable[[LoopConfig], Oracle]] = {
+    "pairwise": _dm("pairwise", lambda cfg: PairwiseTeacher(sigma=cfg.noise_sigma)),
+    "groupwise": _dm("groupwise", _paper_teacher),
+    "interactive": _dm("interactive", _paper_teacher),
+    "interactive-distinct": _dm("interactive-distinct", _paper_teacher),
+    **{
+        f"{dm}-{kind}": _dm(dm, _imperfect(kind))
+        for dm in ("pairwise", "groupwise", "interactive")
+        for kind in TEACHERS
+    },
+}
+"""Every registered decision-maker, by name (the study's `--dms`)."""
 
 __all__ = [
     "ORACLES",
-    "GroupwiseDM",
-    "InteractiveDM",
+    "STRATEGIES",
+    "Feedback",
     "Oracle",
-    "PairwiseDM",
+    "PairwiseTeacher",
     "Perception",
+    "SimulatedTeacher",
     "Teacher",
-    "TeacherPairwiseDM",
 ]

@@ -1,13 +1,13 @@
 """How a simulated decision-maker answers one query (SPEC §7).
 
-A query is two groups of pool indices (a pairwise query is two groups of one). A `Teacher`
-answers it in two steps:
+A query is two groups of pool indices (a pairwise query is two groups of one). A
+`SimulatedTeacher` answers it in two steps:
 
 1. perception (`Perception`): each behaviour's return as the DM sees it, true return plus
    ε ~ Normal(0, (L·σ)²) drawn once per behaviour per judgement (paper eq. 1); a myopic
    teacher discounts earlier steps first (`gamma`, B-Pref);
-2. labelling: a pipeline of steps, each a function `(Query, rng) -> Query` that may decide,
-   skip or change the answer. `decide` is the group decision below; the imperfect
+2. labelling: a pipeline of steps, each a function `(LabelState, rng) -> LabelState` that
+   may decide, skip or change the answer. `decide` is the group decision below; the imperfect
    teachers of `imperfect.py` add steps before it (skip, equal) or after it (mistake).
 
 The group decision (both group DMs; paper §6: "the group whose behaviours' rewards had a
@@ -35,6 +35,7 @@ import numpy as np
 from groupwise.oracles.noise import perceived_returns
 from groupwise.pool import BehaviourPool
 from groupwise.preferences.judgement import EQUAL, LEFT_BETTER, RIGHT_BETTER, Judgement, Source
+from groupwise.query.strategies import Query
 from groupwise.types import FloatArray
 
 
@@ -97,7 +98,9 @@ class Perception:
         if not 0.0 < self.gamma <= 1.0:
             raise ValueError(f"myopic discount must be in (0, 1], got {self.gamma}")
 
-    def __call__(self, pool: BehaviourPool, indices: Sequence[int], rng: np.random.Generator) -> FloatArray:
+    def __call__(
+        self, pool: BehaviourPool, indices: Sequence[int], rng: np.random.Generator
+    ) -> FloatArray:
         """(n,) perceived returns of pool behaviours `indices`, fresh noise for each."""
         idx = np.asarray(indices, dtype=np.int64)
         if self.gamma == 1.0:
@@ -116,7 +119,7 @@ def _discounted(rewards: FloatArray, gamma: float) -> float:
 
 
 @dataclass(frozen=True)
-class Query:
+class LabelState:
     """The state a teacher's labelling steps pass along.
 
     `left`/`right` are the members still in each group, `seen_*` their perceived returns
@@ -135,11 +138,11 @@ class Query:
     removed: int = 0
 
 
-Step = Callable[[Query, np.random.Generator], Query]
+Step = Callable[[LabelState, np.random.Generator], LabelState]
 """One labelling step: returns the query decided, skipped or changed (or as it was)."""
 
 
-def decide(query: Query, rng: np.random.Generator) -> Query:
+def decide(query: LabelState, rng: np.random.Generator) -> LabelState:
     """The group decision as a labelling step; leaves an already decided query alone."""
     del rng
     if query.label is not None or query.skipped:
@@ -161,7 +164,7 @@ def decide(query: Query, rng: np.random.Generator) -> Query:
 
 
 @dataclass(frozen=True)
-class Teacher:
+class SimulatedTeacher:
     """A simulated DM's answer to one query: `perception`, then the labelling `steps`.
 
     The default is the paper's DM: noisy perception and the group decision.
@@ -185,7 +188,7 @@ class Teacher:
         """
         left, right = tuple(int(i) for i in left), tuple(int(i) for i in right)
         seen = self.perception(pool, left + right, rng)
-        query = Query(left, right, seen[: len(left)], seen[len(left) :], pool.true_returns)
+        query = LabelState(left, right, seen[: len(left)], seen[len(left) :], pool.true_returns)
         for step in self.steps:
             query = step(query, rng)
             if query.skipped:
@@ -193,3 +196,10 @@ class Teacher:
         if query.label is None:
             raise ValueError("the teacher's steps left the query undecided (missing `decide`)")
         return Judgement(query.left, query.right, query.label, source, edits=query.removed)
+
+    def answer(
+        self, pool: BehaviourPool, queries: Sequence[Query], rng: np.random.Generator
+    ) -> list[Judgement]:
+        """The judgements of `queries`, in order; a skipped query yields none."""
+        judgements = (self.judge(pool, q.left, q.right, rng) for q in queries)
+        return [j for j in judgements if j is not None]

@@ -1,6 +1,6 @@
 """B-Pref-style imperfect teachers (Lee et al. 2021, "B-Pref"), for pair and group queries.
 
-Each imperfection is one composable piece of a `Teacher` (`group_decision.py`):
+Each imperfection is one composable piece of a `SimulatedTeacher` (`group_decision.py`):
 
 - myopic: `Perception(gamma=γ)`, earlier steps discounted by γ^(L−1−t) (B-Pref γ = 0.9);
 - skip: `SkipWhenBothBelow(q)` before `decide`: skip when both groups' mean perceived
@@ -19,14 +19,12 @@ imperfection; use `noise_sigma = 0` for B-Pref's noise-free teachers.
 """
 
 from collections.abc import Callable
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 
 import numpy as np
 
-from groupwise.oracles.group_decision import Perception, Query, Teacher, decide
-from groupwise.pool import BehaviourPool
-from groupwise.preferences.judgement import EQUAL, Judgement
-from groupwise.query.pairwise import select_pairs
+from groupwise.oracles.group_decision import LabelState, Perception, SimulatedTeacher, decide
+from groupwise.preferences.judgement import EQUAL
 
 
 @dataclass(frozen=True)
@@ -39,7 +37,7 @@ class SkipWhenBothBelow:
         if not 0.0 <= self.quantile <= 1.0:
             raise ValueError(f"skip quantile must be in [0, 1], got {self.quantile}")
 
-    def __call__(self, query: Query, rng: np.random.Generator) -> Query:
+    def __call__(self, query: LabelState, rng: np.random.Generator) -> LabelState:
         del rng
         if query.label is not None or query.skipped:
             return query
@@ -60,7 +58,7 @@ class EqualWhenClose:
         if self.fraction < 0:
             raise ValueError(f"equal fraction must be >= 0, got {self.fraction}")
 
-    def __call__(self, query: Query, rng: np.random.Generator) -> Query:
+    def __call__(self, query: LabelState, rng: np.random.Generator) -> LabelState:
         del rng
         if query.label is not None or query.skipped:
             return query
@@ -80,7 +78,7 @@ class Mistake:
         if not 0.0 <= self.rate <= 1.0:
             raise ValueError(f"mistake rate must be in [0, 1], got {self.rate}")
 
-    def __call__(self, query: Query, rng: np.random.Generator) -> Query:
+    def __call__(self, query: LabelState, rng: np.random.Generator) -> LabelState:
         if query.label is None or query.label == EQUAL or query.skipped:
             return query
         if rng.random() < self.rate:
@@ -102,51 +100,30 @@ class Imperfection:
     """Answer equal when the means differ by less than this many pool standard deviations."""
 
 
-def myopic(sigma: float, p: Imperfection) -> Teacher:
+def myopic(sigma: float, p: Imperfection) -> SimulatedTeacher:
     """Sees discounted returns (γ on earlier steps), otherwise the paper's DM."""
-    return Teacher(Perception(sigma, p.gamma))
+    return SimulatedTeacher(Perception(sigma, p.gamma))
 
 
-def mistaken(sigma: float, p: Imperfection) -> Teacher:
+def mistaken(sigma: float, p: Imperfection) -> SimulatedTeacher:
     """The paper's DM, then a flip with probability ε."""
-    return Teacher(Perception(sigma), (decide, Mistake(p.mistake)))
+    return SimulatedTeacher(Perception(sigma), (decide, Mistake(p.mistake)))
 
 
-def skipping(sigma: float, p: Imperfection) -> Teacher:
+def skipping(sigma: float, p: Imperfection) -> SimulatedTeacher:
     """Skips queries whose groups both look bad, otherwise the paper's DM."""
-    return Teacher(Perception(sigma), (SkipWhenBothBelow(p.skip_quantile), decide))
+    return SimulatedTeacher(Perception(sigma), (SkipWhenBothBelow(p.skip_quantile), decide))
 
 
-def equal_when_close(sigma: float, p: Imperfection) -> Teacher:
+def equal_when_close(sigma: float, p: Imperfection) -> SimulatedTeacher:
     """Answers equal when the groups look alike, otherwise the paper's DM."""
-    return Teacher(Perception(sigma), (EqualWhenClose(p.equal_fraction), decide))
+    return SimulatedTeacher(Perception(sigma), (EqualWhenClose(p.equal_fraction), decide))
 
 
-TEACHERS: dict[str, Callable[[float, Imperfection], Teacher]] = {
+TEACHERS: dict[str, Callable[[float, Imperfection], SimulatedTeacher]] = {
     "myopic": myopic,
     "mistake": mistaken,
     "skip": skipping,
     "equal": equal_when_close,
 }
 """Imperfection name -> teacher factory from the noise σ per step and the parameters."""
-
-
-@dataclass(frozen=True)
-class TeacherPairwiseDM:
-    """Pairwise-DM answered by any `Teacher`: the pair comes from pairwise active learning
-    (the most disputed of `candidates` random pairs, as `PairwiseDM`), the answer from the
-    teacher, so a skipping teacher can use up a query without a judgement.
-
-    With the default teacher its answers follow the same rule as `PairwiseDM` (higher
-    perceived return wins, 0.5 on an exact tie).
-    """
-
-    teacher: Teacher = field(default_factory=Teacher)
-    candidates: int = 10
-
-    def gather(self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator) -> list[Judgement]:
-        if n_queries <= 0 or len(pool) < 2:
-            return []
-        pairs = select_pairs(pool.predicted_returns, n_queries, self.candidates, rng)
-        judgements = (self.teacher.judge(pool, (a,), (b,), rng) for a, b in pairs.tolist())
-        return [j for j in judgements if j is not None]

@@ -1,5 +1,6 @@
-"""Pairwise-DM (SPEC §7): the standard RLHF baseline, one pair per query."""
+"""The Pairwise-DM's teacher (SPEC §7): labels a pair by noisy true return."""
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -7,30 +8,32 @@ import numpy as np
 from groupwise.oracles.noise import perceived_returns, preference
 from groupwise.pool import BehaviourPool
 from groupwise.preferences.judgement import Judgement, Source
-from groupwise.query.pairwise import select_pairs
+from groupwise.query.strategies import Query
 
 
 @dataclass(frozen=True)
-class PairwiseDM:
-    """Asks the pairs chosen by pairwise active learning and labels them by noisy true return.
+class PairwiseTeacher:
+    """Answers pairs (groups of one): both returns perceived with fresh noise, the higher
+    wins (0.5 on an exact tie), or with `beta` a Boltzmann-rational choice
+    P(a) = σ((R(a) − R(b)) / β), as the paper's reference code labels.
 
-    For each query the most disputed of `candidates` random pairs is asked (ensemble
-    variance of the return difference); both returns are perceived with fresh noise.
+    It answers pairs only; `SimulatedTeacher` answers groups.
     """
 
     sigma: float = 0.25
-    candidates: int = 10
     beta: float | None = None
 
-    def gather(self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator) -> list[Judgement]:
-        if n_queries <= 0 or len(pool) < 2:
-            return []
-        pairs = select_pairs(pool.predicted_returns, n_queries, self.candidates, rng)
+    def answer(
+        self, pool: BehaviourPool, queries: Sequence[Query], rng: np.random.Generator
+    ) -> list[Judgement]:
         true = pool.true_returns
-        length = pool.fragments[0].length
         judgements = []
-        for a, b in pairs:
+        for query in queries:
+            if len(query.left) != 1 or len(query.right) != 1:
+                raise ValueError(f"the pairwise teacher answers pairs only, got {query}")
+            (a,), (b,) = query.left, query.right
+            length = pool.fragments[a].length
             seen_a, seen_b = perceived_returns(true[[a, b]], length, self.sigma, rng)
             label = preference(seen_a, seen_b, rng, self.beta)
-            judgements.append(Judgement((int(a),), (int(b),), label, Source.SIMULATED))
+            judgements.append(Judgement((a,), (b,), label, Source.SIMULATED))
         return judgements

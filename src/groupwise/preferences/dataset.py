@@ -59,13 +59,16 @@ class PreferenceDataset:
         self.labels = np.concatenate([self.labels, [p.label for p in pairs]]).astype(np.float32)
         self.rounds = np.concatenate([self.rounds, np.full(len(pairs), round_index)])
 
-    def label_error_rate(self) -> float:
-        """Share of labels that disagree with the true returns (nan when empty)."""
-        if len(self) == 0:
+    def label_error_rate(self, mask: np.ndarray | None = None) -> float:
+        """Share of labels (of the pairs in `mask`, default all) that disagree with the true
+        returns; nan when there are none."""
+        pairs, labels = self.pairs, self.labels
+        if mask is not None:
+            pairs, labels = pairs[mask], labels[mask]
+        if len(pairs) == 0:
             return float("nan")
         returns = self.true_returns
-        wrong = wrong_labels(returns[self.pairs[:, 0]], returns[self.pairs[:, 1]], self.labels)
-        return float(wrong.mean())
+        return float(wrong_labels(returns[pairs[:, 0]], returns[pairs[:, 1]], labels).mean())
 
     def save(self, path: Path) -> None:
         np.savez_compressed(

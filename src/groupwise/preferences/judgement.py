@@ -7,6 +7,8 @@ LEFT_BETTER = 1.0
 RIGHT_BETTER = 0.0
 EQUAL = 0.5
 LABELS = (LEFT_BETTER, RIGHT_BETTER, EQUAL)
+MAX_GROUP = 8
+"""Largest group of one comparison (paper §6: 8 keeps a comparison humanly possible)."""
 
 
 class Source(StrEnum):

@@ -1,5 +1,5 @@
-"""Interactive-DM (SPEC §7): a person exploring the view, who finds comparisons that span
-the whole range of quality.
+"""The Interactive-DM's walk (SPEC §7): a person exploring the view, who finds comparisons
+that span the whole range of quality (`strategies.InteractiveWalk`).
 
 The DM ranks the pool's group candidates (tree nodes at levels 1–2 with 2–8 leaves) by the
 *mean* true return of their members (the paper says mean; the prototype summed, which
@@ -30,15 +30,9 @@ its query.
 """
 
 from collections.abc import Sequence
-from dataclasses import dataclass, field
 
 import numpy as np
 
-from groupwise.behaviour import TreeConfig
-from groupwise.oracles.group_decision import Teacher
-from groupwise.oracles.groupwise import pool_candidates
-from groupwise.pool import BehaviourPool
-from groupwise.preferences.judgement import Judgement
 from groupwise.types import FloatArray
 
 
@@ -90,29 +84,3 @@ def evenly_spaced(total: int, count: int) -> list[int]:
     if count <= 0:
         return []
     return np.round(np.linspace(0, total - 1, count)).astype(int).tolist()
-
-
-@dataclass(frozen=True)
-class InteractiveDM:
-    """Compares neighbouring groups in true mean return, best to worst (module docstring)."""
-
-    teacher: Teacher = field(default_factory=Teacher)
-    tree: TreeConfig = field(default_factory=TreeConfig)
-    levels: tuple[int, ...] = (1, 2)
-    min_group: int = 2
-    max_group: int = 8
-    max_uses: int = 2
-    min_gap: float = 0.0
-    """The least difference in mean true return between compared groups (0: the spec's walk)."""
-
-    def gather(self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator) -> list[Judgement]:
-        if n_queries <= 0 or len(pool) < 2:
-            return []
-        candidates = pool_candidates(pool, self.tree, self.levels, self.min_group, self.max_group)
-        true = pool.true_returns
-        means = np.array([true[list(c.members)].mean() for c in candidates])
-        members = [c.members for c in candidates]
-        pairs = chain_pairs(members, means, self.max_uses, self.min_gap)
-        asked = [pairs[k] for k in evenly_spaced(len(pairs), n_queries)]
-        judgements = (self.teacher.judge(pool, members[g], members[h], rng) for g, h in asked)
-        return [j for j in judgements if j is not None]

@@ -13,14 +13,17 @@ thread predicting during a fit sees a model in between.
 
 import dataclasses
 import logging
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 import torch
 from torch import Tensor
 
 from groupwise.config import RewardConfig
+from groupwise.envs.spaces import action_dim, observation_dim
 from groupwise.reward.network import RewardNet
 from groupwise.types import FloatArray
 
@@ -61,6 +64,19 @@ class RewardEnsemble:
         )
         self.net.eval()
         self.l2_weight = float(cfg.initial_l2)
+
+    @classmethod
+    def for_env(
+        cls, make_env: Callable[[], gym.Env], cfg: RewardConfig, rng: np.random.Generator
+    ) -> "RewardEnsemble":
+        """An ensemble over the [obs ; encoded action] features of the env `make_env` makes."""
+        probe = make_env()
+        try:
+            obs_dim = observation_dim(probe.observation_space)
+            act_dim = action_dim(probe.action_space)
+        finally:
+            probe.close()
+        return cls(obs_dim, act_dim, cfg, rng)
 
     @property
     def size(self) -> int:

@@ -16,7 +16,7 @@ Modules: `models` (tables), `database` (engines, pragmas), `settings` (session s
 
 from groupwise.storage.database import DATABASE_FILE, Database, default_url, sqlite_url
 from groupwise.storage.errors import ConflictError, InvalidError, NotFoundError, StorageError
-from groupwise.storage.settings import PPOSettings, RewardSettings, SessionSettings
+from groupwise.storage.settings import SessionSettings
 
 __all__ = [
     "DATABASE_FILE",
@@ -24,8 +24,6 @@ __all__ = [
     "Database",
     "InvalidError",
     "NotFoundError",
-    "PPOSettings",
-    "RewardSettings",
     "SessionSettings",
     "StorageError",
     "default_url",

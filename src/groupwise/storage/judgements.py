@@ -1,7 +1,7 @@
 """Judgements: storing, retrying, undoing and listing comparisons, and their pairs.
 
 `add_judgement` is the write path of every comparison: it validates the groups against the
-open round, derives the preference pairs (SPEC §6, `covering_pairs`, max(m, n) pairs) and
+open round, derives the preference pairs (SPEC §6, the session's `pair_derivation`) and
 adds judgement and pairs in the caller's transaction, which commits before the HTTP answer
 is sent, so an answered judgement survives a crash. A retry with the same `client_id`
 returns the stored judgement instead of storing it twice.
@@ -19,8 +19,15 @@ import numpy as np
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session, selectinload
 
-from groupwise.preferences.judgement import EQUAL, LEFT_BETTER, RIGHT_BETTER, Judgement
-from groupwise.preferences.pairs import covering_pairs
+from groupwise.pool import behaviour_id
+from groupwise.preferences.judgement import (
+    EQUAL,
+    LEFT_BETTER,
+    MAX_GROUP,
+    RIGHT_BETTER,
+    Judgement,
+)
+from groupwise.preferences.pairs import PAIR_DERIVATIONS
 from groupwise.storage.errors import ConflictError, InvalidError, NotFoundError
 from groupwise.storage.models import BehaviourRow, JudgementRow, PairRow, SessionRow, utcnow
 from groupwise.storage.rounds import mark_suggestion_used
@@ -32,7 +39,6 @@ from groupwise.storage.sessions import (
     round_due,
     touch,
 )
-from groupwise.storage.settings import MAX_GROUP
 
 LABELS: dict[str, float] = {"left": LEFT_BETTER, "right": RIGHT_BETTER, "equal": EQUAL}
 """The page's label → P(left group preferred)."""
@@ -151,7 +157,8 @@ def add_judgement(
     seq = session.judgement_seq
     session.judgement_seq += 1
     label = LABELS[judgement.label]
-    derived = covering_pairs(
+    derive = PAIR_DERIVATIONS[str(session.settings.get("pair_derivation", "cover"))]
+    derived = derive(
         Judgement(indices[0], indices[1], label),
         pair_rng(int(session.settings["seed"]), judgement.round, seq),
     )
@@ -172,7 +179,7 @@ def add_judgement(
         created_at=now,
         revision=session.revision,
         pairs=[
-            PairRow(position=i, a=f"b{p.a}", b=f"b{p.b}", label=p.label)
+            PairRow(position=i, a=behaviour_id(p.a), b=behaviour_id(p.b), label=p.label)
             for i, p in enumerate(derived)
         ],
     )
@@ -336,3 +343,13 @@ def live_pairs(s: Session, session_id: str) -> list[tuple[int, PairRecord]]:
         .order_by(JudgementRow.seq, PairRow.position)
     ).all()
     return [(r, PairRecord(a, b, label)) for r, a, b, label in rows]
+
+
+def live_judgement_counts(s: Session, session_id: str) -> dict[int, int]:
+    """Round → the number of its non-undone judgements."""
+    rows = s.execute(
+        select(JudgementRow.round_index, func.count())
+        .where(JudgementRow.session_id == session_id, JudgementRow.undone.is_(False))
+        .group_by(JudgementRow.round_index)
+    ).all()
+    return {int(r): int(n) for r, n in rows}

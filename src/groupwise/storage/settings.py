@@ -1,52 +1,36 @@
 """The settings of an interactive session (docs/app.md, "Settings"), validated on creation.
 
 A pydantic model (frozen, unknown fields rejected) because it is both the request schema of
-`POST /api/sessions` and the JSON stored with the session; the worker turns it into the
-core's configs (`groupwise.config`, `groupwise.prepare.PoolConfig`).
+`POST /api/sessions` and the JSON stored with the session. It is a view of the core's one
+config (`groupwise.config`), not a mirror: PPO and the reward model are the core's own
+`PPOConfig` and `RewardConfig`, the loop's fields reuse the core's field types, and
+`run_config` is the session as a `RunConfig` (written beside its checkpoints). What only the
+app has (per-round budgets, the round timer, suggestions, clip size) lives here alone.
 
 The fields after `seed` are advanced knobs that the page does not show; tests and the
 latency benchmark use them to make rounds take seconds.
 """
 
-from typing import Annotated, Self
+from typing import Annotated, Any
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-MAX_GROUP = 8
-"""Largest group in a groupwise comparison (paper §6: 8 keeps comparisons humanly possible)."""
+from groupwise.config import (
+    ExplorationFraction,
+    LoopConfig,
+    PairCap,
+    PairDerivation,
+    PPOConfig,
+    RewardConfig,
+    RunConfig,
+    Seed,
+)
+from groupwise.preferences.judgement import MAX_GROUP
 
+__all__ = ["HUMAN", "MAX_GROUP", "SessionSettings"]
 
-class PPOSettings(BaseModel):
-    """Overrides of `groupwise.config.PPOConfig` (None keeps the study's default)."""
-
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
-    n_envs: int | None = Field(default=None, ge=1, le=64, description="parallel envs")
-    n_steps: int | None = Field(
-        default=None, ge=8, le=8192, description="steps per env per rollout"
-    )
-    batch_size: int | None = Field(default=None, ge=2, le=65536, description="minibatch size")
-    n_epochs: int | None = Field(default=None, ge=1, le=50, description="epochs per rollout")
-    learning_rate: float | None = Field(default=None, gt=0, le=1, description="Adam step size")
-    net_arch: Annotated[list[Annotated[int, Field(ge=1, le=1024)]], Field(max_length=4)] | None = (
-        Field(
-            default=None, min_length=1, description="hidden layer widths of policy and value nets"
-        )
-    )
-
-
-class RewardSettings(BaseModel):
-    """Overrides of `groupwise.config.RewardConfig` (None keeps the default)."""
-
-    model_config = ConfigDict(frozen=True, extra="forbid")
-
-    ensemble_size: int | None = Field(default=None, ge=2, le=10, description="K ensemble members")
-    epochs: int | None = Field(
-        default=None, ge=1, le=100, description="epochs per fit after round 0"
-    )
-    initial_epoch_multiplier: float | None = Field(
-        default=None, ge=1, le=100, description="round 0 trains this many times more epochs"
-    )
+HUMAN = "human"
+"""`LoopConfig.oracle` of a session a person answers (through the page)."""
 
 
 class SessionSettings(BaseModel):
@@ -55,7 +39,7 @@ class SessionSettings(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
     pool_size: int = Field(default=100, ge=8, le=200, description="behaviours per round")
-    fragment_length: int = Field(default=30, ge=5, le=200, description="L, steps per behaviour")
+    fragment_length: Annotated[int, Field(ge=5, le=200, description="L, steps per behaviour")] = 30
     round_seconds: float = Field(
         default=600, ge=0, le=86_400, description="round time budget in seconds (0 = no limit)"
     )
@@ -72,9 +56,9 @@ class SessionSettings(BaseModel):
     suggestions: int = Field(
         default=100, ge=0, le=2000, description="top-k pairwise suggestion edges precomputed"
     )
-    seed: int = Field(
-        default=0, ge=0, le=2**31 - 1, description="everything random derives from it"
-    )
+    seed: Seed = 0
+    pair_derivation: PairDerivation = "cover"
+    pair_cap: PairCap = None
     # -- advanced knobs (not shown by the page) -------------------------------------------
     frame_size: int = Field(
         default=240, ge=16, le=480, multiple_of=2, description="clip width, height"
@@ -82,29 +66,38 @@ class SessionSettings(BaseModel):
     render_workers: int = Field(
         default=2, ge=0, le=8, description="clip render processes (0: inline)"
     )
-    exploration_fraction: float = Field(
-        default=0.25,
-        ge=0,
-        lt=1,
-        description="share of sampled steps with random actions (SPEC §3.1)",
-    )
+    exploration_fraction: ExplorationFraction = 0.25
     eval_episodes: int = Field(
         default=5, ge=0, le=100, description="episodes measuring the true return after training"
     )
-    ppo: PPOSettings = Field(default=PPOSettings(), description="PPO overrides")
-    reward: RewardSettings = Field(default=RewardSettings(), description="reward overrides")
+    ppo: PPOConfig = Field(default_factory=PPOConfig, description="PPO (SPEC §3)")
+    reward: RewardConfig = Field(default_factory=RewardConfig, description="reward model")
 
-    @model_validator(mode="after")
-    def _consistent(self) -> Self:
-        from groupwise.config import PPOConfig
+    @model_validator(mode="before")
+    @classmethod
+    def _legacy_overrides(cls, data: Any) -> Any:
+        """Sessions stored before the settings took the core's models kept PPO and reward
+        overrides with None for "the default": drop those Nones."""
+        if isinstance(data, dict):
+            for key in ("ppo", "reward"):
+                if isinstance(data.get(key), dict):
+                    data = {**data, key: {k: v for k, v in data[key].items() if v is not None}}
+        return data
 
-        defaults = PPOConfig()
-        n_envs = self.ppo.n_envs or defaults.n_envs
-        n_steps = self.ppo.n_steps or defaults.n_steps
-        batch = self.ppo.batch_size or defaults.batch_size
-        if batch > n_envs * n_steps:
-            raise ValueError(
-                f"ppo.batch_size {batch} is larger than a rollout (n_envs × n_steps = "
-                f"{n_envs * n_steps})"
-            )
-        return self
+    def run_config(self, env: str) -> RunConfig:
+        """The session as the core's configuration; its feedback comes from a person."""
+        loop = LoopConfig(
+            env=env,
+            oracle=HUMAN,
+            comparisons=max(1, self.comparisons_per_round * self.rounds),
+            rounds=self.rounds,
+            steps=self.ppo_steps_per_round * self.rounds,
+            fragment_length=self.fragment_length,
+            exploration_fraction=self.exploration_fraction,
+            pool_cap=max(2, self.pool_size),
+            eval_episodes=self.eval_episodes,
+            pair_derivation=self.pair_derivation,
+            pair_cap=self.pair_cap,
+            seed=self.seed,
+        )
+        return RunConfig(loop=loop, reward=self.reward, ppo=self.ppo)

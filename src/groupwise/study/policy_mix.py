@@ -23,8 +23,8 @@ from collections.abc import Callable, Sequence
 import gymnasium as gym
 import numpy as np
 
-from groupwise.fragments import Fragment, tile_fragments
 from groupwise.envs import make_env
+from groupwise.fragments import Fragment, tile_fragments
 from groupwise.rl.policy import Policy, RandomPolicy, random_actions
 from groupwise.rl.rollout import sample_trajectories
 from groupwise.types import FloatArray

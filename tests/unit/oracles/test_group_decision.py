@@ -3,7 +3,7 @@ import pytest
 
 from groupwise.oracles.group_decision import (
     Perception,
-    Teacher,
+    SimulatedTeacher,
     decide,
     group_decision,
 )
@@ -80,7 +80,7 @@ def test_myopic_perception_discounts_earlier_steps(make_pool):
 
 def test_teacher_judges_with_noise_free_perception(make_pool):
     pool = make_pool([10.0, 12.0, 0.0, 1.0, 3.0, 6.0])
-    teacher = Teacher(Perception(sigma=0.0))
+    teacher = SimulatedTeacher(Perception(sigma=0.0))
     j = teacher.judge(pool, (0, 1, 2), (3, 4, 5), np.random.default_rng(0))
     assert j is not None
     assert (j.left, j.right, j.label, j.edits) == ((0, 1), (3, 4), LEFT_BETTER, 2)
@@ -90,5 +90,7 @@ def test_teacher_judges_with_noise_free_perception(make_pool):
 def test_a_teacher_without_a_decision_step_raises(make_pool):
     pool = make_pool([1.0, 0.0])
     with pytest.raises(ValueError):
-        Teacher(Perception(0.0), steps=()).judge(pool, (0,), (1,), np.random.default_rng(0))
+        SimulatedTeacher(Perception(0.0), steps=()).judge(
+            pool, (0,), (1,), np.random.default_rng(0)
+        )
     assert decide  # the step every teacher needs

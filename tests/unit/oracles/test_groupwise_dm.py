@@ -1,12 +1,13 @@
 import numpy as np
 
-from groupwise.oracles.group_decision import Perception, Teacher
-from groupwise.oracles.groupwise import GroupwiseDM, pool_candidates
+from groupwise.oracles import Feedback
+from groupwise.oracles.group_decision import Perception, SimulatedTeacher
 from groupwise.preferences.dataset import wrong_labels
 from groupwise.preferences.pairs import cartesian_pairs, covering_pairs
 from groupwise.query.groups import score_group_pairs, suggestion_order
+from groupwise.query.strategies import GroupSuggestions, pool_candidates
 
-NOISE_FREE = Teacher(Perception(sigma=0.0))
+NOISE_FREE = SimulatedTeacher(Perception(sigma=0.0))
 
 
 def _returns(n, seed=1):
@@ -15,7 +16,9 @@ def _returns(n, seed=1):
 
 def test_at_most_n_judgements_small_disjoint_groups(make_pool):
     pool = make_pool(_returns(60))
-    judgements = GroupwiseDM().gather(pool, 20, np.random.default_rng(0))
+    judgements = Feedback(GroupSuggestions(), SimulatedTeacher()).gather(
+        pool, 20, np.random.default_rng(0)
+    )
     assert 0 < len(judgements) <= 20
     for j in judgements:
         assert 1 <= len(j.left) <= 8 and 1 <= len(j.right) <= 8
@@ -34,7 +37,7 @@ def test_asks_the_top_suggestions_in_order(make_pool):
         (set(candidates[a].members), set(candidates[b].members))
         for a, b in scores.pairs[rows].tolist()
     ]
-    judgements = GroupwiseDM(NOISE_FREE).gather(pool, 5, np.random.default_rng(0))
+    judgements = Feedback(GroupSuggestions(), NOISE_FREE).gather(pool, 5, np.random.default_rng(0))
     # every judgement is one of the top suggestions (outliers removed), in order
     k = 0
     for j in judgements:
@@ -45,7 +48,7 @@ def test_asks_the_top_suggestions_in_order(make_pool):
 
 def test_noise_free_dm_is_always_right(make_pool):
     pool = make_pool(_returns(80, seed=2))
-    judgements = GroupwiseDM(NOISE_FREE).gather(pool, 40, np.random.default_rng(3))
+    judgements = Feedback(GroupSuggestions(), NOISE_FREE).gather(pool, 40, np.random.default_rng(3))
     assert judgements
     true = pool.true_returns
     for derive in (covering_pairs, cartesian_pairs):
@@ -57,7 +60,7 @@ def test_noise_free_dm_is_always_right(make_pool):
 
 def test_same_seed_same_judgements(make_pool):
     pool = make_pool(_returns(50))
-    dm = GroupwiseDM()
+    dm = Feedback(GroupSuggestions(), SimulatedTeacher())
     first = dm.gather(pool, 15, np.random.default_rng(7))
     assert first == dm.gather(pool, 15, np.random.default_rng(7))
 
@@ -65,20 +68,37 @@ def test_same_seed_same_judgements(make_pool):
 def test_works_without_step_variance(make_pool):
     pool = make_pool(_returns(40), step_variance=False)
     assert pool.step_variance is None
-    judgements = GroupwiseDM(NOISE_FREE).gather(pool, 10, np.random.default_rng(0))
+    judgements = Feedback(GroupSuggestions(), NOISE_FREE).gather(pool, 10, np.random.default_rng(0))
     assert 0 < len(judgements) <= 10
 
 
 def test_refill_asks_beyond_one_suggestion_list(make_pool):
     pool = make_pool(_returns(40))
-    one_list = GroupwiseDM(NOISE_FREE, refill=False).gather(pool, 200, np.random.default_rng(0))
-    refilled = GroupwiseDM(NOISE_FREE).gather(pool, 200, np.random.default_rng(0))
+    one_list = Feedback(GroupSuggestions(refill=False), NOISE_FREE).gather(
+        pool, 200, np.random.default_rng(0)
+    )
+    refilled = Feedback(GroupSuggestions(), NOISE_FREE).gather(pool, 200, np.random.default_rng(0))
     # each candidate is in at most 2 suggestions of one list: at most G suggestions
     assert len(one_list) <= len(pool_candidates(pool))
     assert len(refilled) > len(one_list)
 
 
 def test_tiny_pools(make_pool):
-    assert GroupwiseDM().gather(make_pool([1.0]), 5, np.random.default_rng(0)) == []
-    assert GroupwiseDM().gather(make_pool([1.0, 2.0]), 5, np.random.default_rng(0)) == []
-    assert GroupwiseDM().gather(make_pool(_returns(10)), 0, np.random.default_rng(0)) == []
+    assert (
+        Feedback(GroupSuggestions(), SimulatedTeacher()).gather(
+            make_pool([1.0]), 5, np.random.default_rng(0)
+        )
+        == []
+    )
+    assert (
+        Feedback(GroupSuggestions(), SimulatedTeacher()).gather(
+            make_pool([1.0, 2.0]), 5, np.random.default_rng(0)
+        )
+        == []
+    )
+    assert (
+        Feedback(GroupSuggestions(), SimulatedTeacher()).gather(
+            make_pool(_returns(10)), 0, np.random.default_rng(0)
+        )
+        == []
+    )

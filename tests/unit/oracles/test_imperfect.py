@@ -1,22 +1,22 @@
 import numpy as np
 import pytest
 
-from groupwise.fragments import Fragment
 from groupwise.config import LoopConfig
-from groupwise.oracles import ORACLES
-from groupwise.oracles.group_decision import Perception, Teacher, decide
+from groupwise.fragments import Fragment
+from groupwise.oracles import ORACLES, Feedback
+from groupwise.oracles.group_decision import Perception, SimulatedTeacher, decide
 from groupwise.oracles.imperfect import (
     TEACHERS,
     EqualWhenClose,
     Imperfection,
     Mistake,
     SkipWhenBothBelow,
-    TeacherPairwiseDM,
 )
 from groupwise.pool import BehaviourPool
 from groupwise.preferences.dataset import wrong_labels
 from groupwise.preferences.judgement import EQUAL, LEFT_BETTER, RIGHT_BETTER, Judgement
 from groupwise.preferences.pairs import covering_pairs
+from groupwise.query.strategies import PairwiseQueries
 
 
 def _error_rate(pool, judgements):
@@ -28,15 +28,15 @@ def _error_rate(pool, judgements):
 
 def test_mistake_rate_on_pairs_is_epsilon(make_pool):
     pool = make_pool([0.0, 100.0])
-    teacher = Teacher(Perception(0.0), (decide, Mistake(0.1)))
-    judgements = TeacherPairwiseDM(teacher).gather(pool, 5000, np.random.default_rng(0))
+    teacher = SimulatedTeacher(Perception(0.0), (decide, Mistake(0.1)))
+    judgements = Feedback(PairwiseQueries(), teacher).gather(pool, 5000, np.random.default_rng(0))
     assert len(judgements) == 5000
     assert _error_rate(pool, judgements) == pytest.approx(0.1, abs=0.015)
 
 
 def test_mistake_rate_on_groups_is_epsilon(make_pool):
     pool = make_pool([0.0, 1.0, 100.0, 101.0])
-    teacher = Teacher(Perception(0.0), (decide, Mistake(0.2)))
+    teacher = SimulatedTeacher(Perception(0.0), (decide, Mistake(0.2)))
     rng = np.random.default_rng(1)
     judgements = [teacher.judge(pool, (0, 1), (2, 3), rng) for _ in range(4000)]
     flipped = np.mean([j is not None and j.label == LEFT_BETTER for j in judgements])
@@ -46,20 +46,22 @@ def test_mistake_rate_on_groups_is_epsilon(make_pool):
 
 def test_skip_when_both_look_bad(make_pool):
     pool = make_pool([float(r) for r in range(100)])  # 10 % quantile 9.9
-    teacher = Teacher(Perception(0.0), (SkipWhenBothBelow(0.1), decide))
+    teacher = SimulatedTeacher(Perception(0.0), (SkipWhenBothBelow(0.1), decide))
     rng = np.random.default_rng(0)
     assert teacher.judge(pool, (0,), (9,), rng) is None
     assert teacher.judge(pool, (0, 1), (5, 8), rng) is None
     assert teacher.judge(pool, (0,), (50,), rng) == Judgement((0,), (50,), RIGHT_BETTER)
     # a skipped query uses up its query
-    dm = TeacherPairwiseDM(Teacher(Perception(0.0), (SkipWhenBothBelow(0.5), decide)))
+    dm = Feedback(
+        PairwiseQueries(), SimulatedTeacher(Perception(0.0), (SkipWhenBothBelow(0.5), decide))
+    )
     judgements = dm.gather(pool, 400, np.random.default_rng(0))
     assert 50 < len(judgements) < 400
 
 
 def test_equal_when_close(make_pool):
     pool = make_pool([float(r) for r in range(100)])  # std 28.87: threshold 2.887
-    teacher = Teacher(Perception(0.0), (EqualWhenClose(0.1), decide))
+    teacher = SimulatedTeacher(Perception(0.0), (EqualWhenClose(0.1), decide))
     rng = np.random.default_rng(0)
     assert teacher.judge(pool, (10,), (12,), rng) == Judgement((10,), (12,), EQUAL)
     # equal keeps the groups whole: no outlier removal without a winner
@@ -70,7 +72,7 @@ def test_equal_when_close(make_pool):
 
 def test_equal_answers_are_never_flipped(make_pool):
     pool = make_pool([float(r) for r in range(100)])
-    teacher = Teacher(Perception(0.0), (EqualWhenClose(0.1), decide, Mistake(1.0)))
+    teacher = SimulatedTeacher(Perception(0.0), (EqualWhenClose(0.1), decide, Mistake(1.0)))
     rng = np.random.default_rng(0)
     assert teacher.judge(pool, (10,), (12,), rng).label == EQUAL
     assert teacher.judge(pool, (10,), (50,), rng).label == LEFT_BETTER  # flipped for sure
@@ -87,13 +89,16 @@ def test_myopic_teacher_prefers_what_happens_last():
     )
     pool = BehaviourPool(0, fragments, np.zeros((2, 3)))
     rng = np.random.default_rng(0)
-    assert Teacher(Perception(0.0)).judge(pool, (0,), (1,), rng).label == LEFT_BETTER
-    assert Teacher(Perception(0.0, gamma=0.9)).judge(pool, (0,), (1,), rng).label == RIGHT_BETTER
+    assert SimulatedTeacher(Perception(0.0)).judge(pool, (0,), (1,), rng).label == LEFT_BETTER
+    assert (
+        SimulatedTeacher(Perception(0.0, gamma=0.9)).judge(pool, (0,), (1,), rng).label
+        == RIGHT_BETTER
+    )
 
 
 def test_default_teacher_pairwise_matches_the_pairwise_rule(make_pool):
     pool = make_pool([float(r) for r in range(20)])
-    judgements = TeacherPairwiseDM(Teacher(Perception(0.0))).gather(
+    judgements = Feedback(PairwiseQueries(), SimulatedTeacher(Perception(0.0))).gather(
         pool, 50, np.random.default_rng(0)
     )
     assert len(judgements) == 50 and _error_rate(pool, judgements) == 0.0

@@ -3,14 +3,15 @@ from collections import Counter
 import numpy as np
 import pytest
 
-from groupwise.oracles.group_decision import Perception, Teacher
-from groupwise.oracles.groupwise import pool_candidates
-from groupwise.oracles.interactive import InteractiveDM, chain_pairs, evenly_spaced
+from groupwise.oracles import Feedback
+from groupwise.oracles.group_decision import Perception, SimulatedTeacher
 from groupwise.preferences.dataset import wrong_labels
 from groupwise.preferences.judgement import LEFT_BETTER
 from groupwise.preferences.pairs import covering_pairs
+from groupwise.query.interactive import chain_pairs, evenly_spaced
+from groupwise.query.strategies import InteractiveWalk, pool_candidates
 
-NOISE_FREE = Teacher(Perception(sigma=0.0))
+NOISE_FREE = SimulatedTeacher(Perception(sigma=0.0))
 
 
 def test_chain_pairs_by_hand():
@@ -81,7 +82,7 @@ def test_pairs_neighbours_by_mean_return_best_to_worst(make_pool):
     assert sorted(map(set, (c.members for c in pool_candidates(pool))), key=min) == [
         _members(c) for c in (0, 1, 2, 3)
     ]
-    judgements = InteractiveDM(NOISE_FREE).gather(pool, 10, np.random.default_rng(0))
+    judgements = Feedback(InteractiveWalk(), NOISE_FREE).gather(pool, 10, np.random.default_rng(0))
     asked = [(set(j.left), set(j.right)) for j in judgements]
     assert asked == [
         (_members(0), _members(2)),
@@ -95,7 +96,9 @@ def test_distinct_walk_compares_only_groups_far_enough_apart(make_pool):
     pool = _cluster_pool(make_pool)
     # means 30 > 25 > 20 > 5: with a gap of 8, c0 passes over c2 (5 lower) to c1 (10 lower);
     # c2 passes over c1 (5 lower) to c3; c1 (used once) takes c3 (used once) as well
-    judgements = InteractiveDM(NOISE_FREE, min_gap=8.0).gather(pool, 10, np.random.default_rng(0))
+    judgements = Feedback(InteractiveWalk(min_gap=8.0), NOISE_FREE).gather(
+        pool, 10, np.random.default_rng(0)
+    )
     assert [(set(j.left), set(j.right)) for j in judgements] == [
         (_members(0), _members(1)),
         (_members(2), _members(3)),
@@ -105,7 +108,7 @@ def test_distinct_walk_compares_only_groups_far_enough_apart(make_pool):
 
 def test_more_pairs_than_queries_keep_the_ends(make_pool):
     pool = _cluster_pool(make_pool)
-    judgements = InteractiveDM(NOISE_FREE).gather(pool, 2, np.random.default_rng(0))
+    judgements = Feedback(InteractiveWalk(), NOISE_FREE).gather(pool, 2, np.random.default_rng(0))
     assert [(set(j.left), set(j.right)) for j in judgements] == [
         (_members(0), _members(2)),
         (_members(1), _members(3)),
@@ -118,7 +121,9 @@ def _random_pool(make_pool, n=80, seed=4):
 
 def test_random_pool_uses_each_behaviour_at_most_twice(make_pool):
     pool = _random_pool(make_pool)
-    judgements = InteractiveDM().gather(pool, 40, np.random.default_rng(0))
+    judgements = Feedback(InteractiveWalk(), SimulatedTeacher()).gather(
+        pool, 40, np.random.default_rng(0)
+    )
     assert 0 < len(judgements) <= 40
     uses = Counter(i for j in judgements for i in j.left + j.right)
     assert max(uses.values()) <= 2
@@ -127,13 +132,13 @@ def test_random_pool_uses_each_behaviour_at_most_twice(make_pool):
 
 def test_noise_free_dm_is_always_right_and_seeded(make_pool):
     pool = _random_pool(make_pool, seed=5)
-    dm = InteractiveDM(NOISE_FREE)
+    dm = Feedback(InteractiveWalk(), NOISE_FREE)
     judgements = dm.gather(pool, 40, np.random.default_rng(1))
     pairs = [p for j in judgements for p in covering_pairs(j, np.random.default_rng(0))]
     true = pool.true_returns
     a, b = np.array([p.a for p in pairs]), np.array([p.b for p in pairs])
     assert not wrong_labels(true[a], true[b], np.array([p.label for p in pairs])).any()
-    noisy = InteractiveDM()
+    noisy = Feedback(InteractiveWalk(), SimulatedTeacher())
     assert noisy.gather(pool, 40, np.random.default_rng(9)) == noisy.gather(
         pool, 40, np.random.default_rng(9)
     )

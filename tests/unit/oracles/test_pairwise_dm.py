@@ -1,9 +1,10 @@
 import numpy as np
 
 from groupwise.fragments import Fragment
+from groupwise.oracles import Feedback, PairwiseTeacher
 from groupwise.oracles.noise import perceived_returns, preference
-from groupwise.oracles.pairwise import PairwiseDM
 from groupwise.pool import BehaviourPool
+from groupwise.query.strategies import PairwiseQueries
 
 
 def _pool(returns: list[float], k: int = 3) -> BehaviourPool:
@@ -30,7 +31,9 @@ def test_noise_has_the_specified_scale():
 
 def test_noise_free_dm_is_always_right():
     pool = _pool([float(r) for r in range(20)])
-    judgements = PairwiseDM(sigma=0.0).gather(pool, 50, np.random.default_rng(0))
+    judgements = Feedback(PairwiseQueries(), PairwiseTeacher(sigma=0.0)).gather(
+        pool, 50, np.random.default_rng(0)
+    )
     assert len(judgements) == 50
     true = pool.true_returns
     for j in judgements:
@@ -40,7 +43,7 @@ def test_noise_free_dm_is_always_right():
 
 def test_noisy_dm_errs_more_on_close_pairs_and_is_seeded():
     pool = _pool([0.0, 1.0, 100.0])
-    dm = PairwiseDM(sigma=0.25, candidates=1)
+    dm = Feedback(PairwiseQueries(candidates=1), PairwiseTeacher(sigma=0.25))
     first = dm.gather(pool, 300, np.random.default_rng(5))
     assert first == dm.gather(pool, 300, np.random.default_rng(5))
     true = pool.true_returns

@@ -29,7 +29,10 @@ interface View {
 
 const views = new WeakMap<Element, View>();
 
-const FIELDS: Array<[keyof Settings, string, number, number]> = [
+/** The settings the form shows: the numeric ones. */
+type NumericSetting = { [K in keyof Settings]-?: Settings[K] extends number | undefined ? K : never }[keyof Settings];
+
+const FIELDS: Array<[NumericSetting, string, number, number]> = [
   ["pool_size", "Behaviours per round", 8, 200],
   ["rounds", "Rounds", 1, 100],
   ["round_seconds", "Seconds per round (0: no limit)", 0, 86400],
@@ -113,7 +116,7 @@ function build(element: HTMLElement): View {
       env: String(fd.get("env") ?? ""),
       mode: fd.get("mode") === "pairwise" ? "pairwise" : "groupwise",
     };
-    const chosen: Partial<Settings> = {};
+    const chosen: Partial<Pick<Settings, NumericSetting>> = {};
     for (const [key] of FIELDS) {
       const v = String(fd.get(key) ?? "").trim();
       if (v !== "") chosen[key] = Number(v);

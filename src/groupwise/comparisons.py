@@ -1,0 +1,92 @@
+"""groupwise inside someone else's RLHF code: the loop over a user's env and agent.
+
+`PreferenceComparisons` is the library's front door, in the spirit of imitation's class of
+the same name: give it an env factory, an agent (any Stable-Baselines3 algorithm, or
+anything with `learn(steps)` and `predict(obs)`), a reward ensemble the agent's env is
+rewarded by, and the feedback (a query strategy and a teacher: a simulated decision-maker,
+or a person through the web page, `WebTeacher`). `train()` runs the rounds of SPEC §3 with
+exactly the round function of `groupwise train` and the app (`loop.run_round`).
+
+    make = lambda: gym.make("Pendulum-v1")
+    reward = RewardEnsemble.for_env(make, RewardConfig(), np.random.default_rng(0))
+    agent = PPO("MlpPolicy", LearnedRewardVecEnv(make_vec_env(make, 4), reward.mean_reward))
+    loop = PreferenceComparisons(
+        make, agent, reward, Feedback(GroupSuggestions(), SimulatedTeacher()),
+        LoopConfig(comparisons=60, rounds=3, steps=12_000, fragment_length=20),
+    )
+    records = loop.train()
+
+See docs/library.md.
+"""
+
+from collections.abc import Callable
+from typing import Any
+
+from tqdm.auto import tqdm
+
+from groupwise.config import LoopConfig, RewardConfig, RunConfig
+from groupwise.loop import RoundRecord, Session, round_plan, run_round
+from groupwise.oracles.base import Oracle
+from groupwise.preferences.dataset import PreferenceDataset
+from groupwise.reward import RewardEnsemble
+from groupwise.rl.agents import as_agent
+from groupwise.rl.rollout import EnvFactory
+
+
+class PreferenceComparisons:
+    """The RLHF loop over a user's env factory, agent, reward ensemble and feedback.
+
+    `loop` sets the budgets (comparisons, rounds, PPO steps, fragment length, seed, pair
+    derivation, ...; `loop.env` and `loop.oracle` are only labels here); `reward` how the
+    ensemble is fitted. The agent must be trained on `reward_model`'s reward (e.g. its env
+    wrapped in `LearnedRewardVecEnv(venv, reward_model.mean_reward)`): the loop refits the
+    ensemble in place every round, so the agent's env sees the new reward at once.
+    """
+
+    def __init__(
+        self,
+        make_env: EnvFactory,
+        agent: Any,
+        reward_model: RewardEnsemble,
+        feedback: Oracle,
+        loop: LoopConfig | None = None,
+        reward: RewardConfig | None = None,
+    ) -> None:
+        cfg = RunConfig(loop=loop or LoopConfig(), reward=reward or reward_model.cfg)
+        self.feedback = feedback
+        self.session = Session.of(cfg, make_env, reward_model, as_agent(agent))
+
+    @property
+    def records(self) -> list[RoundRecord]:
+        """One record per finished round (what `groupwise train` writes to rounds.csv)."""
+        return self.session.records
+
+    @property
+    def dataset(self) -> PreferenceDataset:
+        """Every preference pair so far, with its fragments."""
+        return self.session.dataset
+
+    def train(
+        self,
+        show_progress: bool = False,
+        on_round: Callable[[RoundRecord], None] | None = None,
+    ) -> list[RoundRecord]:
+        """Run the rounds not run yet (all of them on a fresh object) and return the records."""
+        loop = self.session.cfg.loop
+        plan = round_plan(loop)
+        bar = tqdm(
+            total=len(plan),
+            initial=self.session.next_round,
+            desc="rlhf",
+            unit="round",
+            disable=not show_progress,
+        )
+        with bar:
+            while self.session.next_round < len(plan):
+                n_comparisons, steps = plan[self.session.next_round]
+                record = run_round(self.session, self.feedback, n_comparisons, steps, False)
+                bar.update(1)
+                bar.set_postfix(true_return=f"{record.true_return_mean:.1f}")
+                if on_round is not None:
+                    on_round(record)
+        return self.records

@@ -1,0 +1,143 @@
+"""Query strategies: which comparisons to ask of a pool (SPEC §5, §7), apart from who answers.
+
+A strategy *proposes* queries, a teacher (`groupwise.oracles.Teacher`: a simulated
+decision-maker, an imperfect teacher, or a person through the web page) *answers* them.
+`groupwise.oracles.Feedback` puts one of each together into what the loop asks for
+feedback. The three strategies of the paper's study:
+
+- `PairwiseQueries`: pairwise active learning, for each query the most disputed of
+  `candidates` random pairs (the Pairwise-DM's and the app's pairwise mode);
+- `GroupSuggestions`: the group-variance suggestions over the behaviour tree's candidate
+  groups (the Groupwise-DM; the app's suggestion list);
+- `InteractiveWalk`: a person walking the tree's groups from best to worst in true return
+  (the Interactive-DM; `groupwise.query.interactive`).
+"""
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from typing import Protocol
+
+import numpy as np
+
+from groupwise.behaviour import TreeConfig, build_tree, group_candidates
+from groupwise.pool import BehaviourPool
+from groupwise.preferences.judgement import MAX_GROUP
+from groupwise.query.groups import GroupCandidate, return_variance, suggest_groups
+from groupwise.query.interactive import chain_pairs, evenly_spaced
+from groupwise.query.pairwise import select_pairs
+
+
+@dataclass(frozen=True)
+class Query:
+    """One comparison to ask: two disjoint groups of pool indices (a pair: groups of one)."""
+
+    left: tuple[int, ...]
+    right: tuple[int, ...]
+
+    def __post_init__(self) -> None:
+        if not self.left or not self.right:
+            raise ValueError("both groups of a query need at least one behaviour")
+        if set(self.left) & set(self.right):
+            raise ValueError("a behaviour cannot be in both groups of a query")
+
+
+class QueryStrategy(Protocol):
+    """Proposes up to `n_queries` comparisons of `pool`, in the order to ask them."""
+
+    def propose(
+        self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator
+    ) -> list[Query]: ...
+
+
+def pool_candidates(
+    pool: BehaviourPool,
+    tree: TreeConfig | None = None,
+    levels: Sequence[int] = (1, 2),
+    min_size: int = 2,
+    max_size: int = MAX_GROUP,
+) -> list[GroupCandidate]:
+    """The pool's group candidates (SPEC §4), as the interface offers them.
+
+    The pool's DTW distances (computed once per pool) → behaviour tree → the nodes at
+    `levels` with `min_size` … `max_size` leaves, in the tree's pre-order. Empty for a pool
+    of fewer than 2 behaviours.
+    """
+    if len(pool) < 2:
+        return []
+    nodes = group_candidates(build_tree(pool.distances, tree), levels, min_size, max_size)
+    return [GroupCandidate(node.id, node.leaves) for node in nodes]
+
+
+@dataclass(frozen=True)
+class PairwiseQueries:
+    """For each query the most disputed of `candidates` random pairs (ensemble variance of
+    the return difference, SPEC §5)."""
+
+    candidates: int = 10
+
+    def propose(self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator) -> list[Query]:
+        if n_queries <= 0 or len(pool) < 2:
+            return []
+        pairs = select_pairs(pool.predicted_returns, n_queries, self.candidates, rng)
+        return [Query((a,), (b,)) for a, b in pairs.tolist()]
+
+
+@dataclass(frozen=True)
+class GroupSuggestions:
+    """The best-scoring suggested group comparisons of the pool (SPEC §5).
+
+    Suggestions are ranked by the group-variance score over the disjoint pairs of tree
+    candidates; each candidate appears in at most `max_uses` suggestions of one list.
+    With `refill` a list that is used up is followed by the next one over the pairs not yet
+    asked (a pool of 2 × queries behaviours has far fewer candidate nodes than queries, so
+    one list rarely covers the round). The intra term uses `pool.step_variance`; a pool
+    without it falls back to Var_k[R_k(f)] / L (`query.groups.return_variance`).
+    """
+
+    tree: TreeConfig = field(default_factory=TreeConfig)
+    levels: tuple[int, ...] = (1, 2)
+    min_group: int = 2
+    max_group: int = MAX_GROUP
+    max_uses: int = 2
+    refill: bool = True
+
+    def propose(self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator) -> list[Query]:
+        del rng  # the list is a function of the pool
+        if n_queries <= 0 or len(pool) < 2:
+            return []
+        candidates = pool_candidates(pool, self.tree, self.levels, self.min_group, self.max_group)
+        intra = pool.step_variance
+        if intra is None:
+            intra = return_variance(pool.predicted_returns, pool.fragments[0].length)
+        suggestions = suggest_groups(
+            pool.predicted_returns, intra, candidates, n_queries, self.max_uses, self.refill
+        )
+        return [Query(s.left.members, s.right.members) for s in suggestions]
+
+
+@dataclass(frozen=True)
+class InteractiveWalk:
+    """Neighbouring groups in mean true return, best to worst (`query.interactive`).
+
+    A simulated person who sees every behaviour's quality; `min_gap` > 0 (the
+    "interactive-distinct" DM) pairs a group only with one at least that much lower.
+    """
+
+    tree: TreeConfig = field(default_factory=TreeConfig)
+    levels: tuple[int, ...] = (1, 2)
+    min_group: int = 2
+    max_group: int = MAX_GROUP
+    max_uses: int = 2
+    min_gap: float = 0.0
+
+    def propose(self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator) -> list[Query]:
+        del rng  # the walk is a function of the pool
+        if n_queries <= 0 or len(pool) < 2:
+            return []
+        candidates = pool_candidates(pool, self.tree, self.levels, self.min_group, self.max_group)
+        true = pool.true_returns
+        means = np.array([true[list(c.members)].mean() for c in candidates])
+        members = [c.members for c in candidates]
+        pairs = chain_pairs(members, means, self.max_uses, self.min_gap)
+        asked = [pairs[k] for k in evenly_spaced(len(pairs), n_queries)]
+        return [Query(members[g], members[h]) for g, h in asked]

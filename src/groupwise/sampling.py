@@ -1,0 +1,66 @@
+"""Sampling a round's behaviour pool from a policy (SPEC §3.1–3.2).
+
+Episodes of the policy (with random exploration mixed in) are cut into non-overlapping
+windows of L steps; of `oversample` × N windows the N the reward ensemble is most uncertain
+about are kept (a uniformly random N without an ensemble). The headless loop, the app and
+`groupwise pool` all sample through `sample_pool`.
+"""
+
+import math
+
+import numpy as np
+
+from groupwise.fragments import most_uncertain, stack_fragments, tile_fragments
+from groupwise.pool import BehaviourPool
+from groupwise.query.groups import step_variance
+from groupwise.reward import RewardEnsemble
+from groupwise.rl.policy import Policy
+from groupwise.rl.rollout import EnvFactory, sample_episodes_for_windows
+from groupwise.types import IntArray
+
+
+def sample_pool(
+    make_env: EnvFactory,
+    policy: Policy,
+    size: int,
+    length: int,
+    rng: np.random.Generator,
+    *,
+    round_index: int = 0,
+    exploration_fraction: float = 0.0,
+    oversample: float = 1.0,
+    ensemble: RewardEnsemble | None = None,
+) -> BehaviourPool:
+    """A pool of (up to) `size` behaviours of `length` steps (module docstring).
+
+    With an `ensemble` the pool carries its predicted returns (N, K) and step variance;
+    without one the predicted returns are an empty (N, 0) array.
+
+    Raises:
+        ValueError: `size` < 1 or `oversample` < 1, or episodes too short for a window.
+    """
+    if size < 1 or oversample < 1.0:
+        raise ValueError(f"need size >= 1 and oversample >= 1, got {size} and {oversample}")
+    episodes = sample_episodes_for_windows(
+        make_env, policy, math.ceil(size * oversample), length, rng, exploration_fraction
+    )
+    windows = tile_fragments(episodes, length)
+    if ensemble is None:
+        keep: IntArray = (
+            np.arange(len(windows))
+            if len(windows) <= size
+            else np.sort(rng.choice(len(windows), size=size, replace=False))
+        )
+        kept = tuple(windows[i] for i in keep)
+        return BehaviourPool(round_index, kept, np.zeros((len(kept), 0)), episodes=tuple(episodes))
+    obs, acts = stack_fragments(windows)
+    step = ensemble.step_rewards(obs, acts)  # (K, M, L): one forward pass for both uses
+    returns = np.ascontiguousarray(step.sum(axis=-1).T)  # (M, K), as ensemble.returns
+    keep = most_uncertain(returns.var(axis=1), size)
+    return BehaviourPool(
+        round_index,
+        tuple(windows[i] for i in keep),
+        returns[keep],
+        step_variance(step[:, keep]),
+        episodes=tuple(episodes),
+    )
