@@ -11,6 +11,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
+from groupwise.pool import behaviour_id
 from groupwise.server import schemas
 from groupwise.server.context import AppContext
 from groupwise.storage import ConflictError, Database, InvalidError, NotFoundError
@@ -66,7 +67,7 @@ def _tree(
     data = json.loads((directory / "tree.json").read_text())
     medoids_file = directory / "medoids.json"
     raw = json.loads(medoids_file.read_text()) if medoids_file.is_file() else {}
-    medoids = {node: [f"b{i}" for i in members] for node, members in raw.items()}
+    medoids = {node: [behaviour_id(i) for i in members] for node, members in raw.items()}
     value = (_node(data["root"]), int(data["levels"]), medoids)
     with context.trees_lock:
         context.trees[key] = value

@@ -9,13 +9,17 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from groupwise.pool import BEHAVIOUR_PREFIX, behaviour_id
 from groupwise.storage.settings import MAX_GROUP, SessionSettings
 
 Phase = Literal["preparing", "ready", "training", "finished", "failed"]
 Mode = Literal["groupwise", "pairwise"]
 Label = Literal["left", "right", "equal"]
 Source = Literal["suggested", "explored", "pairwise"]
-BehaviourId = Annotated[str, Field(pattern=r"^b\d{1,6}$", max_length=8, examples=["b17"])]
+BehaviourId = Annotated[
+    str,
+    Field(pattern=rf"^{BEHAVIOUR_PREFIX}\d{{1,6}}$", max_length=8, examples=[behaviour_id(17)]),
+]
 ClipId = Annotated[str, Field(pattern=r"^[0-9a-f]{64}\.(mp4|jpg|png)$")]
 
 

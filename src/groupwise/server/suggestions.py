@@ -9,6 +9,7 @@ import numpy as np
 
 from groupwise.behaviour import TreeNode
 from groupwise.config import LoopConfig
+from groupwise.pool import behaviour_id
 from groupwise.query.groups import GroupCandidate, suggest_groups
 from groupwise.query.pairwise import select_pairs, top_pairs
 from groupwise.storage.rounds import GroupSuggestionInput, PairInput
@@ -31,8 +32,8 @@ def group_suggestions(
     )
     return tuple(
         GroupSuggestionInput(
-            left=tuple(f"b{i}" for i in g.left.members),
-            right=tuple(f"b{i}" for i in g.right.members),
+            left=tuple(behaviour_id(i) for i in g.left.members),
+            right=tuple(behaviour_id(i) for i in g.right.members),
             left_node=g.left.id,
             right_node=g.right.id,
             score=float(g.score),
@@ -49,7 +50,7 @@ def pairwise_edges(returns: FloatArray, k: int) -> tuple[PairInput, ...]:
     top = float(scores[0]) if len(scores) else 0.0
     scaled = scores / top if top > 0 else np.ones_like(scores)
     return tuple(
-        PairInput(f"b{a}", f"b{b}", float(max(s, 1e-6)))
+        PairInput(behaviour_id(a), behaviour_id(b), float(max(s, 1e-6)))
         for (a, b), s in zip(pairs.tolist(), scaled.tolist(), strict=True)
     )
 
@@ -72,7 +73,7 @@ def pairwise_queue(
             continue
         seen.add(key)
         score = float(np.var(returns[a] - returns[b]))
-        queue.append(PairInput(f"b{a}", f"b{b}", score))
+        queue.append(PairInput(behaviour_id(a), behaviour_id(b), score))
         if len(queue) >= wanted:
             break
     return tuple(queue)

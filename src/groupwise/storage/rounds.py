@@ -11,6 +11,7 @@ from datetime import datetime
 from sqlalchemy import delete, select
 from sqlalchemy.orm import Session
 
+from groupwise.pool import behaviour_id
 from groupwise.storage.errors import NotFoundError
 from groupwise.storage.models import (
     BehaviourRow,
@@ -34,7 +35,7 @@ class BehaviourInput:
 
     @property
     def name(self) -> str:
-        return f"b{self.index}"
+        return behaviour_id(self.index)
 
 
 @dataclass(frozen=True)
