@@ -360,7 +360,13 @@ def run_session(
         directory, state = found
         session.restore(directory, state)
         log.info("resuming %s after round %d", out, state["round"])
-    oracle = oracle or ORACLES[loop.oracle](loop)
+    if oracle is None:
+        if loop.oracle not in ORACLES:
+            raise ValueError(
+                f"no simulated decision-maker {loop.oracle!r} (a person answers an app "
+                f"session's rounds); choose from {', '.join(ORACLES)}"
+            )
+        oracle = ORACLES[loop.oracle](loop)
     plan = round_plan(loop)
 
     bar = tqdm(

@@ -57,7 +57,7 @@ def write_pool(
         start=np.array([f.start for f in fragments]),
         reset_seed=np.array([f.reset_seed for f in fragments]),
     )
-    np.savez(out / "episodes.npz", **episode_arrays(trajectories))
+    np.savez(out / "episodes.npz", **episode_arrays(trajectories))  # type: ignore[arg-type]
     np.save(out / "distances.npy", pool.distances)
     behaviours = [
         {
@@ -130,4 +130,3 @@ def write_json(path: Path, data: Any) -> None:
     tmp = path.with_name(path.name + ".tmp")
     tmp.write_text(json.dumps(data, indent=1))
     tmp.replace(path)
-

@@ -776,6 +776,7 @@ export interface components {
             /**
              * @default {
              *       "comparisons_per_round": 20,
+             *       "driver": "app",
              *       "eval_episodes": 5,
              *       "exploration_fraction": 0.25,
              *       "fragment_length": 30,
@@ -846,6 +847,13 @@ export interface components {
              * @default 20
              */
             comparisons_per_round: number;
+            /**
+             * Driver
+             * @description who prepares and trains the rounds: the app's worker, or a program using groupwise.WebTeacher
+             * @default app
+             * @enum {string}
+             */
+            driver: "app" | "library";
             /**
              * Eval Episodes
              * @description episodes measuring the true return after training

@@ -28,6 +28,7 @@ import json
 import logging
 import math
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -52,8 +53,15 @@ from groupwise.pool import BehaviourPool, behaviour_index
 from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.preferences.pairs import Pair
 from groupwise.prepare import PoolConfig, PreparedPool, load_fragments, publish_pool
+from groupwise.query.groups import return_variance
+from groupwise.query.strategies import Query
 from groupwise.server.progress import ProgressReporter
-from groupwise.server.suggestions import group_suggestions, pairwise_edges, pairwise_queue
+from groupwise.server.suggestions import (
+    group_suggestions,
+    pairwise_edges,
+    pairwise_queue,
+    suggestions_of,
+)
 from groupwise.storage import Database, SessionSettings
 from groupwise.storage.judgements import PairRecord, live_judgement_counts, live_pairs
 from groupwise.storage.rounds import (
@@ -124,24 +132,59 @@ def prepare(
         )
         tick = time.perf_counter()
         pool = sample_pool(session, r, settings.pool_size, streams.sample)
-        published = publish_pool(
-            pool_config(job.env, settings, render.workers),
-            pool,
-            data_dir / round_directory(job.session_id, r),
-            store=ClipStore(data_dir / "clips"),
-            render_pool=render,
-            metadata={"session": job.session_id, "round": r},
-            show_progress=False,
-            sample_s=time.perf_counter() - tick,
-        )
+        sample_s = time.perf_counter() - tick
     finally:
         session.ppo.close()
-    progress.report("suggestions", 0.9, "computing suggestions", force=True)
-    prepared = prepared_round(pool, published, settings, streams.feedback)
-    with db.write() as s:
-        if not store_prepared_round(s, job.session_id, r, prepared):
-            log.warning("session %s moved on while round %d was prepared", job.session_id, r)
+    publish_round(
+        db,
+        data_dir,
+        job.session_id,
+        job.env,
+        settings,
+        pool,
+        render,
+        streams.feedback,
+        progress=progress,
+        sample_s=sample_s,
+    )
     log.info("session %s: round %d ready (%d behaviours)", job.session_id, r, len(pool))
+
+
+def publish_round(
+    db: Database,
+    data_dir: Path,
+    session_id: str,
+    env: str,
+    settings: SessionSettings,
+    pool: BehaviourPool,
+    render: RenderPool,
+    rng: np.random.Generator,
+    *,
+    queries: Sequence[Query] | None = None,
+    progress: ProgressReporter | None = None,
+    sample_s: float = 0.0,
+) -> bool:
+    """Publish `pool` as round `pool.round` of a session and open the round: clips, tree
+    and candidates (`prepare.publish_pool`), then the round's suggestions (`prepared_round`)
+    stored in one transaction. False (nothing opened) when the session moved on meanwhile."""
+    published = publish_pool(
+        pool_config(env, settings, render.workers),
+        pool,
+        data_dir / round_directory(session_id, pool.round),
+        store=ClipStore(data_dir / "clips"),
+        render_pool=render,
+        metadata={"session": session_id, "round": pool.round},
+        show_progress=False,
+        sample_s=sample_s,
+    )
+    if progress is not None:
+        progress.report("suggestions", 0.9, "computing suggestions", force=True)
+    prepared = prepared_round(pool, published, settings, rng, queries)
+    with db.write() as s:
+        if not store_prepared_round(s, session_id, pool.round, prepared):
+            log.warning("session %s moved on while round %d was prepared", session_id, pool.round)
+            return False
+    return True
 
 
 def pool_config(env: str, settings: SessionSettings, workers: int) -> PoolConfig:
@@ -162,22 +205,31 @@ def prepared_round(
     published: PreparedPool,
     settings: SessionSettings,
     rng: np.random.Generator,
+    queries: Sequence[Query] | None = None,
 ) -> PreparedRound:
     """What the database stores to open a round: the behaviours, the group suggestions over
-    the tree's candidates, the top-k pairwise edges and the pairwise baseline's queue."""
+    the tree's candidates, the top-k pairwise edges and the pairwise baseline's queue.
+
+    Given `queries` (a query strategy's proposals), they are the round's suggestions (groups)
+    and its pairwise queue (pairs) instead, in their order."""
     returns = pool.predicted_returns
     intra = pool.step_variance
-    assert intra is not None  # loop.sample_pool always computes it
+    if intra is None:
+        intra = return_variance(returns, pool.fragments[0].length)
+    suggestions = group_suggestions(returns, intra, published.candidates)
+    queue = pairwise_queue(
+        returns, QUEUE_FACTOR * (settings.comparisons_per_round or settings.pool_size), rng
+    )
+    if queries is not None:
+        suggestions, queue = suggestions_of(queries, published.tree, returns)
     return PreparedRound(
         behaviours=tuple(
             BehaviourInput(i, published.clips[i], published.posters[i], f.true_return)
             for i, f in enumerate(pool.fragments)
         ),
-        suggestions=group_suggestions(returns, intra, published.candidates),
+        suggestions=suggestions,
         edges=pairwise_edges(returns, settings.suggestions),
-        queue=pairwise_queue(
-            returns, QUEUE_FACTOR * (settings.comparisons_per_round or settings.pool_size), rng
-        ),
+        queue=queue,
     )
 
 

@@ -5,13 +5,16 @@ worker's `jobs.prepare` stays a composition: group suggestions over the tree's c
 the top-k pairwise edges of the exploration view, and the pairwise baseline's queue.
 """
 
+from collections.abc import Sequence
+
 import numpy as np
 
-from groupwise.behaviour import TreeNode
+from groupwise.behaviour import BehaviourTree, TreeNode
 from groupwise.config import LoopConfig
 from groupwise.pool import behaviour_id
 from groupwise.query.groups import GroupCandidate, suggest_groups
 from groupwise.query.pairwise import select_pairs, top_pairs
+from groupwise.query.strategies import Query
 from groupwise.storage.rounds import GroupSuggestionInput, PairInput
 from groupwise.types import FloatArray
 
@@ -77,3 +80,33 @@ def pairwise_queue(
         if len(queue) >= wanted:
             break
     return tuple(queue)
+
+
+def suggestions_of(
+    queries: Sequence[Query], tree: BehaviourTree, returns: FloatArray
+) -> tuple[tuple[GroupSuggestionInput, ...], tuple[PairInput, ...]]:
+    """A query strategy's proposals as a round's suggestion list and pairwise queue, in their
+    order: each group is named by the tree node with exactly its behaviours (a leaf for a
+    group of one); a query whose group is no tree node is left out of the suggestions (a
+    person can still compose it in the chart). Scores are the ensemble's disagreement about
+    the groups' mean returns, Var_k[mean R_k(A) − mean R_k(B)]."""
+    nodes = {frozenset(node.leaves): node.id for node in tree.nodes() if node.kind != "padding"}
+    groups, pairs = [], []
+    for q in queries:
+        difference = returns[list(q.left)].mean(axis=0) - returns[list(q.right)].mean(axis=0)
+        score = float(np.var(difference)) if returns.shape[1] else 0.0
+        if len(q.left) == 1 and len(q.right) == 1:
+            pairs.append(PairInput(behaviour_id(q.left[0]), behaviour_id(q.right[0]), score))
+        left, right = nodes.get(frozenset(q.left)), nodes.get(frozenset(q.right))
+        if left is None or right is None:
+            continue
+        groups.append(
+            GroupSuggestionInput(
+                left=tuple(behaviour_id(i) for i in q.left),
+                right=tuple(behaviour_id(i) for i in q.right),
+                left_node=left,
+                right_node=right,
+                score=score,
+            )
+        )
+    return tuple(groups), tuple(pairs)

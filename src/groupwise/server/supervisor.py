@@ -24,11 +24,11 @@ from groupwise.server.worker import THREAD_ENV, kill_group, worker_main
 from groupwise.storage import Database
 from groupwise.storage.sessions import (
     READY,
-    WORK_PHASES,
     close_if_due,
     mark_failed,
     round_due,
     sessions_in,
+    worker_sessions,
 )
 
 log = logging.getLogger(__name__)
@@ -133,7 +133,7 @@ class Supervisor:
         message = f"the training worker stopped (exit code {exit_code})"
         log.error(message)
         with self.db.write() as s:
-            for session in sessions_in(s, WORK_PHASES):
+            for session in worker_sessions(s):
                 if session.progress_phase != QUEUED:
                     mark_failed(s, session.id, session.phase, message)
 
@@ -146,4 +146,4 @@ class Supervisor:
 
     def _has_work(self) -> bool:
         with self.db.read() as s:
-            return bool(sessions_in(s, WORK_PHASES))
+            return bool(worker_sessions(s))

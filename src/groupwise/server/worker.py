@@ -28,7 +28,7 @@ from typing import TYPE_CHECKING
 
 from groupwise.server.progress import ProgressReporter
 from groupwise.storage import Database
-from groupwise.storage.sessions import WORK_PHASES, mark_failed, sessions_in
+from groupwise.storage.sessions import mark_failed, worker_sessions
 
 if TYPE_CHECKING:  # the server imports this module; only the worker process needs these
     from groupwise.clips.render import RenderPool
@@ -104,7 +104,7 @@ class Worker:
         from groupwise.server import jobs
 
         with self.db.read() as s:
-            waiting = [row.id for row in sessions_in(s, WORK_PHASES)]
+            waiting = [row.id for row in worker_sessions(s)]
         for session_id in waiting:
             job = jobs.job_of(self.db, session_id)
             if job is not None:

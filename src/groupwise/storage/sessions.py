@@ -27,7 +27,7 @@ from groupwise.storage.models import (
     SessionRow,
     utcnow,
 )
-from groupwise.storage.settings import SessionSettings
+from groupwise.storage.settings import LIBRARY, SessionSettings
 
 PREPARING = "preparing"
 READY = "ready"
@@ -155,6 +155,22 @@ def sessions_in(s: Session, phases: tuple[str, ...]) -> list[SessionRow]:
     """Sessions in any of `phases`, the longest-waiting first."""
     query = select(SessionRow).where(SessionRow.phase.in_(phases)).order_by(SessionRow.updated_at)
     return list(s.scalars(query))
+
+
+def worker_sessions(s: Session) -> list[SessionRow]:
+    """Sessions that wait for the app's training worker, the longest-waiting first (a
+    session driven by a user's program through `WebTeacher` never does)."""
+    return [row for row in sessions_in(s, WORK_PHASES) if row.settings.get("driver") != LIBRARY]
+
+
+def finish_session(s: Session, session_id: str, now: datetime | None = None) -> SessionRow:
+    """The program driving a library session is done with it: phase ``finished``."""
+    session = get_session(s, session_id, lock=True)
+    session.phase = FINISHED
+    _stop_timer(session, now or utcnow())
+    _set_progress(session, "finished", 1.0, "the program's rounds are done")
+    touch(session, now)
+    return session
 
 
 def get_round(s: Session, session_id: str, index: int) -> RoundRow:

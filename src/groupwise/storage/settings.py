@@ -11,7 +11,7 @@ The fields after `seed` are advanced knobs that the page does not show; tests an
 latency benchmark use them to make rounds take seconds.
 """
 
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
@@ -27,10 +27,13 @@ from groupwise.config import (
 )
 from groupwise.preferences.judgement import MAX_GROUP
 
-__all__ = ["HUMAN", "MAX_GROUP", "SessionSettings"]
+__all__ = ["HUMAN", "LIBRARY", "MAX_GROUP", "SessionSettings"]
 
 HUMAN = "human"
 """`LoopConfig.oracle` of a session a person answers (through the page)."""
+LIBRARY = "library"
+"""`SessionSettings.driver` of a session whose rounds a user's program publishes and trains
+(`groupwise.server.web_teacher.WebTeacher`); the app's worker leaves it alone."""
 
 
 class SessionSettings(BaseModel):
@@ -60,6 +63,11 @@ class SessionSettings(BaseModel):
     pair_derivation: PairDerivation = "cover"
     pair_cap: PairCap = None
     # -- advanced knobs (not shown by the page) -------------------------------------------
+    driver: Literal["app", "library"] = Field(
+        default="app",
+        description="who prepares and trains the rounds: the app's worker, or a program "
+        "using groupwise.WebTeacher",
+    )
     frame_size: int = Field(
         default=240, ge=16, le=480, multiple_of=2, description="clip width, height"
     )
