@@ -10,6 +10,17 @@ import torch
 from groupwise.commands import COMMANDS
 from groupwise.commands.arguments import UsageError
 
+EXTRAS = {
+    "fastapi": "app",
+    "uvicorn": "app",
+    "sqlalchemy": "app",
+    "pyarrow": "app",
+    "matplotlib": "study",
+    "sklearn": "study",
+    "ray": "study",
+}
+"""A package of an optional extra (pyproject.toml) → the extra that installs it."""
+
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
@@ -39,6 +50,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         return handler(args)
     except UsageError as error:
         print(f"groupwise: error: {error}", file=sys.stderr)
+        return 2
+    except ModuleNotFoundError as error:
+        extra = EXTRAS.get((error.name or "").split(".")[0])
+        if extra is None:
+            raise
+        hint = f"pip install 'groupwise[{extra}]'"
+        print(f"groupwise: error: {args.command} needs {error.name}: {hint}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("groupwise: interrupted; continue with --resume", file=sys.stderr)

@@ -83,7 +83,22 @@ class PairwiseQueries:
 
 
 @dataclass(frozen=True)
-class GroupSuggestions:
+class _TreeGroups:
+    """What both group strategies share: the tree's candidate groups (SPEC §4) and how often
+    one behaviour may be asked in a round's list."""
+
+    tree: TreeConfig = field(default_factory=TreeConfig)
+    levels: tuple[int, ...] = (1, 2)
+    min_group: int = 2
+    max_group: int = MAX_GROUP
+    max_uses: int = 2
+
+    def candidates(self, pool: BehaviourPool) -> list[GroupCandidate]:
+        return pool_candidates(pool, self.tree, self.levels, self.min_group, self.max_group)
+
+
+@dataclass(frozen=True)
+class GroupSuggestions(_TreeGroups):
     """The best-scoring suggested group comparisons of the pool (SPEC §5).
 
     Suggestions are ranked by the group-variance score over the disjoint pairs of tree
@@ -94,18 +109,13 @@ class GroupSuggestions:
     without it falls back to Var_k[R_k(f)] / L (`query.groups.return_variance`).
     """
 
-    tree: TreeConfig = field(default_factory=TreeConfig)
-    levels: tuple[int, ...] = (1, 2)
-    min_group: int = 2
-    max_group: int = MAX_GROUP
-    max_uses: int = 2
     refill: bool = True
 
     def propose(self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator) -> list[Query]:
         del rng  # the list is a function of the pool
         if n_queries <= 0 or len(pool) < 2:
             return []
-        candidates = pool_candidates(pool, self.tree, self.levels, self.min_group, self.max_group)
+        candidates = self.candidates(pool)
         intra = pool.step_variance
         if intra is None:
             intra = return_variance(pool.predicted_returns, pool.fragments[0].length)
@@ -116,25 +126,20 @@ class GroupSuggestions:
 
 
 @dataclass(frozen=True)
-class InteractiveWalk:
+class InteractiveWalk(_TreeGroups):
     """Neighbouring groups in mean true return, best to worst (`query.interactive`).
 
     A simulated person who sees every behaviour's quality; `min_gap` > 0 (the
     "interactive-distinct" DM) pairs a group only with one at least that much lower.
     """
 
-    tree: TreeConfig = field(default_factory=TreeConfig)
-    levels: tuple[int, ...] = (1, 2)
-    min_group: int = 2
-    max_group: int = MAX_GROUP
-    max_uses: int = 2
     min_gap: float = 0.0
 
     def propose(self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator) -> list[Query]:
         del rng  # the walk is a function of the pool
         if n_queries <= 0 or len(pool) < 2:
             return []
-        candidates = pool_candidates(pool, self.tree, self.levels, self.min_group, self.max_group)
+        candidates = self.candidates(pool)
         true = pool.true_returns
         means = np.array([true[list(c.members)].mean() for c in candidates])
         members = [c.members for c in candidates]

@@ -23,6 +23,11 @@ BehaviourId = Annotated[
 ClipId = Annotated[str, Field(pattern=r"^[0-9a-f]{64}\.(mp4|jpg|png)$")]
 
 
+def limits() -> dict[str, int]:
+    """The server's limits that the page needs as numbers (``web/src/limits.json``)."""
+    return {"max_group": MAX_GROUP}
+
+
 class _In(BaseModel):
     model_config = ConfigDict(extra="forbid", frozen=True)
 

@@ -5,8 +5,10 @@ from pathlib import Path
 
 from groupwise.server.app import create_app
 from groupwise.server.config import AppConfig
+from groupwise.server.schemas import limits
 
-SAVED = Path(__file__).resolve().parents[3] / "web" / "openapi.json"
+WEB = Path(__file__).resolve().parents[3] / "web"
+SAVED = WEB / "openapi.json"
 
 
 def test_the_web_uis_saved_schema_is_the_servers(tmp_path):
@@ -15,3 +17,8 @@ def test_the_web_uis_saved_schema_is_the_servers(tmp_path):
     assert json.loads(SAVED.read_text()) == served, (
         "web/openapi.json is stale: cd web && npm run types:schema && npm run types"
     )
+
+
+def test_the_web_uis_limits_are_the_servers():
+    saved = json.loads((WEB / "src" / "limits.json").read_text())
+    assert saved == limits(), "web/src/limits.json is stale: cd web && npm run types:schema"

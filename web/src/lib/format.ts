@@ -38,6 +38,8 @@ const PHASES: Record<string, string> = {
   ppo: "Training the agent (PPO)",
   policy: "Training the agent (PPO)",
   checkpoint: "Saving a checkpoint",
+  eval: "Measuring the agent's true return",
+  evaluate: "Measuring the agent's true return",
 };
 
 export function phaseName(phase: string): string {

@@ -12,6 +12,8 @@
  * - A group holds at most MAX_GROUP behaviours (the server enforces it too).
  */
 
+import limits from "../limits.json";
+
 export type GroupId = "A" | "B";
 
 export interface Groups {
@@ -19,7 +21,9 @@ export interface Groups {
   readonly B: readonly string[];
 }
 
-export const MAX_GROUP = 8;
+/** The server's limit on a group (`groupwise.preferences.judgement.MAX_GROUP`), generated
+ * into `limits.json` with the API contract and checked against the server by its tests. */
+export const MAX_GROUP: number = limits.max_group;
 export const EMPTY_GROUPS: Groups = { A: [], B: [] };
 
 export interface SelectionResult {

@@ -1,4 +1,5 @@
-"""The built web UI at ``/`` (``web/dist``), or a page saying how to build it."""
+"""The built web UI at ``/`` (``src/groupwise/static``, package data), or a page saying how to
+build it."""
 
 from pathlib import Path
 
@@ -11,8 +12,9 @@ NOT_BUILT = """<!doctype html>
 <body style="font-family: sans-serif; max-width: 40em; margin: 3em auto">
 <h1>groupwise</h1>
 <p>The server is running, but the web UI has not been built: no <code>{index}</code>.</p>
-<p>Build it with <code>cd web &amp;&amp; npm install &amp;&amp; npm run build</code> and
-reload this page. The API is at <a href="/api/docs">/api/docs</a>.</p>
+<p>In a checkout, build it with <code>make setup</code> (or <code>cd web &amp;&amp; npm ci
+&amp;&amp; npm run build</code>) and reload this page; an installed package needs to be
+reinstalled after the build. The API is at <a href="/api/docs">/api/docs</a>.</p>
 </body></html>
 """
 
