@@ -74,6 +74,12 @@ class RewardConfig:
     """Below this many pairs there is no held-out split (tiny datasets must not crash)."""
     bootstrap: bool = True
     """Each member trains on its own resample with replacement of the training pairs."""
+    warm_start: bool = True
+    """Each fit continues from the last one's weights; off, every fit starts from fresh
+    weights (and the initial L2 weight)."""
+    standardise_output: bool = False
+    """After each fit, centre and scale every member's reward to mean 0, sd 1 over the
+    dataset's steps in the reward PPO sees (`RewardEnsemble.standardise_output`)."""
 
 
 @dataclass(frozen=True, config=_STRICT)
@@ -97,6 +103,9 @@ class PPOConfig:
     """Running observation normalisation (VecNormalize)."""
     normalize_reward: bool = True
     """Scale rewards by a running return std: the learned reward's scale drifts per round."""
+    reset_reward_norm: bool = False
+    """Forget the running return std at the start of every round's training (the reward
+    function changed with the fit before it)."""
     tensorboard: bool = True
     """Write TensorBoard logs under the run directory."""
 

@@ -122,6 +122,8 @@ def fit(
     """
     start = time.perf_counter()
     _check(ensemble, dataset, cfg, epochs)
+    if not cfg.warm_start and len(dataset):
+        ensemble.reinitialise(rng)
     if dataset.n_fragments:
         ensemble.refit_normalizer(dataset.obs, dataset.acts)
     n_pairs = len(dataset)
@@ -177,6 +179,8 @@ def fit(
         _flush_denormals(params, optimiser)
         net.eval()
 
+    if cfg.standardise_output:
+        ensemble.standardise_output(dataset.obs, dataset.acts)
     loss, accuracy = _evaluate(ensemble, fragments, pairs, labels, train)
     val_loss, val_accuracy = (
         _evaluate(ensemble, fragments, pairs, labels, val) if len(val) else (math.nan, math.nan)

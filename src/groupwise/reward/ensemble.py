@@ -24,7 +24,7 @@ from torch import Tensor
 
 from groupwise.config import RewardConfig
 from groupwise.envs.spaces import action_dim, observation_dim
-from groupwise.reward.network import RewardNet
+from groupwise.reward.network import RewardNet, StackedMLP
 from groupwise.types import FloatArray
 
 log = logging.getLogger(__name__)
@@ -64,6 +64,8 @@ class RewardEnsemble:
         )
         self.net.eval()
         self.l2_weight = float(cfg.initial_l2)
+        self.output_shift = torch.zeros(cfg.ensemble_size, 1)
+        self.output_scale = torch.ones(cfg.ensemble_size, 1)
 
     @classmethod
     def for_env(
@@ -146,7 +148,31 @@ class RewardEnsemble:
                 f"got {np.shape(obs)} and {np.shape(acts)}"
             )
         with torch.inference_mode():
-            return self.net(x).mean(dim=0).numpy()
+            out = (self.net(x) - self.output_shift) / self.output_scale
+            return out.mean(dim=0).numpy()
+
+    def reinitialise(self, rng: np.random.Generator) -> None:
+        """Fresh member weights drawn from `rng` and the initial L2 weight (a refit from
+        scratch, `RewardConfig.warm_start` off); the normaliser is left to `fit`."""
+        generator = torch.Generator().manual_seed(int(rng.integers(0, 2**63 - 1)))
+        cfg = self.cfg
+        self.net.mlp = StackedMLP(
+            cfg.ensemble_size, self.in_dim, cfg.hidden_sizes, cfg.activation, generator
+        )
+        self.net.eval()
+        self.l2_weight = float(cfg.initial_l2)
+
+    def standardise_output(self, obs: np.ndarray, acts: np.ndarray) -> None:
+        """Centre and scale each member's reward to mean 0 and sd 1 over these steps (obs
+        (..., obs_dim), acts (..., act_dim)) in `mean_reward`, the reward PPO sees; the
+        members' raw outputs (`step_rewards`, `returns`, what training and query selection
+        use) stay as they are. Called after every fit when `RewardConfig.standardise_output`."""
+        out = self.step_rewards(obs, acts).reshape(self.size, -1).astype(np.float64)
+        if out.shape[1] == 0:
+            return
+        self.output_shift = torch.as_tensor(out.mean(axis=1, keepdims=True), dtype=torch.float32)
+        scale = np.maximum(out.std(axis=1, keepdims=True), 1e-6)
+        self.output_scale = torch.as_tensor(scale, dtype=torch.float32)
 
     # ---------------------------------------------------------------- normaliser
 
@@ -172,6 +198,8 @@ class RewardEnsemble:
                 "act_dim": self.act_dim,
                 "config": dataclasses.asdict(self.cfg),
                 "l2_weight": self.l2_weight,
+                "output_shift": self.output_shift,
+                "output_scale": self.output_scale,
                 "state_dict": self.net.state_dict(),
             },
             path,
@@ -195,6 +223,9 @@ class RewardEnsemble:
         except RuntimeError as error:
             raise ValueError(f"{path} does not fit this ensemble: {error}") from error
         self.l2_weight = float(payload["l2_weight"])
+        # files written before outputs were standardised hold neither: the identity
+        self.output_shift = payload.get("output_shift", torch.zeros(self.size, 1))
+        self.output_scale = payload.get("output_scale", torch.ones(self.size, 1))
 
     @classmethod
     def load(cls, path: Path) -> "RewardEnsemble":

@@ -81,6 +81,8 @@ class PPOAgent:
         if steps <= 0:
             return
         self.model.set_random_seed(seed)
+        if self.cfg.reset_reward_norm:
+            self._normaliser().ret_rms = RunningMeanStd(shape=())
         self.model.set_env(self.venv, force_reset=True)
         if self.model.tensorboard_log is None:
             # without one, SB3 makes an empty /tmp/SB3-<time> folder on every learn call

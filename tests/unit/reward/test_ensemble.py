@@ -115,3 +115,26 @@ def test_ensemble_and_its_mean_reward_pickle(dumps):
     np.testing.assert_array_equal(copy.mean_reward(obs, acts), ens.mean_reward(obs, acts))
     reward_fn = pickle.loads(dumps(ens.mean_reward))
     np.testing.assert_array_equal(reward_fn(obs, acts), ens.mean_reward(obs, acts))
+
+
+def test_standardised_output_is_what_ppo_sees_and_survives_save(tmp_path: Path):
+    ens = _ensemble(cfg=RewardConfig(ensemble_size=3))
+    obs, acts = _inputs(200, seed=3)
+    raw = ens.step_rewards(obs, acts)
+    ens.standardise_output(obs, acts)
+    standard = (raw - raw.mean(axis=1, keepdims=True)) / raw.std(axis=1, keepdims=True)
+    np.testing.assert_allclose(ens.mean_reward(obs, acts), standard.mean(axis=0), atol=1e-4)
+    np.testing.assert_array_equal(ens.step_rewards(obs, acts), raw)  # training's view unchanged
+    ens.save(tmp_path / "r.pt")
+    again = RewardEnsemble.load(tmp_path / "r.pt")
+    np.testing.assert_allclose(again.mean_reward(obs, acts), ens.mean_reward(obs, acts))
+
+
+def test_reinitialise_draws_fresh_seeded_weights():
+    a, b = _ensemble(), _ensemble()
+    obs, acts = _inputs(9)
+    before = a.step_rewards(obs, acts)
+    a.reinitialise(np.random.default_rng(5))
+    b.reinitialise(np.random.default_rng(5))
+    assert not np.allclose(a.step_rewards(obs, acts), before)
+    np.testing.assert_array_equal(a.step_rewards(obs, acts), b.step_rewards(obs, acts))

@@ -1,0 +1,131 @@
+"""One peer-benchmark cell of groupwise (run by `benchmarks/peer.py` in the project's venv).
+
+    python benchmarks/peer_groupwise.py '<cell spec JSON>'   → one JSON line on stdout
+
+The library as a user would run it (`PreferenceComparisons`) with our PPO adapter, pairwise
+active learning (`PairwiseQueries`) and a Boltzmann teacher without perception noise
+(`PairwiseTeacher(sigma=0, beta)`, imitation's `SyntheticGatherer`). A `variant` names
+changes to the defaults for ablations (`VARIANTS`).
+"""
+
+import dataclasses
+import json
+import sys
+import time
+from typing import Any
+
+import numpy as np
+import torch
+
+from groupwise.comparisons import PreferenceComparisons
+from groupwise.config import LoopConfig, PPOConfig, RewardConfig
+from groupwise.envs import make_env
+from groupwise.oracles import Feedback, PairwiseTeacher
+from groupwise.query.strategies import PairwiseQueries
+from groupwise.reward import RewardEnsemble
+from groupwise.rl.ppo import PPOAgent
+
+VARIANTS: dict[str, dict[str, dict[str, Any]]] = {
+    "default": {},
+    "epochs10": {"reward": {"epochs": 10}},
+    "fresh": {"reward": {"warm_start": False, "epochs": 10}},
+    "std-out": {"reward": {"standardise_output": True}},
+    "std-out-noppo": {"reward": {"standardise_output": True}, "ppo": {"normalize_reward": False}},
+    "reset-norm": {"ppo": {"reset_reward_norm": True}},
+    "no-val": {"reward": {"validation_fraction": 0.0}},
+    "init30": {"loop": {"initial_fraction": 0.3}},
+    "batch32": {"reward": {"batch_size": 32, "epochs": 10}},
+}
+"""Variant name → {"loop" | "reward" | "ppo": field overrides} on top of the spec."""
+
+
+def evaluate(agent: PPOAgent, make, seeds: list[int]) -> list[float]:
+    policy = agent.policy(deterministic=True)
+    rng = np.random.default_rng(0)
+    returns = []
+    for seed in seeds:
+        env = make()
+        obs, _ = env.reset(seed=seed)
+        total, done = 0.0, False
+        while not done:
+            action = policy.act(np.asarray(obs, dtype=np.float32)[None], rng)[0]
+            obs, reward, terminated, truncated, info = env.step(action)
+            total += float(info.get("true_reward", reward))
+            done = terminated or truncated
+        env.close()
+        returns.append(total)
+    return returns
+
+
+def main(spec: dict) -> dict:
+    started = time.perf_counter()
+    torch.set_num_threads(1)
+    seed, variant = spec["seed"], spec.get("variant", "default")
+    changes = VARIANTS[variant]
+
+    def make():
+        return make_env(spec["env"])
+
+    loop = LoopConfig(
+        env=spec["env"],
+        comparisons=spec["comparisons"],
+        rounds=spec["rounds"],
+        steps=spec["steps_per_round"] * spec["rounds"],
+        initial_fraction=spec["initial_fraction"],
+        fragment_length=spec["fragment_length"],
+        exploration_fraction=spec["exploration_fraction"],
+        candidate_pairs=spec["candidate_pairs"],
+        eval_episodes=len(spec["eval_seeds"]),
+        seed=seed,
+    )
+    loop = dataclasses.replace(loop, **changes.get("loop", {}))
+    reward = dataclasses.replace(
+        RewardConfig(
+            ensemble_size=spec["ensemble_size"], hidden_sizes=tuple(spec["reward_hidden"])
+        ),
+        **changes.get("reward", {}),
+    )
+    ppo = dataclasses.replace(
+        PPOConfig(**{**spec["ppo"], "net_arch": tuple(spec["ppo"]["net_arch"])}, tensorboard=False),
+        **changes.get("ppo", {}),
+    )
+    ensemble = RewardEnsemble.for_env(make, reward, np.random.default_rng([seed, 2**20]))
+    agent = PPOAgent(make, ppo, seed=seed, reward_fn=ensemble.mean_reward)
+    ppo_seconds = [0.0]
+    learn = agent.learn
+
+    def timed_learn(*args: Any, **kwargs: Any) -> None:
+        tick = time.perf_counter()
+        learn(*args, **kwargs)
+        ppo_seconds[0] += time.perf_counter() - tick
+
+    agent.learn = timed_learn  # type: ignore[method-assign]
+    teacher = PairwiseTeacher(sigma=0.0, beta=spec["boltzmann_beta"])
+    feedback = Feedback(PairwiseQueries(candidates=loop.candidate_pairs), teacher)
+    curve: list[float] = []
+    seeds = spec["eval_seeds"]
+    # per-round curve on the same reset seeds as the final evaluation
+    loop_eval = dataclasses.replace(loop, eval_episodes=0)
+    comparisons = PreferenceComparisons(make, agent, ensemble, feedback, loop_eval, reward)
+    comparisons.train(on_round=lambda _: curve.append(float(np.mean(evaluate(agent, make, seeds)))))
+    final = evaluate(agent, make, seeds)
+    wall = time.perf_counter() - started
+    records = comparisons.records
+    return {
+        "side": "groupwise",
+        "env": spec["env"],
+        "seed": seed,
+        "variant": variant,
+        "wall_s": wall,
+        "ppo_s": ppo_seconds[0],
+        "non_ppo_s": wall - ppo_seconds[0],
+        "final_return": float(np.mean(final)),
+        "curve": curve,
+        "env_steps": int(agent.num_timesteps),
+        "label_error": float(records[-1].label_error_rate_total),
+        "pairs": int(records[-1].pairs_total),
+    }
+
+
+if __name__ == "__main__":
+    print(json.dumps(main(json.loads(sys.argv[1]))))
