@@ -4,8 +4,15 @@ Construction, from condensed DTW distances of N behaviours:
 
 1. SciPy agglomerative clustering (`linkage.py`) gives a binary dendrogram with merge
    heights; D is the root's height.
-2. Level bands. `levels` thresholds t_1 < ... < t_levels = D:
-   - "linear" (default): t_k = D k / levels (SPEC §4);
+2. Level bands. `levels` thresholds t_1 <= ... <= t_levels = D:
+   - "counts" (default): levels by target cluster counts, not by height. With
+     k = N^(1/levels), level l should hold about N / k^l clusters (for N = 100 and 4 levels:
+     32, 10, 3, then the root), so t_l is the height of the first merge that would leave
+     fewer: after the j lowest merges N − j clusters remain. Every level then holds real
+     groups whatever the distribution of the distances; DTW distances of z-scored windows
+     are concentrated (the lowest merge is already a large fraction of D), and fixed
+     fractions of D left levels 1–2 without a single group on HalfCheetah;
+   - "linear": t_k = D k / levels (SPEC §4, the paper's cut);
    - "geometric": t_k = D 2^(k - levels), i.e. D/8, D/4, D/2, D for 4 levels: the lower
      levels get the narrower bands, so close behaviours are split into finer groups.
    A merge of height h gets the first level k whose threshold exceeds h (t_k > h); a merge
@@ -71,23 +78,45 @@ NodeKind = Literal["leaf", "merge", "padding"]
 JSON_FORMAT = "groupwise.behaviour-tree/1"
 
 
-def linear_thresholds(root_height: float, levels: int) -> tuple[float, ...]:
-    """t_k = D k / levels for k = 1..levels (SPEC §4)."""
+def linear_thresholds(heights: FloatArray, levels: int) -> tuple[float, ...]:
+    """t_k = D k / levels for k = 1..levels (SPEC §4); D the highest merge."""
+    root_height = _root_height(heights)
     out = [root_height * k / levels for k in range(1, levels)]
     return (*out, root_height)
 
 
-def geometric_thresholds(root_height: float, levels: int) -> tuple[float, ...]:
+def geometric_thresholds(heights: FloatArray, levels: int) -> tuple[float, ...]:
     """t_k = D 2^(k - levels) for k = 1..levels: D/8, D/4, D/2, D for 4 levels."""
+    root_height = _root_height(heights)
     out = [root_height * 2.0 ** (k - levels) for k in range(1, levels)]
     return (*out, root_height)
 
 
-BANDS: dict[str, Callable[[float, int], tuple[float, ...]]] = {
+def count_thresholds(heights: FloatArray, levels: int) -> tuple[float, ...]:
+    """Thresholds that leave about N / k^l clusters at level l, k = N^(1/levels) (module
+    docstring); `heights` are the N − 1 merge heights in ascending order."""
+    h = np.sort(np.asarray(heights, dtype=np.float64))
+    n = len(h) + 1
+    if n < 2:
+        return tuple([0.0] * levels)
+    k = n ** (1.0 / levels)
+    out = []
+    for level in range(1, levels):
+        clusters = max(1, round(n / k**level))
+        out.append(float(h[min(max(n - clusters, 0), n - 2)]))
+    return (*out, float(h[-1]))
+
+
+def _root_height(heights: FloatArray) -> float:
+    return float(np.max(heights)) if len(heights) else 0.0
+
+
+BANDS: dict[str, Callable[[FloatArray, int], tuple[float, ...]]] = {
+    "counts": count_thresholds,
     "linear": linear_thresholds,
     "geometric": geometric_thresholds,
 }
-"""Band name -> thresholds (levels,) from the root height D and the number of levels."""
+"""Band name -> thresholds (levels,) from the merge heights and the number of levels."""
 
 
 @dataclass(frozen=True)
@@ -98,8 +127,8 @@ class TreeConfig:
     """Number of level bands; the root is at this level, leaves at 0."""
     method: str = "complete"
     """Linkage, a key of `LINKAGE_METHODS` ("complete", "average", "ward")."""
-    bands: str = "linear"
-    """Threshold spacing, a key of `BANDS` ("linear" or "geometric")."""
+    bands: str = "counts"
+    """Threshold spacing, a key of `BANDS` ("counts", "linear" or "geometric")."""
 
     def __post_init__(self) -> None:
         if self.levels < 1:
@@ -220,15 +249,14 @@ def build_tree(distances: FloatArray, config: TreeConfig | None = None) -> Behav
     d = as_condensed(distances)
     n = pool_size(d.shape[0])
     if n == 1:
-        thresholds = BANDS[cfg.bands](0.0, cfg.levels)
+        thresholds = BANDS[cfg.bands](np.zeros(0), cfg.levels)
         leaf = _pad(_leaf(0), cfg.levels)
         root = TreeNode("root", cfg.levels, "padding", (leaf,), leaf.leaves, 0.0)
         return BehaviourTree(root, cfg.levels, thresholds, cfg.method, cfg.bands)
 
     z = linkage_matrix(d, cfg.method)
     heights = z[:, 2]
-    root_height = float(heights[-1])
-    thresholds = BANDS[cfg.bands](root_height, cfg.levels)
+    thresholds = BANDS[cfg.bands](heights, cfg.levels)
     merge_levels = assign_levels(heights, thresholds)
     merge_levels[-1] = cfg.levels
 

@@ -13,6 +13,7 @@ from groupwise.behaviour.tree import (
     TreeNode,
     assign_levels,
     build_tree,
+    count_thresholds,
     from_json,
     geometric_thresholds,
     group_candidates,
@@ -24,6 +25,9 @@ from groupwise.behaviour.tree import (
 # six points on a line; complete linkage merges (0,1)@1 -> m6, (4,5)@1 -> m7,
 # (2,m6)@3 -> m8, (3,m8)@7 -> m9, (m7,m9)@16 -> root. D = 16, thresholds 4, 8, 12, 16.
 LINE = np.array([0.0, 1.0, 3.0, 7.0, 15.0, 16.0])
+LINEAR = TreeConfig(bands="linear")
+"""The paper's cut, which the hand-worked trees below were drawn for."""
+
 LINE_D = pdist(LINE[:, None])
 
 
@@ -53,7 +57,7 @@ def check_invariants(tree: BehaviourTree, n: int) -> None:
 
 
 def test_line_tree_by_hand():
-    tree = build_tree(LINE_D)
+    tree = build_tree(LINE_D, LINEAR)
     assert tree.thresholds == (4.0, 8.0, 12.0, 16.0)
     # m6 (level 1) under m8 (level 1) is dissolved: b0, b1 take its place after b2
     assert shape(tree.root) == (
@@ -77,7 +81,7 @@ def test_dissolved_merges_splice_in_place():
     # both dissolve and their leaves become the children of the @3.5 merge, in order
     x = np.array([0.0, 1.0, 2.5, 3.5, 20.0])
     d = pdist(x[:, None])
-    tree = build_tree(d)
+    tree = build_tree(d, LINEAR)
     order = tuple(int(i) for i in leaves_list(linkage(d, "complete")))
     level1 = [n for n in tree.at_level(1) if n.kind == "merge"]
     assert [n.leaves for n in level1] == [tuple(i for i in order if i < 4)]
@@ -87,7 +91,7 @@ def test_dissolved_merges_splice_in_place():
 
 def test_merge_at_an_exact_threshold_goes_one_level_up():
     # (0,1)@1 and (3,4)@1 with D = 4: t_1 = 1 does not exceed 1, so both are level 2
-    tree = build_tree(pdist(np.array([[0.0], [1.0], [3.0], [4.0]])))
+    tree = build_tree(pdist(np.array([[0.0], [1.0], [3.0], [4.0]])), LINEAR)
     assert tree.thresholds == (1.0, 2.0, 3.0, 4.0)
     merges = [n for n in tree.nodes() if n.kind == "merge" and n.id != "root"]
     assert [(n.level, n.leaves) for n in merges] == [(2, (0, 1)), (2, (2, 3))]
@@ -105,9 +109,11 @@ def test_merge_at_an_exact_threshold_goes_one_level_up():
 
 
 def test_threshold_bands():
-    assert linear_thresholds(16.0, 4) == (4.0, 8.0, 12.0, 16.0)
-    assert geometric_thresholds(16.0, 4) == (2.0, 4.0, 8.0, 16.0)
-    assert linear_thresholds(0.3, 3)[-1] == 0.3  # the top is exactly the root height
+    assert linear_thresholds(np.array([1.0, 16.0]), 4) == (4.0, 8.0, 12.0, 16.0)
+    assert geometric_thresholds(np.array([16.0]), 4) == (2.0, 4.0, 8.0, 16.0)
+    assert (
+        linear_thresholds(np.array([0.1, 0.3]), 3)[-1] == 0.3
+    )  # the top is exactly the root height
     tree = build_tree(LINE_D, TreeConfig(bands="geometric"))
     assert tree.thresholds == (2.0, 4.0, 8.0, 16.0)
     assert tree.node("m8").level == 2 and tree.node("m9").level == 3
@@ -115,7 +121,7 @@ def test_threshold_bands():
 
 
 def test_group_candidates():
-    tree = build_tree(LINE_D)
+    tree = build_tree(LINE_D, LINEAR)
     # pre-order; the padding m7@2 repeats m7's leaves and is left out
     assert [n.id for n in group_candidates(tree)] == ["m7", "m9", "m8"]
     assert [n.id for n in group_candidates(tree, max_size=3)] == ["m7", "m8"]
@@ -124,7 +130,7 @@ def test_group_candidates():
 
 
 def test_medoids():
-    tree = build_tree(LINE_D)
+    tree = build_tree(LINE_D, LINEAR)
     # m8 holds points 3 (b2), 0 (b0), 1 (b1): summed distances 5, 4, 3
     assert medoids(tree.node("m8"), LINE_D) == (1, 0, 2)
     assert medoids(tree.node("m8"), squareform(LINE_D), k=2) == (1, 0)
@@ -148,12 +154,12 @@ def test_two_behaviours():
 
 def test_long_chain_does_not_recurse():
     x = 2.0 ** np.arange(300)  # complete linkage adds one point per merge
-    tree = build_tree(pdist(x[:, None]))
+    tree = build_tree(pdist(x[:, None]), LINEAR)
     check_invariants(tree, 300)
 
 
 def test_json_round_trip():
-    tree = build_tree(LINE_D)
+    tree = build_tree(LINE_D, LINEAR)
     payload = to_json(tree, leaf_extra={4: {"clip": "/clips/4.mp4"}})
     text = json.dumps(payload)
     back = json.loads(text)
@@ -199,7 +205,7 @@ def test_invalid_inputs():
     n=st.integers(1, 24),
     seed=st.integers(0, 2**32 - 1),
     method=st.sampled_from(["complete", "average", "ward"]),
-    bands=st.sampled_from(["linear", "geometric"]),
+    bands=st.sampled_from(["counts", "linear", "geometric"]),
     levels=st.integers(1, 5),
     ties=st.booleans(),
 )
@@ -241,3 +247,39 @@ def test_pool_to_tree_end_to_end():
     for node in group_candidates(tree):
         assert 2 <= node.size <= 8 and node.level in (1, 2)
         assert set(medoids(node, distances)) <= set(node.leaves)
+
+
+@pytest.mark.parametrize("n", [32, 80, 100, 200])
+def test_counts_cut_gives_groups_when_distances_are_concentrated(n):
+    """All distances within [0.8, 1] × the largest, as DTW distances of z-scored windows
+    tend to be: fixed fractions of the root height leave levels 1–2 without groups, the
+    count cut does not."""
+    rng = np.random.default_rng(n)
+    d = rng.uniform(0.8, 1.0, size=n * (n - 1) // 2)
+    linear = build_tree(d, LINEAR)
+    tree = build_tree(d)
+    assert tree.bands == "counts"
+    assert len(group_candidates(linear)) < n / 8  # the problem the count cut solves
+    real = [
+        level
+        for level in range(1, tree.levels)
+        if any(node.kind == "merge" for node in tree.at_level(level))
+    ]
+    assert len(real) >= 2
+    candidates = group_candidates(tree)
+    assert len(candidates) >= n / 8
+    assert all(2 <= c.size <= 8 for c in candidates)
+    # leaf order and ids as with any cut
+    assert tree.leaf_order == linear.leaf_order
+    assert {node.id for node in tree.nodes() if node.kind == "leaf"} == {f"b{i}" for i in range(n)}
+
+
+def test_count_thresholds_leave_the_target_numbers_of_clusters():
+    n = 81  # k = 3 for 4 levels: 27, 9, 3 clusters, then the root
+    heights = np.arange(1.0, n)  # distinct, ascending
+    thresholds = count_thresholds(heights, 4)
+    for level, clusters in zip((1, 2, 3), (27, 9, 3), strict=True):
+        merges_below = int((heights < thresholds[level - 1]).sum())
+        assert n - merges_below == clusters
+    assert thresholds[-1] == heights[-1]
+    assert count_thresholds(np.zeros(0), 3) == (0.0, 0.0, 0.0)

@@ -3,6 +3,7 @@ from collections import Counter
 import numpy as np
 import pytest
 
+from groupwise.behaviour import TreeConfig
 from groupwise.oracles import Feedback
 from groupwise.oracles.group_decision import Perception, SimulatedTeacher
 from groupwise.preferences.dataset import wrong_labels
@@ -11,6 +12,8 @@ from groupwise.preferences.pairs import covering_pairs
 from groupwise.query.interactive import chain_pairs, evenly_spaced
 from groupwise.query.strategies import InteractiveWalk, pool_candidates
 
+LINEAR = TreeConfig(bands="linear")
+"""The cut the hand-built cluster pool was laid out for."""
 NOISE_FREE = SimulatedTeacher(Perception(sigma=0.0))
 
 
@@ -79,10 +82,12 @@ def _members(c):
 def test_pairs_neighbours_by_mean_return_best_to_worst(make_pool):
     pool = _cluster_pool(make_pool)
     # the tree finds exactly the four clusters as candidates
-    assert sorted(map(set, (c.members for c in pool_candidates(pool))), key=min) == [
+    assert sorted(map(set, (c.members for c in pool_candidates(pool, LINEAR))), key=min) == [
         _members(c) for c in (0, 1, 2, 3)
     ]
-    judgements = Feedback(InteractiveWalk(), NOISE_FREE).gather(pool, 10, np.random.default_rng(0))
+    judgements = Feedback(InteractiveWalk(tree=LINEAR), NOISE_FREE).gather(
+        pool, 10, np.random.default_rng(0)
+    )
     asked = [(set(j.left), set(j.right)) for j in judgements]
     assert asked == [
         (_members(0), _members(2)),
@@ -96,7 +101,7 @@ def test_distinct_walk_compares_only_groups_far_enough_apart(make_pool):
     pool = _cluster_pool(make_pool)
     # means 30 > 25 > 20 > 5: with a gap of 8, c0 passes over c2 (5 lower) to c1 (10 lower);
     # c2 passes over c1 (5 lower) to c3; c1 (used once) takes c3 (used once) as well
-    judgements = Feedback(InteractiveWalk(min_gap=8.0), NOISE_FREE).gather(
+    judgements = Feedback(InteractiveWalk(tree=LINEAR, min_gap=8.0), NOISE_FREE).gather(
         pool, 10, np.random.default_rng(0)
     )
     assert [(set(j.left), set(j.right)) for j in judgements] == [
@@ -108,7 +113,9 @@ def test_distinct_walk_compares_only_groups_far_enough_apart(make_pool):
 
 def test_more_pairs_than_queries_keep_the_ends(make_pool):
     pool = _cluster_pool(make_pool)
-    judgements = Feedback(InteractiveWalk(), NOISE_FREE).gather(pool, 2, np.random.default_rng(0))
+    judgements = Feedback(InteractiveWalk(tree=LINEAR), NOISE_FREE).gather(
+        pool, 2, np.random.default_rng(0)
+    )
     assert [(set(j.left), set(j.right)) for j in judgements] == [
         (_members(0), _members(2)),
         (_members(1), _members(3)),
@@ -121,7 +128,7 @@ def _random_pool(make_pool, n=80, seed=4):
 
 def test_random_pool_uses_each_behaviour_at_most_twice(make_pool):
     pool = _random_pool(make_pool)
-    judgements = Feedback(InteractiveWalk(), SimulatedTeacher()).gather(
+    judgements = Feedback(InteractiveWalk(tree=LINEAR), SimulatedTeacher()).gather(
         pool, 40, np.random.default_rng(0)
     )
     assert 0 < len(judgements) <= 40
@@ -132,13 +139,13 @@ def test_random_pool_uses_each_behaviour_at_most_twice(make_pool):
 
 def test_noise_free_dm_is_always_right_and_seeded(make_pool):
     pool = _random_pool(make_pool, seed=5)
-    dm = Feedback(InteractiveWalk(), NOISE_FREE)
+    dm = Feedback(InteractiveWalk(tree=LINEAR), NOISE_FREE)
     judgements = dm.gather(pool, 40, np.random.default_rng(1))
     pairs = [p for j in judgements for p in covering_pairs(j, np.random.default_rng(0))]
     true = pool.true_returns
     a, b = np.array([p.a for p in pairs]), np.array([p.b for p in pairs])
     assert not wrong_labels(true[a], true[b], np.array([p.label for p in pairs])).any()
-    noisy = Feedback(InteractiveWalk(), SimulatedTeacher())
+    noisy = Feedback(InteractiveWalk(tree=LINEAR), SimulatedTeacher())
     assert noisy.gather(pool, 40, np.random.default_rng(9)) == noisy.gather(
         pool, 40, np.random.default_rng(9)
     )
