@@ -166,6 +166,9 @@ class LoopConfig:
     interactive_gap: Annotated[float, Field(ge=0)] = 1.0
     """The "interactive-distinct" DM compares only groups whose mean true returns differ by at
     least this many per-behaviour noise sds (L·σ); the spec's Interactive-DM uses 0."""
+    interactive_clear: Annotated[float, Field(ge=0)] = 1.0
+    """The "interactive-clear" DM compares groups whose mean true returns differ by at least
+    this many typical member deviations (`query.interactive.clear_gaps`)."""
     teacher_gamma: Annotated[float, Field(gt=0, le=1)] = 0.9
     """Myopic imperfect teachers ("<dm>-myopic"): discount per step back from the last (B-Pref)."""
     teacher_mistake: Annotated[float, Field(ge=0, le=1)] = 0.1

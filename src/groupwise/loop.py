@@ -33,7 +33,7 @@ from groupwise.checkpoint import (
 )
 from groupwise.config import LoopConfig, RunConfig
 from groupwise.envs import make_env
-from groupwise.oracles import ORACLES, Oracle
+from groupwise.oracles import ORACLES, Feedback, Oracle
 from groupwise.pool import BehaviourPool
 from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.preferences.judgement import Judgement
@@ -78,6 +78,18 @@ class RoundRecord:
     reward_s: float
     ppo_s: float
     eval_s: float
+    # how the round's feedback went (SPEC §7 diagnostics); nan where unknown (a person)
+    queries_asked: float = math.nan
+    """Queries the strategy proposed and the teacher was asked."""
+    queries_unused: float = math.nan
+    """The round's queries the strategy had nothing to propose for."""
+    queries_skipped: float = math.nan
+    """Asked queries that yielded no judgement (interference, a skipping teacher)."""
+    candidates: float = math.nan
+    """Group candidates the tree offered (nan for pairwise strategies)."""
+    return_sd_over_noise: float = math.nan
+    """sd of the pool's true returns ÷ the per-behaviour noise sd L·σ: below about 1 the
+    labels are near coin flips whatever the strategy (the information limit)."""
 
 
 @dataclass
@@ -231,6 +243,7 @@ def train_round(
     steps: int,
     streams: RoundStreams,
     seconds: dict[str, float],
+    feedback: dict[str, float] | None = None,
     show_progress: bool = False,
     report: Callable[[str, int, int], None] | None = None,
 ) -> RoundRecord:
@@ -238,7 +251,8 @@ def train_round(
     the session's dataset (round 0 with `initial_epoch_multiplier` × the epochs), train the
     agent for `steps` on the learned reward, evaluate it on the true reward, and append the
     round's record. `seconds` holds the sample and feedback phases' wall times; `report`
-    hears ("reward" | "ppo" | "eval", done, total)."""
+    hears ("reward" | "ppo" | "eval", done, total); `feedback` the round's query diagnostics
+    (`feedback_diagnostics`)."""
     cfg = session.cfg
     timer = _PhaseTimer(seconds)
 
@@ -286,9 +300,31 @@ def train_round(
         true_return_mean=float(returns.mean()),
         true_return_std=float(returns.std()),
         **timer.seconds,
+        **(feedback or {}),
     )
     session.records.append(record)
     return record
+
+
+def feedback_diagnostics(
+    oracle: Oracle,
+    pool: BehaviourPool,
+    n_comparisons: int,
+    asked: int,
+    judgements: int,
+    noise_sd: float,
+) -> dict[str, float]:
+    """The round's query diagnostics for its `RoundRecord` (`noise_sd` = L·σ)."""
+    strategy = getattr(oracle, "queries", None)
+    offered = getattr(strategy, "candidates", None)
+    sd = float(pool.true_returns.std()) if len(pool) else math.nan
+    return {
+        "queries_asked": float(asked),
+        "queries_unused": float(max(n_comparisons - asked, 0)),
+        "queries_skipped": float(max(asked - judgements, 0)),
+        "candidates": float(len(offered(pool))) if callable(offered) else math.nan,
+        "return_sd_over_noise": sd / noise_sd if noise_sd > 0 else math.inf,
+    }
 
 
 def run_round(
@@ -302,7 +338,12 @@ def run_round(
     with timer("sample"):
         pool = sample_pool(session, index, pool_size(loop, n_comparisons), streams.sample)
     with timer("feedback"):
-        judgements = oracle.gather(pool, n_comparisons, streams.feedback)
+        if isinstance(oracle, Feedback):
+            queries, judgements = oracle.ask(pool, n_comparisons, streams.feedback)
+            asked = len(queries)
+        else:
+            judgements = oracle.gather(pool, n_comparisons, streams.feedback)
+            asked = n_comparisons
         pairs = derive_pairs(judgements, loop, streams.pairs)
         pairs = limit_pairs(pairs, loop, n_comparisons, streams.pairs)
         session.dataset.add(pool.fragments, pairs, index)
@@ -314,6 +355,14 @@ def run_round(
         steps=steps,
         streams=streams,
         seconds=timer.seconds,
+        feedback=feedback_diagnostics(
+            oracle,
+            pool,
+            n_comparisons,
+            asked,
+            len(judgements),
+            loop.fragment_length * loop.noise_sigma,
+        ),
         show_progress=show_progress,
     )
 

@@ -303,19 +303,27 @@ def group_candidates(
     levels: Sequence[int] = (1, 2),
     min_size: int = 2,
     max_size: int = MAX_GROUP,
+    padding: bool = False,
 ) -> list[TreeNode]:
     """Nodes that can be offered as one group (SPEC §4): at one of `levels`, with
     min_size..max_size leaves, in pre-order (left to right, parents before children).
 
     Padding nodes are left out: each has exactly the leaves of the real node below it, so
-    it would repeat that node's group.
+    it would repeat that node's group. With `padding` (the reference code's Interactive-DM)
+    they are offered too, once per group of behaviours: a padding node over a leaf is a
+    group of one.
     """
     wanted = set(levels)
-    return [
-        node
-        for node in tree.nodes()
-        if node.kind != "padding" and node.level in wanted and min_size <= node.size <= max_size
-    ]
+    seen: set[tuple[int, ...]] = set()
+    out = []
+    for node in tree.nodes():
+        if node.level not in wanted or not min_size <= node.size <= max_size:
+            continue
+        if node.kind == "padding" and (not padding or node.leaves in seen):
+            continue
+        seen.add(node.leaves)
+        out.append(node)
+    return out
 
 
 def medoids(node: TreeNode, distances: FloatArray, k: int = 3) -> tuple[int, ...]:

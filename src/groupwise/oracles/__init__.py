@@ -2,8 +2,8 @@
 
 A decision-maker (DM) is a query strategy (`groupwise.query.strategies`) answered by a
 teacher: `Feedback(queries, teacher)`. "pairwise", "groupwise" and "interactive" are the
-paper's three DMs; "interactive-distinct" is the Interactive-DM that compares only groups at
-least `LoopConfig.interactive_gap` noise sds apart in mean true return (beyond the spec, see
+paper's three DMs ("interactive" as the paper's reference code walks; "interactive-mean" as
+its text describes; "interactive-distinct" and "interactive-clear" are walks of ours, see
 `query.interactive`); "<dm>-<imperfection>" (e.g. "groupwise-myopic", "pairwise-mistake")
 answers the same queries with a B-Pref-style imperfect teacher (`imperfect.TEACHERS`:
 myopic, mistake, skip, equal). A person answers through the web page
@@ -37,13 +37,27 @@ def _imperfection(cfg: LoopConfig) -> Imperfection:
 STRATEGIES: dict[str, Callable[[LoopConfig], QueryStrategy]] = {
     "pairwise": lambda cfg: PairwiseQueries(candidates=cfg.candidate_pairs),
     "groupwise": lambda cfg: GroupSuggestions(max_group=cfg.max_group_size),
-    "interactive": lambda cfg: InteractiveWalk(max_group=cfg.max_group_size),
+    # the paper's reference code: sum of true returns, every level-1/2 node (padding nodes
+    # over single leaves included), two passes
+    "interactive": lambda cfg: InteractiveWalk(
+        rank="sum", min_group=1, max_group=UNLIMITED, padding=True, passes=2
+    ),
+    # the paper's text: mean true return, groups of 2-8, one pass
+    "interactive-mean": lambda cfg: InteractiveWalk(max_group=cfg.max_group_size),
     "interactive-distinct": lambda cfg: InteractiveWalk(
         max_group=cfg.max_group_size,
         min_gap=cfg.interactive_gap * cfg.fragment_length * cfg.noise_sigma,
     ),
+    # ours: only clearly different groups, passes until the budget is used
+    "interactive-clear": lambda cfg: InteractiveWalk(
+        max_group=cfg.max_group_size,
+        clear=cfg.interactive_clear,
+        noise_sd=cfg.fragment_length * cfg.noise_sigma,
+    ),
 }
-"""How each DM chooses its queries."""
+"""How each DM chooses its queries (the interactive walks: `groupwise.query.interactive`)."""
+UNLIMITED = 2**31 - 1
+"""A group-size limit that limits nothing (the reference code's Interactive-DM)."""
 
 
 def _dm(strategy: str, teacher: Callable[[LoopConfig], Teacher]) -> Callable[[LoopConfig], Oracle]:
@@ -62,7 +76,9 @@ ORACLES: dict[str, Callable[[LoopConfig], Oracle]] = {
     "pairwise": _dm("pairwise", lambda cfg: PairwiseTeacher(sigma=cfg.noise_sigma)),
     "groupwise": _dm("groupwise", _paper_teacher),
     "interactive": _dm("interactive", _paper_teacher),
+    "interactive-mean": _dm("interactive-mean", _paper_teacher),
     "interactive-distinct": _dm("interactive-distinct", _paper_teacher),
+    "interactive-clear": _dm("interactive-clear", _paper_teacher),
     **{
         f"{dm}-{kind}": _dm(dm, _imperfect(kind))
         for dm in ("pairwise", "groupwise", "interactive")

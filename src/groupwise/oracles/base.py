@@ -50,6 +50,13 @@ class Feedback:
     def gather(
         self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator
     ) -> list[Judgement]:
+        return self.ask(pool, n_queries, rng)[1]
+
+    def ask(
+        self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator
+    ) -> tuple[list[Query], list[Judgement]]:
+        """The queries asked and the judgements they yielded (`gather` keeps the latter)."""
         if n_queries <= 0 or len(pool) < 2:
-            return []
-        return self.teacher.answer(pool, self.queries.propose(pool, n_queries, rng), rng)
+            return [], []
+        queries = self.queries.propose(pool, n_queries, rng)
+        return queries, self.teacher.answer(pool, queries, rng)

@@ -23,6 +23,18 @@ GridWorld (299 → 273) and Reacher (−747 → −1 396). Either way most of th
 yield no judgement; we think the chain runs out of candidates (nested tree nodes, each
 behaviour used twice) before the round's queries do, but asked vs skipped was not counted.
 
+Three registered walks (`groupwise.oracles.ORACLES`) differ in what they rank and pair:
+
+- "interactive" — the paper's reference code: rank by the *sum* of the members' true returns
+  over every level-1/2 node with at least 2 leaves (no 8-behaviour limit), two passes;
+- "interactive-mean" — the paper's text: rank by the mean, groups of 2–8, one pass (and
+  "interactive-distinct", the same with a partner at least `LoopConfig.interactive_gap`
+  noise sds lower);
+- "interactive-clear" — ours, a person who compares only what they can see: a partner must
+  be clearly worse relative to both groups' spread and the perception noise (`clear_gaps`),
+  and passes repeat (each allowing a behaviour one more use) until the round's queries are
+  used or no new comparison is left, so the budget is used.
+
 The higher-ranked group is always the left one. When the chain has more comparisons than
 the round's queries, an evenly spaced subset is asked, so the comparisons still span the
 range. Each comparison is answered with the noisy group decision, and a skipped one uses up
@@ -37,43 +49,70 @@ from groupwise.types import FloatArray
 
 
 def chain_pairs(
-    groups: Sequence[Sequence[int]], scores: FloatArray, max_uses: int = 2, min_gap: float = 0.0
+    groups: Sequence[Sequence[int]],
+    scores: FloatArray,
+    max_uses: int = 2,
+    min_gap: float | FloatArray = 0.0,
+    passes: int = 1,
 ) -> list[tuple[int, int]]:
     """Comparisons (higher, lower) as indices into `groups`, best first (module docstring).
 
     groups: G groups of behaviour indices; scores: (G,) their rank key, higher is better
-    (ties keep the list order); min_gap: the least score difference of a comparison.
+    (ties keep the list order); min_gap: the least score difference of a comparison, one
+    number or a (G, G) matrix (row: the higher group); passes: walks over the ranking, each
+    after the first pairing groups only with partners they have not been compared with yet
+    (the behaviours' uses carry over).
     """
     if max_uses < 1:
         raise ValueError(f"max uses must be >= 1, got {max_uses}")
-    if min_gap < 0:
-        raise ValueError(f"min gap must be >= 0, got {min_gap}")
+    if passes < 1:
+        raise ValueError(f"passes must be >= 1, got {passes}")
     key = np.asarray(scores, dtype=np.float64)
+    gap = np.broadcast_to(np.asarray(min_gap, dtype=np.float64), (len(key), len(key)))
+    if (gap < 0).any():
+        raise ValueError("min gap must be >= 0")
     order = np.argsort(-key, kind="stable").tolist()
     sets = [frozenset(int(i) for i in g) for g in groups]
     uses: dict[int, int] = {}
+    asked: set[tuple[int, int]] = set()
 
     def available(g: int) -> bool:
         return all(uses.get(i, 0) < max_uses for i in sets[g])
 
     pairs = []
-    for pos, g in enumerate(order):
-        if not available(g):
-            continue
-        partner = next(
-            (
-                h
-                for h in order[pos + 1 :]
-                if key[g] - key[h] >= min_gap and not sets[g] & sets[h] and available(h)
-            ),
-            None,
-        )
-        if partner is None:
-            continue
-        for i in sets[g] | sets[partner]:
-            uses[i] = uses.get(i, 0) + 1
-        pairs.append((g, partner))
+    for _ in range(passes):
+        for pos, g in enumerate(order):
+            if not available(g):
+                continue
+            partner = next(
+                (
+                    h
+                    for h in order[pos + 1 :]
+                    if (g, h) not in asked
+                    and key[g] - key[h] >= gap[g, h]
+                    and not sets[g] & sets[h]
+                    and available(h)
+                ),
+                None,
+            )
+            if partner is None:
+                continue
+            for i in sets[g] | sets[partner]:
+                uses[i] = uses.get(i, 0) + 1
+            asked.add((g, partner))
+            pairs.append((g, partner))
     return pairs
+
+
+def clear_gaps(means: FloatArray, spreads: FloatArray, noise_sd: float, z: float) -> FloatArray:
+    """(G, G) least differences in mean true return at which a person sees group g as
+    clearly better than group h: z × sqrt((s_g² + s_h²) / 2 + (L·σ)²), with s the sd of
+    each group's members' true returns and L·σ one behaviour's perception noise: the typical
+    distance of one member's perceived return from its group's mean. Below it, the group
+    decision is about as likely to skip (interference) or err as to answer right."""
+    s2 = np.asarray(spreads, dtype=np.float64) ** 2
+    del means
+    return z * np.sqrt((s2[:, None] + s2[None, :]) / 2 + noise_sd**2)
 
 
 def evenly_spaced(total: int, count: int) -> list[int]:

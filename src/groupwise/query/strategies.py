@@ -15,7 +15,7 @@ feedback. The three strategies of the paper's study:
 
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from typing import Protocol
+from typing import Literal, Protocol
 
 import numpy as np
 
@@ -23,7 +23,7 @@ from groupwise.behaviour import TreeConfig, build_tree, group_candidates
 from groupwise.pool import BehaviourPool
 from groupwise.preferences.judgement import MAX_GROUP
 from groupwise.query.groups import GroupCandidate, return_variance, suggest_groups
-from groupwise.query.interactive import chain_pairs, evenly_spaced
+from groupwise.query.interactive import chain_pairs, clear_gaps, evenly_spaced
 from groupwise.query.pairwise import select_pairs
 
 
@@ -55,6 +55,7 @@ def pool_candidates(
     levels: Sequence[int] = (1, 2),
     min_size: int = 2,
     max_size: int = MAX_GROUP,
+    padding: bool = False,
 ) -> list[GroupCandidate]:
     """The pool's group candidates (SPEC §4), as the interface offers them.
 
@@ -64,7 +65,8 @@ def pool_candidates(
     """
     if len(pool) < 2:
         return []
-    nodes = group_candidates(build_tree(pool.distances, tree), levels, min_size, max_size)
+    tree_ = build_tree(pool.distances, tree)
+    nodes = group_candidates(tree_, levels, min_size, max_size, padding)
     return [GroupCandidate(node.id, node.leaves) for node in nodes]
 
 
@@ -92,9 +94,13 @@ class _TreeGroups:
     min_group: int = 2
     max_group: int = MAX_GROUP
     max_uses: int = 2
+    padding: bool = False
+    """Offer the tree's padding nodes too (groups of one among them; `group_candidates`)."""
 
     def candidates(self, pool: BehaviourPool) -> list[GroupCandidate]:
-        return pool_candidates(pool, self.tree, self.levels, self.min_group, self.max_group)
+        return pool_candidates(
+            pool, self.tree, self.levels, self.min_group, self.max_group, self.padding
+        )
 
 
 @dataclass(frozen=True)
@@ -127,13 +133,21 @@ class GroupSuggestions(_TreeGroups):
 
 @dataclass(frozen=True)
 class InteractiveWalk(_TreeGroups):
-    """Neighbouring groups in mean true return, best to worst (`query.interactive`).
+    """Groups compared down the ranking of their true returns (`query.interactive`).
 
-    A simulated person who sees every behaviour's quality; `min_gap` > 0 (the
-    "interactive-distinct" DM) pairs a group only with one at least that much lower.
+    A simulated person who sees every behaviour's quality. `rank` orders the tree's groups
+    by the "mean" or the "sum" of their members' true returns; `min_gap` > 0 (the
+    "interactive-distinct" DM) pairs a group only with one at least that much lower;
+    `clear` (a z, with `noise_sd` = L·σ) pairs it only with one clearly worse
+    (`interactive.clear_gaps`) and repeats passes, each allowing one more use per behaviour,
+    until `n_queries` comparisons are found or none is left; otherwise `passes` walks.
     """
 
+    rank: Literal["mean", "sum"] = "mean"
     min_gap: float = 0.0
+    passes: int = 1
+    clear: float | None = None
+    noise_sd: float = 0.0
 
     def propose(self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator) -> list[Query]:
         del rng  # the walk is a function of the pool
@@ -141,8 +155,20 @@ class InteractiveWalk(_TreeGroups):
             return []
         candidates = self.candidates(pool)
         true = pool.true_returns
-        means = np.array([true[list(c.members)].mean() for c in candidates])
         members = [c.members for c in candidates]
-        pairs = chain_pairs(members, means, self.max_uses, self.min_gap)
+        values = [true[list(m)] for m in members]
+        means = np.array([v.mean() for v in values])
+        if self.clear is None:
+            scores = means if self.rank == "mean" else np.array([v.sum() for v in values])
+            pairs = chain_pairs(members, scores, self.max_uses, self.min_gap, self.passes)
+        else:  # clear differences are differences of means: rank by the mean
+            spreads = np.array([v.std() for v in values])
+            gaps = clear_gaps(means, spreads, self.noise_sd, self.clear)
+            pairs, found = [], -1
+            for uses in range(self.max_uses, self.max_uses + len(pool)):
+                pairs = chain_pairs(members, means, uses, gaps, passes=uses)
+                if len(pairs) >= n_queries or len(pairs) == found:
+                    break
+                found = len(pairs)
         asked = [pairs[k] for k in evenly_spaced(len(pairs), n_queries)]
         return [Query(members[g], members[h]) for g, h in asked]

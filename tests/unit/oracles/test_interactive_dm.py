@@ -1,3 +1,4 @@
+import dataclasses
 from collections import Counter
 
 import numpy as np
@@ -149,3 +150,37 @@ def test_noise_free_dm_is_always_right_and_seeded(make_pool):
     assert noisy.gather(pool, 40, np.random.default_rng(9)) == noisy.gather(
         pool, 40, np.random.default_rng(9)
     )
+
+
+def test_reference_walk_ranks_by_sum_over_all_groups_in_two_passes(make_pool):
+    pool = _random_pool(make_pool, n=120, seed=6)
+    reference = InteractiveWalk(rank="sum", min_group=1, max_group=10**6, padding=True, passes=2)
+    candidates = reference.candidates(pool)
+    assert max(len(c.members) for c in candidates) > 8  # no 8-behaviour limit
+    assert min(len(c.members) for c in candidates) == 1  # padding over single leaves
+    assert len({frozenset(c.members) for c in candidates}) == len(candidates)
+    one_pass = dataclasses.replace(reference, passes=1).propose(pool, 10**6, None)
+    two = reference.propose(pool, 10**6, None)
+    assert two[: len(one_pass)] == one_pass and len(two) >= len(one_pass)
+    sums = {frozenset(c.members): pool.true_returns[list(c.members)].sum() for c in candidates}
+    assert all(sums[frozenset(q.left)] >= sums[frozenset(q.right)] for q in two)
+
+
+@pytest.mark.parametrize("z", [0.5, 1.0])
+def test_clear_walk_uses_its_budget_and_never_pairs_groups_closer_than_its_threshold(make_pool, z):
+    pool = _random_pool(make_pool, n=120, seed=7)
+    noise_sd = 30 * 0.25  # L·σ of the fixture's 30-step fragments
+    walk = InteractiveWalk(clear=z, noise_sd=noise_sd)
+    budget = 40
+    queries = walk.propose(pool, budget, None)
+    true = pool.true_returns
+    found = len(queries)
+    # the whole budget, or every clear comparison there is (then it says why: none left)
+    everything = walk.propose(pool, 10**6, None)
+    assert found == budget or found == len(everything)
+    for q in queries:
+        left, right = true[list(q.left)], true[list(q.right)]
+        gap = z * np.sqrt((left.std() ** 2 + right.std() ** 2) / 2 + noise_sd**2)
+        assert left.mean() - right.mean() >= gap - 1e-9
+    # the spec's walk leaves most of the same budget unasked on the same pool
+    assert len(InteractiveWalk().propose(pool, budget, None)) < found
