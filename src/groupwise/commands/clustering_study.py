@@ -35,9 +35,9 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
     )
     study.add_argument(
         "--bands",
-        choices=["linear", "geometric"],
+        choices=["linear", "geometric", "counts"],
         default="linear",
-        help="level bands of the HC tree (SPEC §4)",
+        help="level bands of the HC tree (SPEC §4; the paper's study used linear)",
     )
     study.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
     study.add_argument("--out", type=Path, required=True, help="output directory")

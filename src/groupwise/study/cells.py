@@ -94,6 +94,14 @@ class CellRecord:
     label_error_rate_total: FloatArray
     round_comparisons: IntArray
     """`RoundRecord.comparisons` per row."""
+    judgements: FloatArray
+    queries_asked: FloatArray
+    """`RoundRecord.queries_asked` per row, and the other diagnostics below (nan in cells
+    written before they were recorded)."""
+    queries_unused: FloatArray
+    queries_skipped: FloatArray
+    candidates: FloatArray
+    return_sd_over_noise: FloatArray
 
     @property
     def rows(self) -> int:
@@ -110,6 +118,37 @@ class CellRecord:
     @property
     def final_error_rate(self) -> float:
         return float(self.label_error_rate_total[-1]) if self.rows else math.nan
+
+    def _feedback_mean(self, values: FloatArray) -> float:
+        """Mean over the rows that asked for feedback (nan when none or unrecorded)."""
+        asked = self.round_comparisons > 0
+        chosen = values[asked]
+        return float(np.nanmean(chosen)) if np.isfinite(chosen).any() else math.nan
+
+    @property
+    def mean_asked(self) -> float:
+        return self._feedback_mean(self.queries_asked)
+
+    @property
+    def mean_unused(self) -> float:
+        return self._feedback_mean(self.queries_unused)
+
+    @property
+    def mean_skipped(self) -> float:
+        return self._feedback_mean(self.queries_skipped)
+
+    @property
+    def mean_judged(self) -> float:
+        return self._feedback_mean(self.judgements)
+
+    @property
+    def mean_candidates(self) -> float:
+        return self._feedback_mean(self.candidates)
+
+    @property
+    def mean_signal(self) -> float:
+        """Mean pool return sd ÷ noise sd over the feedback rounds."""
+        return self._feedback_mean(self.return_sd_over_noise)
 
 
 def read_cell(cell: Cell, root: Path) -> CellRecord | None:
@@ -137,6 +176,11 @@ def read_cell(cell: Cell, root: Path) -> CellRecord | None:
         except (KeyError, ValueError) as error:
             raise ValueError(f"{directory / ROUNDS_FILE}: bad column {name!r}: {error}") from None
 
+    def optional(name: str) -> np.ndarray:
+        if rows and name not in rows[0]:
+            return np.full(len(rows), np.nan)
+        return column(name, float)
+
     return CellRecord(
         cell=cell,
         complete=is_done(directory),
@@ -149,6 +193,12 @@ def read_cell(cell: Cell, root: Path) -> CellRecord | None:
         pairs_total=column("pairs_total", int),
         label_error_rate_total=column("label_error_rate_total", float),
         round_comparisons=column("comparisons", int),
+        judgements=column("judgements", float),
+        queries_asked=optional("queries_asked"),
+        queries_unused=optional("queries_unused"),
+        queries_skipped=optional("queries_skipped"),
+        candidates=optional("candidates"),
+        return_sd_over_noise=optional("return_sd_over_noise"),
     )
 
 

@@ -61,6 +61,7 @@ def write_report(root: Path, seed: int = 0, bootstrap_reps: int = 2000) -> Path:
         _header(results),
         _returns_table(grid),
         _pairs_section(results, root),
+        _diagnostics_section(results),
         _curves_section(results, root),
         _normalised_section(
             grid,
@@ -155,6 +156,45 @@ def _pairs_section(results: StudyResults, root: Path) -> str:
         f"{title}\n\n" + "\n".join(lines) + "\n\nWelch t-tests of the pair counts:\n\n"
         f"{tests}\n\n![pairs and error rate per env]({PAIRS_PNG})"
     )
+
+
+def _diagnostics_section(results: StudyResults) -> str:
+    fields = ("mean_asked", "mean_unused", "mean_skipped", "mean_judged", "mean_candidates")
+    grids = {f: results.grid("cells", f) for f in fields}
+    signal = results.grid("cells", "mean_signal")
+    title = (
+        "## How the queries went\n\nPer feedback round, mean over finished seeds: queries "
+        "asked / left unused (the strategy had nothing to propose) / skipped (asked, no "
+        "judgement) / judged; group candidates the tree offered; the pool's sd of true "
+        "returns ÷ the per-behaviour noise sd L·σ. Below 1 the labels are near coin flips "
+        "whatever the DM: an information limit, not a bug."
+    )
+    asked = grids["mean_asked"]
+    if not asked.dms or not any(np.isfinite(v).any() for v in asked.values.values()):
+        return title + "\n\nNo finished cell recorded these yet."
+    lines = [
+        _row(["env", "DM", "asked / unused / skipped / judged", "candidates", "sd ÷ noise"]),
+        _row(["---"] * 5),
+    ]
+    limited = set()
+    for j, env in enumerate(asked.envs):
+        for dm in asked.dms:
+            means = {f: _finite_mean(grids[f].values[dm][:, j]) for f in fields}
+            ratio = _finite_mean(signal.values[dm][:, j])
+            if ratio < 1:
+                limited.add(env)
+            counts = " / ".join(
+                _num(means[f], 1)
+                for f in ("mean_asked", "mean_unused", "mean_skipped", "mean_judged")
+            )
+            lines.append(_row([env, dm, counts, _num(means["mean_candidates"], 1), _num(ratio, 2)]))
+    note = ""
+    if limited:
+        note = (
+            f"\n\nAt the information limit (sd ÷ noise < 1): {', '.join(sorted(limited))}. "
+            "Label errors there say more about the noise model than about the DMs."
+        )
+    return f"{title}\n\n" + "\n".join(lines) + note
 
 
 def _curves_section(results: StudyResults, root: Path) -> str:
@@ -305,6 +345,11 @@ def _paper_reference(test: paper.PaperTest, sign: float) -> str:
 
 def _in_paper(dm: str) -> bool:
     return any(dm in row for row in paper.TABLE1.values())
+
+
+def _finite_mean(values: np.ndarray) -> float:
+    finite = values[np.isfinite(values)]
+    return float(finite.mean()) if finite.size else math.nan
 
 
 def _nan_safe(values: np.ndarray) -> np.ndarray:

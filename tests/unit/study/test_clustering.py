@@ -133,7 +133,7 @@ def _result() -> ClusteringStudyResult:
 
 def test_table_lists_methods_and_the_papers_numbers() -> None:
     table = markdown_table(_result())
-    assert "| HC (tree level 2 of 4, linear bands, > 1 leaf) | 1.5 ± 0.707 |" in table
+    assert "| HC (tree level 2 of 4, counts bands, > 1 leaf) | 1.5 ± 0.707 |" in table
     assert "6.54" in table and "0.0001" in table and "4.47" in table and "-0.46" in table
     assert table.count("\n| ") >= 8
 
