@@ -74,6 +74,10 @@ def _imperfect(kind: str) -> Callable[[LoopConfig], Teacher]:
 
 ORACLES: dict[str, Callable[[LoopConfig], Oracle]] = {
     "pairwise": _dm("pairwise", lambda cfg: PairwiseTeacher(sigma=cfg.noise_sigma)),
+    # the reference code's pairwise labels: Boltzmann-rational, temperature 1
+    "pairwise-boltzmann": _dm(
+        "pairwise", lambda cfg: PairwiseTeacher(sigma=cfg.noise_sigma, beta=1.0)
+    ),
     "groupwise": _dm("groupwise", _paper_teacher),
     "interactive": _dm("interactive", _paper_teacher),
     "interactive-mean": _dm("interactive-mean", _paper_teacher),

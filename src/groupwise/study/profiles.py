@@ -1,7 +1,7 @@
 """Study profiles: how big each cell of a simulated study is (SPEC §8).
 
 A profile fixes everything of a cell but its env, decision-maker and seed: the comparisons,
-the rounds, the PPO step budgets per env and the evaluation. Five ship:
+the rounds, the PPO step budgets per env and the evaluation. Six ship:
 
 - ``paper``: SPEC §8 as written, for a cluster (``--ray``). 400 comparisons in 5 rounds,
   then a long PPO run on the frozen learned reward. The paper gives no step budgets; its
@@ -16,6 +16,8 @@ the rounds, the PPO step budgets per env and the evaluation. Five ship:
   extrapolated from measured cells) on two cores; the arithmetic is in `LOCAL`'s docstring.
 - ``session``: the paper's protocol on GridWorld, MountainCarContinuous and Reacher with a
   fifth of ``local``'s PPO budgets: about an hour on two cores (the study in ``docs/results``).
+- ``mujoco``: Hopper, HalfCheetah and Walker2d at 120 k + 120 k PPO steps per cell, beside
+  ``session`` (about 2 h on two cores, minutes on a 16-core machine).
 - ``quick``: GridWorld and MountainCarContinuous, 2 seeds, tiny budgets: a few minutes on two
   cores, for CI and for trying the pipeline.
 - ``smoke`` (hidden): the tiniest cell that still runs every phase, for the tests.
@@ -188,6 +190,24 @@ rounds, three DMs, five seeds) on the three cheapest envs, with a fifth of `LOCA
 budgets. 45 cells × (80–160 k steps) = 4.8 M steps. Measured: 74 min for the 45 cells on 2
 workers, on a machine shared with other test runs."""
 
+MUJOCO = StudyProfile(
+    name="mujoco",
+    summary="Hopper, HalfCheetah and Walker2d, 400 comparisons in 5 rounds, 120 k + 120 k "
+    "PPO steps per cell",
+    envs=("Hopper", "HalfCheetah", "Walker2d"),
+    dms=PAPER_DMS,
+    seeds=5,
+    comparisons=400,
+    rounds=5,
+    budgets={},
+    default_budget=EnvBudget(steps=120_000, final_steps=120_000),
+    eval_episodes=5,
+    ppo=PPOConfig(tensorboard=False),
+)
+"""The paper's protocol on its three MuJoCo locomotion envs at a budget beside `SESSION`'s:
+45 cells × 240 k steps = 10.8 M steps, about 2 h on 2 cores at ~1,500 steps/s per worker
+(15 Hopper cells of 240 k steps took about 250 s on 16 cores)."""
+
 QUICK = StudyProfile(
     name="quick",
     summary="GridWorld and MountainCarContinuous, 2 seeds, tiny budgets: ~2 min on 2 cores",
@@ -220,5 +240,7 @@ SMOKE = StudyProfile(
     hidden=True,
 )
 
-PROFILES: dict[str, StudyProfile] = {p.name: p for p in (PAPER, LOCAL, SESSION, QUICK, SMOKE)}
+PROFILES: dict[str, StudyProfile] = {
+    p.name: p for p in (PAPER, LOCAL, SESSION, MUJOCO, QUICK, SMOKE)
+}
 """Every profile by name; `StudyProfile.hidden` ones are for tests."""

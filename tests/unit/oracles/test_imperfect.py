@@ -113,7 +113,7 @@ def test_teacher_presets_are_built_from_the_parameters():
 
 
 def test_registry_builds_every_oracle_and_each_is_seeded(make_pool):
-    expected = {"pairwise", "groupwise", "interactive"}
+    expected = {"pairwise", "pairwise-boltzmann", "groupwise", "interactive"}
     expected |= {"interactive-mean", "interactive-distinct", "interactive-clear"}
     expected |= {
         f"{dm}-{kind}" for dm in ("pairwise", "groupwise", "interactive") for kind in TEACHERS
