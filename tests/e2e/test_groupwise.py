@@ -213,18 +213,20 @@ def test_arcs_by_keyboard_and_previews(server: Server, page: Page, ui: Any, shot
     if page.locator(".clip").count():
         page.get_by_role("button", name="Clear groups").click()
 
-    # The chart is one tab stop; arrows move along a ring and outwards; Enter selects.
+    # The chart is one tab stop; Shift + arrows move along a ring and outwards (plain arrows
+    # are the answer keys); Enter selects.
+    expect(page.locator(".keys-hint")).to_contain_text("Shift + arrows move through the chart")
     first = page.locator('.arc[tabindex="0"]')
     expect(first).to_have_count(1)
     first.focus()
-    page.keyboard.press("ArrowRight")
+    page.keyboard.press("Shift+ArrowRight")
     focused = page.evaluate("document.activeElement.dataset.id")
     expect(page.locator(".preview")).to_be_visible()
     expect(page.locator(".preview video")).to_have_count(1)
     page.keyboard.press("Enter")
     assert ui.clip_ids("A") == [focused]
     for _ in range(4):  # outwards to the first real cluster (padding arcs stand for one leaf)
-        page.keyboard.press("ArrowUp")
+        page.keyboard.press("Shift+ArrowUp")
         label = page.evaluate("document.activeElement.getAttribute('aria-label')")
         if label.startswith("cluster of"):
             break
@@ -238,6 +240,22 @@ def test_arcs_by_keyboard_and_previews(server: Server, page: Page, ui: Any, shot
     page.keyboard.press("Alt+Enter")  # the other group
     expect(page.locator(".group-B .clip").first).to_be_visible()
     assert focused not in ui.clip_ids("A")  # never in both groups
+
+    # With the focus still on an arc, ← answers (it used to move the chart's focus and
+    # save nothing) and the toast confirms it.
+    left, right = ui.clip_ids("A"), ui.clip_ids("B")
+    page.keyboard.press("ArrowLeft")
+    expect(page.locator(".toast")).to_contain_text("Saved: left better")
+    [j] = server.judgements(sid, 0)
+    assert (j["left"], j["right"], j["label"]) == (left, right, "left")
+    shot(page, "groupwise-chart-focus-answer")
+    # an answer key with nothing to answer says why
+    page.wait_for_timeout(1000)  # the next suggestion may still be on its way
+    page.get_by_role("button", name="Clear groups").click()
+    expect(page.locator(".clip")).to_have_count(0)
+    page.keyboard.press("ArrowRight")
+    expect(page.locator(".toast")).to_contain_text("No answer saved: group A is empty")
+    assert len(server.judgements(sid, 0)) == 1
 
     # Every control has an accessible name; no horizontal scrolling from 1366 × 768 up.
     unnamed = page.evaluate(

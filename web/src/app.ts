@@ -256,9 +256,9 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
       ctrlKey: e.ctrlKey,
       metaKey: e.metaKey,
       altKey: e.altKey,
+      shiftKey: e.shiftKey,
       repeat: e.repeat,
       inField: !!target?.closest?.("input, select, textarea, [contenteditable]"),
-      inChart: !!target?.closest?.(".chart-svg"),
     };
     const cmd = keyCommand(input, s.mode);
     if (!cmd) return;

@@ -270,7 +270,18 @@ export function createController(store: Store, api: Api, options: ControllerOpti
     const s = st.session;
     const round = st.round;
     const { A, B } = st.groups;
-    if (st.submitting || !s || !round || s.phase !== "ready" || !A.length || !B.length) return;
+    if (st.submitting || !s || !round) return;
+    const why =
+      s.phase !== "ready"
+        ? "No answer saved: the round is not open."
+        : !A.length || !B.length
+          ? `No answer saved: group ${A.length ? "B" : "A"} is empty. Click arcs to fill it ` +
+            "(Alt-click fills the other group), or press N for a suggestion."
+          : null;
+    if (why) {
+      dispatch({ type: "toast", kind: "info", text: why });
+      return;
+    }
     dispatch({ type: "submitting", value: true });
     const started = st.origin.startedAt ?? Date.now();
     try {

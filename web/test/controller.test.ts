@@ -64,6 +64,17 @@ describe("controller (groupwise)", () => {
     expect(st.toast?.text).toBe("Saved: right better · 2 preference pairs.");
   });
 
+  it("an answer key with a group empty saves nothing and says why", async () => {
+    const { api, store, controller } = setup("groupwise");
+    const submit = vi.spyOn(api, "submitJudgement");
+    await controller.boot("s-demo");
+    store.dispatch({ type: "clear" });
+    store.dispatch({ type: "select", click: { leaves: ["b1"], isLeaf: true, add: false }, other: false, at: Date.now() });
+    await controller.answer("left");
+    expect(submit).not.toHaveBeenCalled();
+    expect(store.getState().toast?.text).toMatch(/No answer saved: group B is empty/);
+  });
+
   it("undo deletes the last judgement and brings its groups back", async () => {
     const { api, store, controller } = setup("groupwise");
     const undo = vi.spyOn(api, "undoJudgement");

@@ -20,9 +20,11 @@ describe("keyCommand", () => {
     expect(keyCommand({ key: "a", inField: true }, "groupwise")).toBeNull();
   });
 
-  it("leaves arrows to the chart when it has focus, but not the letter keys", () => {
-    expect(keyCommand({ key: "ArrowLeft", inChart: true }, "groupwise")).toBeNull();
-    expect(keyCommand({ key: "a", inChart: true }, "groupwise")).toEqual({ type: "answer", label: "left" });
+  it("answers with arrows wherever focus is, and leaves Shift + arrows to the chart", () => {
+    expect(keyCommand({ key: "ArrowLeft" }, "groupwise")).toEqual({ type: "answer", label: "left" });
+    expect(keyCommand({ key: "ArrowLeft", shiftKey: true }, "groupwise")).toBeNull();
+    expect(keyCommand({ key: "ArrowUp", shiftKey: true }, "pairwise")).toBeNull();
+    expect(keyCommand({ key: "A", shiftKey: true }, "groupwise")).toEqual({ type: "answer", label: "left" });
   });
 
   it("has the group keys in groupwise mode and skip in pairwise mode", () => {

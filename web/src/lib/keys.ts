@@ -3,8 +3,9 @@
  * left-hand alternatives A / D / W / S; G switches the group that clicks fill (1 / 2 pick
  * A / B), N asks for the next suggestion, U or Ctrl+Z undoes the last answer.
  *
- * Keys typed into form fields are left alone, auto-repeat never answers twice, and arrows
- * pressed inside the chart belong to the chart's own navigation.
+ * The answer keys act wherever focus is on the page except in form fields, the chart
+ * included: the chart's own keyboard navigation uses Shift + arrows (and Home / End), so it
+ * never collides with answering. Auto-repeat never answers twice.
  */
 import type { GroupId } from "./selection";
 
@@ -21,11 +22,10 @@ export interface KeyInput {
   ctrlKey?: boolean;
   metaKey?: boolean;
   altKey?: boolean;
+  shiftKey?: boolean;
   repeat?: boolean;
   /** The event target is a text field, select or other form input. */
   inField?: boolean;
-  /** The event target is inside the radial chart (arrows navigate arcs there). */
-  inChart?: boolean;
 }
 
 const ANSWERS: Record<string, "left" | "right" | "equal"> = {
@@ -42,7 +42,7 @@ export function keyCommand(e: KeyInput, mode: "groupwise" | "pairwise"): KeyComm
   const key = e.key.length === 1 ? e.key.toLowerCase() : e.key;
   if (e.ctrlKey || e.metaKey) return key === "z" && !e.altKey && !e.repeat ? { type: "undo" } : null;
   if (e.altKey) return null;
-  if (e.inChart && key.startsWith("Arrow")) return null;
+  if (e.shiftKey && key.startsWith("Arrow")) return null; // the chart's navigation
   if (e.repeat) return null;
   const label = ANSWERS[key];
   if (label) return { type: "answer", label };

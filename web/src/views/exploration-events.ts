@@ -69,6 +69,8 @@ export function attachArcEvents(chart: Chart, call: CallHandler): void {
       select(a, e.shiftKey || e.ctrlKey || e.metaKey, e.altKey);
       return;
     }
+    // Shift + arrows move between arcs; plain arrows are the page's answer keys
+    if (e.key.startsWith("Arrow") && !e.shiftKey) return;
     const next = neighbourArc(chart.layout, a, e.key);
     if (next === undefined) return;
     e.preventDefault();

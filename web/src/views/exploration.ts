@@ -121,15 +121,22 @@ function build(element: HTMLElement): Chart {
     { id: "chart-help", class: "sr-only" },
     "Arcs are behaviours (inner ring) and clusters of them (outer rings). Enter or click " +
       "puts an arc's behaviours in the selected group; Shift adds them instead; Alt or " +
-      "right-click fills the other group. Arrow keys move between arcs: left and right along " +
-      "a ring, up to the enclosing cluster, down into it.",
+      "right-click fills the other group. Shift with the arrow keys moves between arcs: left " +
+      "and right along a ring, up to the enclosing cluster, down into it. The arrow keys " +
+      "alone answer the comparison, wherever the focus is.",
+  );
+  const keysHint = h(
+    "p",
+    { class: "keys-hint", "aria-hidden": "true" },
+    "Keys: ← A better · → B better · ↑ equal · Shift + arrows move through the chart · " +
+      "Enter selects",
   );
 
   const legend = createLegend((patch) => chart.handlers?.view(patch));
 
   element.classList.add("panel", "exploration");
   element.setAttribute("aria-labelledby", "exploration-title");
-  element.replaceChildren(head, wrap, help, legend.element);
+  element.replaceChildren(head, wrap, help, keysHint, legend.element);
 
   const chart: Chart = {
     svg,
