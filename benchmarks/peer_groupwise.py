@@ -35,6 +35,8 @@ VARIANTS: dict[str, dict[str, dict[str, Any]]] = {
     "no-val": {"reward": {"validation_fraction": 0.0}},
     "init30": {"loop": {"initial_fraction": 0.3}},
     "batch32": {"reward": {"batch_size": 32, "epochs": 10}},
+    "random-windows": {"loop": {"pool_selection": "random"}},
+    "oversample4": {"loop": {"pool_oversample": 4.0}},
 }
 """Variant name → {"loop" | "reward" | "ppo": field overrides} on top of the spec."""
 

@@ -147,6 +147,10 @@ class LoopConfig:
     """Pool size N = pool_factor × comparisons this round ..."""
     pool_cap: Annotated[int, Field(ge=2)] = 200
     """... capped at this many behaviours."""
+    pool_oversample: Annotated[float, Field(ge=1)] = 2.0
+    """Sample episodes for this many times N windows, of which N are kept ..."""
+    pool_selection: Literal["uncertain", "random"] = "uncertain"
+    """... those the ensemble is most uncertain about (SPEC §3.2), or a random N."""
     candidate_pairs: PositiveInt = 10
     """Pairwise active learning: random candidate pairs scored per query."""
     noise_sigma: Annotated[float, Field(ge=0)] = 0.25

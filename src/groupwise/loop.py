@@ -48,8 +48,6 @@ log = logging.getLogger(__name__)
 
 CONFIG_FILE = "config.json"
 RESULTS_FILE = "rounds.csv"
-POOL_OVERSAMPLE = 2.0
-"""Sample this many times more windows than the pool keeps, so uncertainty can choose."""
 
 
 class ConfigMismatchError(ValueError):
@@ -199,10 +197,10 @@ def sample_pool(
     round_index: int,
     size: int,
     rng: np.random.Generator,
-    oversample: float = POOL_OVERSAMPLE,
 ) -> BehaviourPool:
-    """The round's pool from the current policy: the `size` of `oversample` × `size` windows
-    the ensemble is most uncertain about (`sampling.sample_pool`)."""
+    """The round's pool from the current policy: the `size` of `loop.pool_oversample` ×
+    `size` windows the ensemble is most uncertain about, or a random `size` of them
+    (`loop.pool_selection`; `sampling.sample_pool`)."""
     loop = session.cfg.loop
     return sampling.sample_pool(
         session.make_env,
@@ -212,8 +210,9 @@ def sample_pool(
         rng,
         round_index=round_index,
         exploration_fraction=loop.exploration_fraction,
-        oversample=oversample,
+        oversample=loop.pool_oversample,
         ensemble=session.ensemble,
+        select=loop.pool_selection,
     )
 
 

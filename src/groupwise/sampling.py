@@ -7,6 +7,7 @@ about are kept (a uniformly random N without an ensemble). The headless loop, th
 """
 
 import math
+from typing import Literal
 
 import numpy as np
 
@@ -30,10 +31,12 @@ def sample_pool(
     exploration_fraction: float = 0.0,
     oversample: float = 1.0,
     ensemble: RewardEnsemble | None = None,
+    select: Literal["uncertain", "random"] = "uncertain",
 ) -> BehaviourPool:
     """A pool of (up to) `size` behaviours of `length` steps (module docstring).
 
-    With an `ensemble` the pool carries its predicted returns (N, K) and step variance;
+    With an `ensemble` the pool carries its predicted returns (N, K) and step variance, and
+    keeps the windows it is most uncertain about (`select="random"`: a random subset);
     without one the predicted returns are an empty (N, 0) array.
 
     Raises:
@@ -46,17 +49,16 @@ def sample_pool(
     )
     windows = tile_fragments(episodes, length)
     if ensemble is None:
-        keep: IntArray = (
-            np.arange(len(windows))
-            if len(windows) <= size
-            else np.sort(rng.choice(len(windows), size=size, replace=False))
-        )
+        keep = _random_subset(len(windows), size, rng)
         kept = tuple(windows[i] for i in keep)
         return BehaviourPool(round_index, kept, np.zeros((len(kept), 0)), episodes=tuple(episodes))
     obs, acts = stack_fragments(windows)
     step = ensemble.step_rewards(obs, acts)  # (K, M, L): one forward pass for both uses
     returns = np.ascontiguousarray(step.sum(axis=-1).T)  # (M, K), as ensemble.returns
-    keep = most_uncertain(returns.var(axis=1), size)
+    if select == "random":
+        keep = _random_subset(len(windows), size, rng)
+    else:
+        keep = most_uncertain(returns.var(axis=1), size)
     return BehaviourPool(
         round_index,
         tuple(windows[i] for i in keep),
@@ -64,3 +66,10 @@ def sample_pool(
         step_variance(step[:, keep]),
         episodes=tuple(episodes),
     )
+
+
+def _random_subset(n: int, size: int, rng: np.random.Generator) -> IntArray:
+    """`size` of `n` indices, uniformly, in ascending order (all of them when n <= size)."""
+    if n <= size:
+        return np.arange(n)
+    return np.sort(rng.choice(n, size=size, replace=False))
