@@ -1,0 +1,43 @@
+"""A round's pool: enough windows, the most uncertain kept, or a random subset."""
+
+import numpy as np
+
+from groupwise.config import RewardConfig
+from groupwise.envs import make_env
+from groupwise.fragments import stack_fragments, tile_fragments
+from groupwise.reward import RewardEnsemble
+from groupwise.rl.policy import RandomPolicy
+from groupwise.sampling import sample_pool
+
+
+def _make():
+    return make_env("GridWorld")
+
+
+def test_the_most_uncertain_windows_are_kept_or_a_random_subset():
+    rng = np.random.default_rng(0)
+    ensemble = RewardEnsemble.for_env(_make, RewardConfig(), rng)
+    policy = RandomPolicy(_make().action_space)
+    uncertain = sample_pool(
+        _make, policy, 20, 30, np.random.default_rng(1), oversample=3.0, ensemble=ensemble
+    )
+    assert len(uncertain) == 20 and uncertain.predicted_returns.shape == (20, 3)
+    windows = sum(len(t) // 30 for t in uncertain.episodes)
+    assert windows >= 60  # oversampled: the pool keeps a third of them
+    kept = uncertain.predicted_returns.var(axis=1).min()
+    # no window left out is more uncertain than the least uncertain one kept
+    obs, acts = stack_fragments(tile_fragments(list(uncertain.episodes), 30))
+    assert (ensemble.returns(obs, acts).var(axis=1) > kept + 1e-6).sum() < 20
+    random = sample_pool(
+        _make,
+        policy,
+        20,
+        30,
+        np.random.default_rng(1),
+        oversample=3.0,
+        ensemble=ensemble,
+        select="random",
+    )
+    assert len(random) == 20
+    assert {f.key for f in random.fragments} != {f.key for f in uncertain.fragments}
+    assert random.step_variance is not None
