@@ -582,6 +582,11 @@ export interface components {
              */
             normalize_reward: boolean;
             /**
+             * Reset Reward Norm
+             * @default false
+             */
+            reset_reward_norm: boolean;
+            /**
              * Tensorboard
              * @default true
              */
@@ -730,10 +735,20 @@ export interface components {
              */
             min_pairs_for_validation: number;
             /**
+             * Standardise Output
+             * @default false
+             */
+            standardise_output: boolean;
+            /**
              * Validation Fraction
              * @default 0.2
              */
             validation_fraction: number;
+            /**
+             * Warm Start
+             * @default true
+             */
+            warm_start: boolean;
         };
         /** RoundTree */
         RoundTree: {
@@ -799,6 +814,7 @@ export interface components {
              *         ],
              *         "normalize_obs": true,
              *         "normalize_reward": true,
+             *         "reset_reward_norm": false,
              *         "tensorboard": true
              *       },
              *       "ppo_steps_per_round": 20000,
@@ -826,7 +842,9 @@ export interface components {
              *         ],
              *         "lr": 0.001,
              *         "min_pairs_for_validation": 10,
-             *         "validation_fraction": 0.2
+             *         "standardise_output": false,
+             *         "validation_fraction": 0.2,
+             *         "warm_start": true
              *       },
              *       "round_seconds": 600,
              *       "rounds": 5,
