@@ -67,12 +67,18 @@ def _expect_prefilled_or_empty_state(
         expect(page.locator(".group-A .group-empty")).to_be_visible()
 
 
+def _settled(page: Page) -> None:
+    """The suggestion the page asks for whenever both groups are empty has come (or none)."""
+    expect(page.locator(".comparison .origin")).not_to_contain_text("Finding a suggestion")
+
+
 def _fill_groups(page: Page, server: Server, sid: str, ui: Any) -> tuple[list[str], list[str]]:
-    """Empties the groups, then fills A and B by clicking two disjoint clusters."""
-    if page.locator(".clip").count():
-        page.get_by_role("button", name="Clear groups").click()
-    expect(page.locator(".clip")).to_have_count(0)
-    (node_a, leaves_a), (node_b, leaves_b) = _disjoint_pair(_clusters(server, sid))
+    """Fills A and B by clicking two disjoint clusters (a click replaces the group; a
+    suggested group is not clicked again, which would toggle its behaviours out)."""
+    _settled(page)
+    shown = set(ui.clip_ids("A"))
+    clusters = [c for c in _clusters(server, sid) if set(c[1]) != shown]
+    (node_a, leaves_a), (node_b, leaves_b) = _disjoint_pair(clusters)
     ui.click_arc(node_a)
     expect(page.locator(".group-A .clip")).to_have_count(len(leaves_a))
     ui.click_arc(node_b, modifiers=("Alt",))  # Alt-click: the other group
@@ -110,8 +116,10 @@ def test_select_answer_reload_undo(server: Server, page: Page, ui: Any, shot: An
     # Move a clip of A to B, remove one of B.
     moved = ui.clip_ids("A")[0]
     page.get_by_role("button", name=f"Move {moved} to group B").click()
+    expect(page.locator(f'.group-B .clip[data-id="{moved}"]')).to_have_count(1)
     removed = leaves_b[0]
     page.get_by_role("button", name=f"Remove {removed} from group B").click()
+    expect(page.locator(f'.clip[data-id="{removed}"]')).to_have_count(0)
     left, right = ui.clip_ids("A"), ui.clip_ids("B")
     assert moved in right and moved not in left and removed not in right + left
     assert len(left) == len(leaves_a) - 1 and len(right) == len(leaves_b)
@@ -240,6 +248,9 @@ def test_arcs_by_keyboard_and_previews(server: Server, page: Page, ui: Any, shot
     page.keyboard.press("Alt+Enter")  # the other group
     expect(page.locator(".group-B .clip").first).to_be_visible()
     assert focused not in ui.clip_ids("A")  # never in both groups
+    page.keyboard.press("Shift+ArrowRight")  # the next cluster of the ring (disjoint) into A
+    page.keyboard.press("Enter")
+    expect(page.locator(".group-A .clip").first).to_be_visible()
 
     # With the focus still on an arc, ← answers (it used to move the chart's focus and
     # save nothing) and the toast confirms it.
