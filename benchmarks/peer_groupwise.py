@@ -24,6 +24,7 @@ from groupwise.oracles import Feedback, PairwiseTeacher
 from groupwise.query.strategies import PairwiseQueries
 from groupwise.reward import RewardEnsemble
 from groupwise.rl.ppo import PPOAgent
+from peer_eval import episode_returns
 
 VARIANTS: dict[str, dict[str, dict[str, Any]]] = {
     "default": {},
@@ -44,19 +45,7 @@ VARIANTS: dict[str, dict[str, dict[str, Any]]] = {
 def evaluate(agent: PPOAgent, make, seeds: list[int]) -> list[float]:
     policy = agent.policy(deterministic=True)
     rng = np.random.default_rng(0)
-    returns = []
-    for seed in seeds:
-        env = make()
-        obs, _ = env.reset(seed=seed)
-        total, done = 0.0, False
-        while not done:
-            action = policy.act(np.asarray(obs, dtype=np.float32)[None], rng)[0]
-            obs, reward, terminated, truncated, info = env.step(action)
-            total += float(info.get("true_reward", reward))
-            done = terminated or truncated
-        env.close()
-        returns.append(total)
-    return returns
+    return episode_returns(lambda obs: policy.act(obs, rng), make, seeds)
 
 
 def reward_correlations(

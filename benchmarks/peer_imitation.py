@@ -26,6 +26,8 @@ from imitation.util import networks
 from stable_baselines3 import PPO
 from stable_baselines3.common.vec_env import DummyVecEnv, VecNormalize
 
+from peer_eval import episode_returns
+
 
 def make_env_factory(spec: dict):
     env_id = spec["env"]
@@ -40,19 +42,10 @@ def make_env_factory(spec: dict):
 
 
 def evaluate(model: PPO, norm: VecNormalize, make, seeds: list[int]) -> list[float]:
-    returns = []
-    for seed in seeds:
-        env = make()
-        obs, _ = env.reset(seed=seed)
-        total, done = 0.0, False
-        while not done:
-            action, _ = model.predict(norm.normalize_obs(obs[None]), deterministic=True)
-            obs, reward, terminated, truncated, info = env.step(action[0])
-            total += float(info.get("true_reward", reward))
-            done = terminated or truncated
-        env.close()
-        returns.append(total)
-    return returns
+    def act(obs: np.ndarray) -> np.ndarray:
+        return model.predict(norm.normalize_obs(obs), deterministic=True)[0]
+
+    return episode_returns(act, make, seeds)
 
 
 def main(spec: dict) -> dict:
