@@ -68,8 +68,11 @@ def _expect_prefilled_or_empty_state(
 
 
 def _settled(page: Page) -> None:
-    """The suggestion the page asks for whenever both groups are empty has come (or none)."""
-    expect(page.locator(".comparison .origin")).not_to_contain_text("Finding a suggestion")
+    """The suggestion the page asks for when it opens (and after each answer) has come, or
+    there was none: the groups are the suggestion's, the person's, or empty for good."""
+    expect(page.locator(".comparison .origin")).to_contain_text(
+        re.compile("Suggested comparison|No suggestions left|Your selection"), timeout=15_000
+    )
 
 
 def _fill_groups(page: Page, server: Server, sid: str, ui: Any) -> tuple[list[str], list[str]]:
@@ -185,6 +188,7 @@ def test_one_submission_per_answer_and_errors(
         "**/judgements",
         lambda route: held.append(route) if route.request.method == "POST" else route.continue_(),
     )
+    assert server.judgements(sid, 0) == [], "no answer before the keys below"
     page.keyboard.press("ArrowRight")
     page.keyboard.press("ArrowRight")
     page.get_by_role("button", name="Group B (right) is better").click(force=True)
@@ -194,7 +198,8 @@ def test_one_submission_per_answer_and_errors(
     client_id = held[0].request.post_data_json["client_id"]
     held[0].continue_()
     expect(page.locator(".toast")).to_contain_text("Saved: right better")
-    assert [j["client_id"] for j in server.judgements(sid, 0)] == [client_id]
+    stored = server.judgements(sid, 0)
+    assert [j["client_id"] for j in stored] == [client_id], stored
 
     # A refusal of the server is shown as its one sentence, and the answer can be given again.
     page.unroute("**/judgements")
@@ -218,8 +223,10 @@ def test_one_submission_per_answer_and_errors(
 def test_arcs_by_keyboard_and_previews(server: Server, page: Page, ui: Any, shot: Any) -> None:
     sid = server.new_session("groupwise")
     _open(page, server, sid)
+    _settled(page)
     if page.locator(".clip").count():
         page.get_by_role("button", name="Clear groups").click()
+    expect(page.locator(".clip")).to_have_count(0)
 
     # The chart is one tab stop; Shift + arrows move along a ring and outwards (plain arrows
     # are the answer keys); Enter selects.
