@@ -22,10 +22,8 @@ See docs/library.md.
 from collections.abc import Callable
 from typing import Any
 
-from tqdm.auto import tqdm
-
 from groupwise.config import LoopConfig, RewardConfig, RunConfig
-from groupwise.loop import RoundRecord, Session, round_plan, run_round
+from groupwise.loop import RoundRecord, Session, run_rounds
 from groupwise.oracles.base import Oracle
 from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.reward import RewardEnsemble
@@ -72,21 +70,5 @@ class PreferenceComparisons:
         on_round: Callable[[RoundRecord], None] | None = None,
     ) -> list[RoundRecord]:
         """Run the rounds not run yet (all of them on a fresh object) and return the records."""
-        loop = self.session.cfg.loop
-        plan = round_plan(loop)
-        bar = tqdm(
-            total=len(plan),
-            initial=self.session.next_round,
-            desc="rlhf",
-            unit="round",
-            disable=not show_progress,
-        )
-        with bar:
-            while self.session.next_round < len(plan):
-                n_comparisons, steps = plan[self.session.next_round]
-                record = run_round(self.session, self.feedback, n_comparisons, steps, False)
-                bar.update(1)
-                bar.set_postfix(true_return=f"{record.true_return_mean:.1f}")
-                if on_round is not None:
-                    on_round(record)
+        run_rounds(self.session, self.feedback, show_progress, on_round)
         return self.records

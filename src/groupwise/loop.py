@@ -415,36 +415,52 @@ def run_session(
                 f"session's rounds); choose from {', '.join(ORACLES)}"
             )
         oracle = ORACLES[loop.oracle](loop)
-    plan = round_plan(loop)
 
+    def finished(record: RoundRecord) -> None:
+        session.save(out)
+        write_records(out / RESULTS_FILE, session.records)
+        log.info(
+            "round %d: %d pairs in total, label error %.3f, reward acc %.3f, true return %.2f",
+            record.round,
+            record.pairs_total,
+            record.label_error_rate_total,
+            record.reward_accuracy,
+            record.true_return_mean,
+        )
+        if on_round is not None:
+            on_round(record)
+
+    try:
+        run_rounds(session, oracle, show_progress, finished)
+    finally:
+        session.ppo.close()
+    return session.records
+
+
+def run_rounds(
+    session: Session,
+    oracle: Oracle,
+    show_progress: bool = False,
+    on_round: Callable[[RoundRecord], None] | None = None,
+) -> list[RoundRecord]:
+    """Run the session's rounds not run yet (`round_plan`), calling `on_round` after each;
+    the one round driver of `run_session` and `PreferenceComparisons.train`."""
+    plan = round_plan(session.cfg.loop)
     bar = tqdm(
         total=len(plan),
         initial=session.next_round,
-        desc=loop.env,
+        desc=session.cfg.loop.env,
         unit="round",
         disable=not show_progress,
     )
-    try:
+    with bar:
         while session.next_round < len(plan):
             n_comparisons, steps = plan[session.next_round]
             record = run_round(session, oracle, n_comparisons, steps, show_progress)
-            session.save(out)
-            write_records(out / RESULTS_FILE, session.records)
-            log.info(
-                "round %d: %d pairs in total, label error %.3f, reward acc %.3f, true return %.2f",
-                record.round,
-                record.pairs_total,
-                record.label_error_rate_total,
-                record.reward_accuracy,
-                record.true_return_mean,
-            )
             bar.update(1)
             bar.set_postfix(true_return=f"{record.true_return_mean:.1f}")
             if on_round is not None:
                 on_round(record)
-    finally:
-        bar.close()
-        session.ppo.close()
     return session.records
 
 
