@@ -47,7 +47,7 @@ from groupwise.storage.settings import LIBRARY
 
 log = logging.getLogger(__name__)
 
-MAX_ROUNDS = 100
+MAX_ROUNDS = next(m.le for m in SessionSettings.model_fields["rounds"].metadata if hasattr(m, "le"))
 """Rounds of a session whose `settings` name none (the most a session may have): the
 program, not the app, decides when it ends (`close`)."""
 SOURCES = {"suggested": Source.SUGGESTED, "explored": Source.EXPLORED, "pairwise": Source.PAIRWISE}
