@@ -36,6 +36,9 @@ class EnvEntry:
     """Gymnasium id of the unmodified env, or None when the env is our own."""
     changes: str
     """What differs from the standard env, for the docs."""
+    clip_seconds: float | None = None
+    """Simulated seconds a behaviour of the app covers (`groupwise.clips.timing`); None:
+    the default, 1 s. Its clip plays at real speed."""
 
     @property
     def gym_id(self) -> str:
@@ -56,6 +59,7 @@ ENVS: dict[str, EnvEntry] = {
             horizon=1000,
             standard_id="Hopper-v5",
             changes="falling (unhealthy) does not terminate; 240×240 frames, torso-tracking camera",
+            clip_seconds=1.5,  # 188 steps of 0.008 s: two hops, or a flip (30 were 0.24 s)
         ),
         EnvEntry(
             name="HalfCheetah",
@@ -63,6 +67,7 @@ ENVS: dict[str, EnvEntry] = {
             horizon=1000,
             standard_id="HalfCheetah-v5",
             changes="none but rendering: 240×240 frames, torso-tracking camera",
+            clip_seconds=1.5,  # 30 steps of 0.05 s: several strides, or a flip
         ),
         EnvEntry(
             name="Walker2d",
@@ -70,6 +75,7 @@ ENVS: dict[str, EnvEntry] = {
             horizon=1000,
             standard_id="Walker2d-v5",
             changes="falling (unhealthy) does not terminate; 240×240 frames, torso-tracking camera",
+            clip_seconds=1.5,  # 188 steps of 0.008 s: one to two strides, or a fall
         ),
         EnvEntry(
             name="Reacher",
@@ -77,6 +83,7 @@ ENVS: dict[str, EnvEntry] = {
             horizon=1000,
             standard_id="Reacher-v5",
             changes="horizon 1000 instead of 50; 240×240 frames",
+            clip_seconds=1.0,  # 50 steps of 0.02 s: one reach, the standard Reacher-v5 episode
         ),
         EnvEntry(
             name="MountainCarContinuous",
@@ -87,6 +94,7 @@ ENVS: dict[str, EnvEntry] = {
                 "dense reward; reaching the goal does not terminate; horizon 250 instead of 999; "
                 "240×240 frames"
             ),
+            clip_seconds=2.0,  # 60 steps at 30 frames/s: a swing (crossing: >= 26 steps)
         ),
         EnvEntry(
             name="GridWorld",
@@ -94,6 +102,7 @@ ENVS: dict[str, EnvEntry] = {
             horizon=1000,
             standard_id=None,
             changes="our own env (5×5, dense distance reward)",
+            clip_seconds=1.0,  # 30 moves at its 30 frames/s, as in the study
         ),
     )
 }
