@@ -2,7 +2,11 @@
 
 Directory layout (``format: groupwise.pool/1``)::
 
-    pool.json         manifest: config, metadata (policy, seed), env, counts, file names
+    pool.json         manifest: config, metadata (policy, seed), env, counts, file names,
+                      "length" (L) and "fps", and under "clip" the clips' timing
+                      (`ClipTiming.as_json`): steps (L), stride (a frame every k-th
+                      step), frames (⌈L / k⌉), fps, seconds (L · dt, simulated and
+                      played), speed (1.0: real time), step_seconds (dt)
     behaviours.json   per behaviour: id ("b<i>", as in the tree), index, key, episode, start,
                       reset_seed, true_return, clip id, poster id
     behaviours.npz    obs (N, L, obs_dim), acts (N, L, act_dim), actions (N, L, *act_shape)
@@ -93,8 +97,9 @@ def write_pool(
         "env": cfg.env,
         "behaviours": len(fragments),
         "episodes": len(trajectories),
-        "length": cfg.length,
-        "fps": cfg.video.fps,
+        "length": pool.timing.steps,
+        "fps": round(pool.timing.fps, 6),
+        "clip": pool.timing.as_json(),
         "frame_size": [cfg.width, cfg.height],
         "store": _relative(pool.store.root, out),
         "config": dataclasses.asdict(cfg),

@@ -4,8 +4,9 @@
 from a bare policy in `prepare_pool`) and, readable top to bottom:
 
 1. **clips**: hands the windows to the render workers (`clips.render`), which replay each
-   episode from its reset seed, render exactly the pool's windows, and encode each as an MP4
-   and a poster into the clip store, while the parent computes
+   episode from its reset seed, render exactly the pool's windows (at real speed, a frame
+   every k-th step: `clips.timing`), and encode each as an MP4 and a poster into the clip
+   store, while the parent computes
 2. the pool's **DTW** distances (`BehaviourPool.distances`), the **tree**, its group
    candidates and medoids (`behaviour`);
 3. **writes** the directory (`pool_files`) and returns a `PreparedPool` with per-phase
@@ -37,6 +38,7 @@ from groupwise.behaviour import (
 from groupwise.clips.render import RenderPool, plan_jobs
 from groupwise.clips.replay import FrameSettings, make_render_env
 from groupwise.clips.store import ClipStore
+from groupwise.clips.timing import ClipTiming, clip_timing, step_seconds
 from groupwise.clips.video import VideoConfig
 from groupwise.envs import make_env
 from groupwise.fragments import Fragment
@@ -62,7 +64,8 @@ class PoolConfig:
     size: int = 200
     """Behaviours in the pool, N (SPEC §1: 100-200; the paper advises < 200)."""
     length: int = 30
-    """Steps per behaviour, L; each clip has exactly L frames."""
+    """Steps per behaviour, L; each clip shows them at real speed, a frame every k-th step
+    (`clips.timing`; the app's default L is the env's clip duration, `env_clip_timing`)."""
     oversample: float = 1.0
     """Sample episodes for this many times `size` windows, of which `size` are kept."""
     exploration_fraction: float = 0.0
@@ -116,7 +119,7 @@ class PoolTimings:
     replay_s: float  # worker-seconds stepping and checking replays, summed over workers
     workers: int
     behaviours: int
-    frames: int  # frames rendered (N × L)
+    frames: int  # frames rendered (N × ⌈L / k⌉)
 
 
 @dataclass(frozen=True)
@@ -132,6 +135,7 @@ class PreparedPool:
     tree: BehaviourTree
     candidates: tuple[TreeNode, ...]
     timings: PoolTimings
+    timing: ClipTiming  # steps per behaviour, frame stride, fps, seconds
 
 
 def load_policy(spec: str, env: str) -> Policy:
@@ -226,19 +230,26 @@ def publish_pool(
         ValueError: unknown env, or a pool without its episodes.
     """
     started = time.perf_counter() - sample_s
-    if not pool.episodes:
-        raise ValueError("the pool carries no episodes to replay into clips")
+    if not pool.episodes or not pool.fragments:
+        raise ValueError("the pool carries no behaviours, or no episodes to replay into clips")
     out.mkdir(parents=True, exist_ok=True)
     store = store or ClipStore(out / STORE_DIR)
     settings = FrameSettings(cfg.env, cfg.width, cfg.height, cfg.video)
-    _check_rendering(settings)
+    timing = clip_timing(_check_rendering(settings), steps=pool.fragments[0].length)
     own_pool = render_pool is None
     workers = render_pool or RenderPool(cfg.workers)
     trajectories, fragments = list(pool.episodes), list(pool.fragments)
     try:
         workers.warm_up(settings)
         tick = time.perf_counter()
-        jobs = plan_jobs(trajectories, fragments, settings, workers.workers)
+        jobs = plan_jobs(
+            trajectories,
+            fragments,
+            settings,
+            workers.workers,
+            stride=timing.stride,
+            fps=timing.fps,
+        )
         pending = workers.start(jobs, store)
         mark = time.perf_counter()
         distances = pool.distances
@@ -277,7 +288,7 @@ def publish_pool(
         replay_s=sum(r.replay_s for r in reports),
         workers=workers.workers,
         behaviours=len(fragments),
-        frames=len(fragments) * pool.fragments[0].length,
+        frames=len(fragments) * timing.frames,
     )
     prepared = PreparedPool(
         directory=out,
@@ -289,6 +300,7 @@ def publish_pool(
         tree=tree,
         candidates=tuple(candidates),
         timings=partial,
+        timing=timing,
     )
     write_pool(prepared, trajectories, representatives, cfg, metadata or {})
     write_s = time.perf_counter() - tick
@@ -305,12 +317,15 @@ def publish_pool(
     return dataclasses.replace(prepared, timings=timings)
 
 
-def _check_rendering(settings: FrameSettings) -> None:
-    # Renders one frame here, before any worker starts: a missing GL library fails now with
-    # the envs package's message, and the chosen MUJOCO_GL is inherited by the workers.
+def _check_rendering(settings: FrameSettings) -> float:
+    """The env's seconds per step (`clips.timing.step_seconds`), after rendering one frame.
+
+    Rendering here, before any worker starts, makes a missing GL library fail now with the
+    envs package's message, and the chosen MUJOCO_GL is inherited by the workers."""
     env = make_render_env(settings)
     try:
         env.reset(seed=0)
         env.render()
+        return step_seconds(env)
     finally:
         env.close()

@@ -58,6 +58,11 @@ def test_gridworld_pool_writes_every_file(grid_pool: PreparedPool) -> None:
         assert store.path(entry["poster"]).suffix == ".jpg"
     timings = json.loads((out / "timings.json").read_text())
     assert timings["total_s"] > 0 and timings["frames"] == 600
+    # GridWorld runs at 30 steps a second: a frame per step, 1 s of real time
+    assert (manifest["length"], manifest["fps"]) == (30, 30.0)
+    clip = manifest["clip"]
+    assert (clip["steps"], clip["stride"], clip["frames"]) == (30, 1, 30)
+    assert (clip["fps"], clip["seconds"], clip["speed"]) == (30.0, 1.0, 1.0)
 
 
 def test_every_clip_has_l_frames_of_h264(grid_pool: PreparedPool) -> None:
@@ -122,9 +127,15 @@ def test_hopper_clips_show_the_window(tmp_path: Path) -> None:
         show_progress=False,
     )
     assert len(set(pool.clips)) == 6
+    # real speed: a frame every 4th step of 0.008 s, 31.25 frames/s, 20 steps = 0.16 s
+    assert (pool.timing.stride, pool.timing.frames) == (4, 5)
+    clip = json.loads((tmp_path / "pool.json").read_text())["clip"]
+    assert (clip["steps"], clip["fps"], clip["seconds"], clip["speed"]) == (20, 31.25, 0.16, 1.0)
+    assert probe(pool.store.path(pool.clips[2])).fps == 31.25
+    assert pool.timings.frames == 6 * 5
     fragment = pool.fragments[2]
     frames = read_frames(pool.store.path(pool.clips[2]))
-    assert frames.shape == (20, 96, 96, 3)
+    assert frames.shape == (5, 96, 96, 3)
     assert not any(rendering.frame_is_blank(f) for f in frames)
     assert np.abs(frames[0].astype(int) - frames[-1]).mean() > 0.5  # it moves
     # frame 0 is the state the window's first observation came from

@@ -28,7 +28,7 @@ from tqdm.auto import tqdm
 
 from groupwise.clips.replay import FrameSettings, even_crop, make_render_env, replay_windows
 from groupwise.clips.store import ClipStore
-from groupwise.clips.video import ClipEncoder, poster_bytes, poster_frame
+from groupwise.clips.video import DEFAULT_FPS, ClipEncoder, poster_bytes, poster_frame
 from groupwise.fragments import Fragment, Trajectory
 
 logger = logging.getLogger(__name__)
@@ -40,7 +40,8 @@ many jobs per worker (a chunk replays from the reset, which costs only physics s
 
 @dataclass(frozen=True)
 class ClipJob:
-    """Render the windows `starts` (ascending) of one episode, `length` steps each."""
+    """Render the windows `starts` (ascending) of one episode, `length` steps each, a frame
+    every `stride`-th step, into clips playing at `fps` frames per second."""
 
     settings: FrameSettings
     episode: int
@@ -49,10 +50,17 @@ class ClipJob:
     observations: np.ndarray  # (T + 1, obs_dim) stored observations of steps 0 … T, for the check
     starts: tuple[int, ...]
     length: int
+    stride: int = 1
+    fps: float = DEFAULT_FPS
+
+    @property
+    def clip_frames(self) -> int:
+        """Frames of each clip, ⌈length / stride⌉."""
+        return -(-self.length // self.stride)
 
     @property
     def frames(self) -> int:
-        return len(self.starts) * self.length
+        return len(self.starts) * self.clip_frames
 
     @property
     def cost(self) -> float:
@@ -86,9 +94,13 @@ def plan_jobs(
     fragments: Sequence[Fragment],
     settings: FrameSettings,
     workers: int,
+    *,
+    stride: int = 1,
+    fps: float = DEFAULT_FPS,
 ) -> list[ClipJob]:
     """One job per episode with selected windows, episodes with many windows split into
-    contiguous chunks (`JOBS_PER_WORKER`); most expensive first, for load balance.
+    contiguous chunks (`JOBS_PER_WORKER`); most expensive first, for load balance. Clips
+    get a frame every `stride`-th step and play at `fps` (`clips.timing`).
 
     Every fragment must come from one of `trajectories` (matched by episode and reset seed)
     and all fragments must have one length.
@@ -128,6 +140,8 @@ def plan_jobs(
                     observations=np.asarray(traj.obs[: last + 1]),
                     starts=chunk,
                     length=length,
+                    stride=stride,
+                    fps=fps,
                 )
             )
     return sorted(jobs, key=lambda job: -job.cost)
@@ -148,17 +162,26 @@ def run_job(job: ClipJob, store: ClipStore, env: gym.Env[Any, Any] | None = None
     posters = []
     try:
         windows = replay_windows(
-            env, job.reset_seed, job.actions, job.starts, job.length, job.observations, timings
+            env,
+            job.reset_seed,
+            job.actions,
+            job.starts,
+            job.length,
+            job.observations,
+            timings,
+            job.stride,
         )
         for _, frames in windows:
             tick = time.perf_counter()
             frames = even_crop(frames)
             if encoder is None:
                 _, height, width, _ = frames.shape
-                encoder = ClipEncoder(tmp, job.length, width, height, job.settings.video)
+                encoder = ClipEncoder(
+                    tmp, job.clip_frames, width, height, job.settings.video, job.fps
+                )
             for frame in frames:
                 encoder.write(frame)
-            image = poster_bytes(frames[poster_frame(job.length)], job.settings.video)
+            image = poster_bytes(frames[poster_frame(job.clip_frames)], job.settings.video)
             posters.append(store.put_bytes(image, job.settings.video.poster_format))
             encode_s += time.perf_counter() - tick
         tick = time.perf_counter()

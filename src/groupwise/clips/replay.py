@@ -1,8 +1,10 @@
 """Reproducing a behaviour's frames: replay its episode in a rendering env.
 
-A clip shows exactly its fragment's L steps, one frame per step: frame k shows the state that
-step ``start + k``'s observation came from (the state before that step's action), so the
-clip and the reward model's input are the same window (SPEC §1; the prototype's were not).
+A clip shows exactly its fragment's L steps, a frame every k-th step (`clips.timing`: k so
+that the clip plays at real speed; k = 1 in envs of 30 steps a second or fewer): frame j
+shows the state that step ``start + j·k``'s observation came from (the state before that
+step's action), so the clip and the reward model's input are the same window (SPEC §1; the
+prototype's were not).
 Frames are reproduced, not recorded: reset a rendering env with the episode's `reset_seed`
 and replay the episode's raw actions, stepping without rendering outside the windows. While
 replaying, every observation is compared with the stored one, so a clip that would show
@@ -104,50 +106,59 @@ def replay_windows(
     length: int,
     observations: np.ndarray | None = None,
     timings: dict[str, float] | None = None,
+    stride: int = 1,
 ) -> Iterator[tuple[int, np.ndarray]]:
-    """Replay an episode and yield (start, frames (length, H, W, 3) uint8) per window.
+    """Replay an episode and yield (start, frames (⌈length / stride⌉, H, W, 3) uint8) per
+    window: frame j shows the state before step ``start + j·stride``.
 
-    `starts` ascending; `actions` must reach the last window's last frame (index
-    ``starts[-1] + length - 2``). With `observations` (T + 1, obs_dim) every observation
-    of the replay is checked against the stored one. `timings` (optional) accumulates
-    "replay_s" and "render_s".
+    `starts` ascending; `actions` must reach the last window's last step (index
+    ``starts[-1] + length - 2``). Every step is replayed, only the frames are strided. With
+    `observations` (T + 1, obs_dim) every observation of the replay, up to the last window's
+    end, is checked against the stored one. `timings` (optional) accumulates "replay_s" and
+    "render_s".
 
     Raises:
         ReplayMismatchError: an observation differs from the stored one.
-        ValueError: `starts` not ascending or the actions do not reach the last window.
+        ValueError: `starts` not ascending, the actions do not reach the last window, or
+            `stride` < 1.
     """
     if list(starts) != sorted(starts) or len(set(starts)) != len(starts):
         raise ValueError(f"window starts must be ascending and distinct, got {list(starts)}")
+    if stride < 1:
+        raise ValueError(f"stride must be >= 1, got {stride}")
     if not starts:
         return
-    end = starts[-1] + length  # exclusive: states 0 … end - 1 are shown
+    end = starts[-1] + length  # exclusive: states 0 … end - 1 are checked
     if len(actions) < end - 1:
         raise ValueError(f"{len(actions)} actions do not reach step {end - 1}")
     clock = timings if timings is not None else {}
     clock.setdefault("replay_s", 0.0)
     clock.setdefault("render_s", 0.0)
-    wanted = {t: (s, t - s) for s in starts for t in range(s, s + length)}
-    frames: np.ndarray | None = None
+    count = -(-length // stride)  # frames per window
+    wanted: dict[int, list[tuple[int, int]]] = {}  # step → (window start, frame index)
+    for s in starts:
+        for j in range(count):
+            wanted.setdefault(s + j * stride, []).append((s, j))
+    frames: dict[int, np.ndarray] = {}
     tick = time.perf_counter()
     obs, _ = env.reset(seed=int(reset_seed))
     for t in range(end):
         if observations is not None:
             _check_observation(obs, observations[t], t, reset_seed)
         if t in wanted:
-            start, k = wanted[t]
             now = time.perf_counter()
             clock["replay_s"] += now - tick
             frame = np.asarray(env.render())
             tick = time.perf_counter()
             clock["render_s"] += tick - now
-            if frames is None or k == 0:
-                frames = np.empty((length, *frame.shape), dtype=np.uint8)
-            frames[k] = frame
-            if k == length - 1:
-                clock["replay_s"] += time.perf_counter() - tick
-                yield start, frames
-                frames = None
-                tick = time.perf_counter()
+            for start, j in wanted[t]:
+                if j == 0:
+                    frames[start] = np.empty((count, *frame.shape), dtype=np.uint8)
+                frames[start][j] = frame
+                if j == count - 1:
+                    clock["replay_s"] += time.perf_counter() - tick
+                    yield start, frames.pop(start)
+                    tick = time.perf_counter()
         if t + 1 < end:
             obs = env.step(actions[t])[0]
     clock["replay_s"] += time.perf_counter() - tick

@@ -2,7 +2,8 @@
 
 A clip is H.264 in an MP4 container, yuv420p (the pixel format every browser decodes), with
 the index (``moov``) before the media data (``+faststart``) so a browser can start playing
-before the file has arrived, one frame per step at `VideoConfig.fps`, no audio, no metadata.
+before the file has arrived, at the frame rate the clip's timing asks for (`clips.timing`: real
+speed, a rate such as 31.25 passed to ffmpeg as the fraction 125/4), no audio, no metadata.
 Encoding uses the ffmpeg binary bundled with imageio-ffmpeg (no system ffmpeg needed), x264 on
 a single thread, each clip by its own encoder instance: then a clip's bytes depend only on its
 frames and the encoder settings (x264's output differs between thread counts), so equal frames
@@ -15,11 +16,13 @@ Costs on a 2-core machine: an ffmpeg process with x264 costs ~20 ms to start and
 """
 
 import io
+import math
 import re
 import subprocess
 import tempfile
 from collections.abc import Sequence
 from dataclasses import dataclass
+from fractions import Fraction
 from pathlib import Path
 
 import imageio_ffmpeg
@@ -28,6 +31,9 @@ from PIL import Image
 
 POSTER_FORMATS: dict[str, str] = {"jpg": "JPEG", "png": "PNG"}
 """Poster suffix → Pillow format name."""
+
+DEFAULT_FPS = 30.0
+"""Frame rate of a clip encoded without one (SPEC §1's 30 frames/s)."""
 
 
 class VideoEncodingError(RuntimeError):
@@ -38,8 +44,6 @@ class VideoEncodingError(RuntimeError):
 class VideoConfig:
     """How clips and posters are encoded."""
 
-    fps: int = 30
-    """Frames per second: one frame per env step, so L = 30 steps play for 1 s (SPEC §1)."""
     preset: str = "ultrafast"
     """x264 preset; "ultrafast" is the cheapest to encode (pool preparation is on the
     critical path of every round); "superfast" costs ~30 % more CPU for a third of the bytes
@@ -52,8 +56,6 @@ class VideoConfig:
     """JPEG quality of posters (ignored for PNG)."""
 
     def __post_init__(self) -> None:
-        if self.fps < 1:
-            raise ValueError(f"fps must be >= 1, got {self.fps}")
         if not 0 <= self.crf <= 51:
             raise ValueError(f"crf must be in 0..51, got {self.crf}")
         if self.poster_format not in POSTER_FORMATS:
@@ -93,15 +95,18 @@ def check_frames(frames: np.ndarray) -> np.ndarray:
     return np.ascontiguousarray(frames)
 
 
-def encode_mp4(frames: np.ndarray, path: Path, cfg: VideoConfig | None = None) -> None:
-    """Encode frames (L, H, W, 3) uint8 RGB as an H.264 yuv420p faststart MP4 at `path`.
+def encode_mp4(
+    frames: np.ndarray, path: Path, cfg: VideoConfig | None = None, fps: float = DEFAULT_FPS
+) -> None:
+    """Encode frames (F, H, W, 3) uint8 RGB as an H.264 yuv420p faststart MP4 at `path`,
+    playing at `fps` frames per second.
 
-    The file has exactly L frames. Raises ValueError for bad frames (`check_frames`) and
-    VideoEncodingError when ffmpeg fails.
+    The file has exactly F frames. Raises ValueError for bad frames (`check_frames`) or
+    frame rate, and VideoEncodingError when ffmpeg fails.
     """
     frames = check_frames(frames)
     _, height, width, _ = frames.shape
-    with ClipEncoder([path], len(frames), width, height, cfg) as encoder:
+    with ClipEncoder([path], len(frames), width, height, cfg, fps) as encoder:
         for frame in frames:
             encoder.write(frame)
 
@@ -109,11 +114,12 @@ def encode_mp4(frames: np.ndarray, path: Path, cfg: VideoConfig | None = None) -
 class ClipEncoder:
     """Encodes consecutive runs of `length` frames into one MP4 each, in one ffmpeg process.
 
-    Write ``len(paths) * length`` frames (H, W, 3) uint8 in order: frames k·L … (k+1)·L − 1
-    become ``paths[k]``. Each output has its own encoder, fed only its own frames (ffmpeg's
-    trim filter), so a file is byte-identical to encoding its frames alone; one process
-    per batch saves ffmpeg's start-up (~20 ms) per clip, and frames are encoded while the
-    caller renders the next ones. Use as a context manager: leaving it waits for ffmpeg.
+    Write ``len(paths) * length`` frames (H, W, 3) uint8 in order: frames k·F … (k+1)·F − 1
+    become ``paths[k]`` (F = `length`, frames per clip), played at `fps` frames per second.
+    Each output has its own encoder, fed only its own frames (ffmpeg's trim filter), so a
+    file is byte-identical to encoding its frames alone; one process per batch saves
+    ffmpeg's start-up (~20 ms) per clip, and frames are encoded while the caller renders the
+    next ones. Use as a context manager: leaving it waits for ffmpeg.
 
     Raises (from `write` or on exit):
         ValueError: a frame of the wrong shape or type.
@@ -127,6 +133,7 @@ class ClipEncoder:
         width: int,
         height: int,
         cfg: VideoConfig | None = None,
+        fps: float = DEFAULT_FPS,
     ) -> None:
         if not paths or length < 1:
             raise ValueError(f"need at least one output of >= 1 frames, got {len(paths)}, {length}")
@@ -152,7 +159,7 @@ class ClipEncoder:
             "-s",
             f"{width}x{height}",
             "-framerate",
-            str(cfg.fps),
+            frame_rate(fps),
             "-i",
             "pipe:0",
         ]
@@ -208,6 +215,18 @@ class ClipEncoder:
     def _error_text(self) -> str:
         self._stderr.seek(0)
         return self._stderr.read().decode(errors="replace").strip()[-500:]
+
+
+def frame_rate(fps: float) -> str:
+    """`fps` as the fraction ffmpeg reads exactly, e.g. 31.25 → "125/4", 30 → "30/1".
+
+    Raises:
+        ValueError: not a positive finite rate.
+    """
+    if not math.isfinite(fps) or fps <= 0:
+        raise ValueError(f"fps must be a positive number, got {fps}")
+    rate = Fraction(fps).limit_denominator(1001)
+    return f"{rate.numerator}/{rate.denominator}"
 
 
 def _output_options(first: int, end: int, cfg: VideoConfig) -> list[str]:

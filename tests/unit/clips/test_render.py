@@ -188,3 +188,45 @@ def test_windows_of_episodes_of_different_lengths_replay_to_their_ends(tmp_path:
     assert sorted(rendered) == sorted((f.episode, f.start) for f in fragments)
     assert all(frames.shape == (3, 32, 32, 3) for frames in rendered.values())
     env.close()
+
+
+def test_strided_windows_show_every_kth_frame_of_the_unstrided_ones() -> None:
+    # Hopper plays at real speed with a frame every 4th step of 0.008 s (clips.timing)
+    settings = FrameSettings("Hopper", width=32, height=32)
+    episode = sample_trajectories(
+        lambda: make_env("Hopper"),
+        RandomPolicy(make_env("Hopper").action_space),
+        1,
+        np.random.default_rng(5),
+        max_steps=60,
+    )[0]
+    env = make_render_env(settings)
+    starts, length = [3, 30], 23
+    every = dict(replay_windows(env, episode.reset_seed, episode.actions, starts, length))
+    strided = dict(
+        replay_windows(
+            env, episode.reset_seed, episode.actions, starts, length, episode.obs, stride=4
+        )
+    )
+    for start in starts:
+        assert every[start].shape[0] == length
+        assert strided[start].shape == (6, 32, 32, 3)  # ⌈23 / 4⌉
+        np.testing.assert_array_equal(strided[start], every[start][::4])
+    with pytest.raises(ValueError, match="stride"):
+        list(replay_windows(env, episode.reset_seed, episode.actions, starts, length, stride=0))
+    env.close()
+
+
+def test_a_strided_job_stores_clips_of_its_frames_at_its_rate(tmp_path: Path) -> None:
+    episode = _episodes(1)[0]
+    job = dataclasses.replace(_job(episode, (0, 10), 10), stride=3, fps=12.5)
+    assert job.clip_frames == 4 and job.frames == 8
+    store = ClipStore(tmp_path)
+    report = run_job(job, store, make_render_env(SETTINGS))
+    for clip in report.clips:
+        info = probe(store.path(clip.clip))
+        assert info.frames == 4 and info.fps == 12.5
+    decoded = read_frames(store.path(report.clips[1].clip))
+    obs = episode.obs[10 + 2 * 3]  # frame 2 of the window at 10
+    expected = draw_grid(5, obs[:2].astype(int), obs[2:].astype(int), SIZE, SIZE)
+    assert np.abs(decoded[2].astype(int) - expected).mean() < 8

@@ -12,6 +12,7 @@ from groupwise.clips.video import (
     VideoConfig,
     VideoEncodingError,
     encode_mp4,
+    frame_rate,
     poster_bytes,
     probe,
     read_frames,
@@ -39,11 +40,28 @@ def test_clip_has_exactly_l_frames_and_is_h264_yuv420p_faststart(tmp_path: Path)
     assert info.faststart
 
 
-def test_frame_rate_and_length_follow_the_config(tmp_path: Path) -> None:
+def test_frame_rate_and_length_follow_the_request(tmp_path: Path) -> None:
     path = tmp_path / "clip.mp4"
-    encode_mp4(_frames(12), path, VideoConfig(fps=24, preset="veryfast"))
+    encode_mp4(_frames(12), path, VideoConfig(preset="veryfast"), fps=24)
     info = probe(path)
     assert info.frames == 12 and info.fps == 24
+
+
+@pytest.mark.parametrize(
+    ("fps", "rate"), [(31.25, "125/4"), (20.0, "20/1"), (1000 / 33, "1000/33")]
+)
+def test_a_fractional_real_speed_rate_is_encoded_exactly(
+    tmp_path: Path, fps: float, rate: str
+) -> None:
+    # Hopper's clips play a frame every 4th step of 0.008 s: 31.25 frames/s
+    assert frame_rate(fps) == rate
+    path = tmp_path / "clip.mp4"
+    encode_mp4(_frames(47), path, fps=fps)
+    info = probe(path)
+    assert info.frames == 47
+    assert info.fps == pytest.approx(fps, abs=0.01)
+    with pytest.raises(ValueError, match="fps"):
+        frame_rate(0.0)
 
 
 def test_equal_frames_give_byte_identical_files(tmp_path: Path) -> None:
