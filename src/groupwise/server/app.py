@@ -6,14 +6,16 @@ in ``app.state.context``. The app's lifespan runs the worker supervisor (when
 
 Errors are JSON ``{"detail": "one sentence"}``: the repositories' refusals map to 404 / 409 /
 422 (`groupwise.storage.errors`), FastAPI's validation errors are flattened into one
-sentence naming each bad field, and an unexpected exception is logged and answered 500
-without internals.
+sentence naming each bad field (a body that is not JSON: 400 naming where the decoder
+stopped), and an unexpected exception is logged and answered 500 without internals.
 """
 
 import asyncio
 import contextlib
+import json
 import logging
 from collections.abc import AsyncIterator
+from typing import Any
 
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
@@ -25,7 +27,7 @@ from groupwise.server.context import AppContext
 from groupwise.server.routes import clips, events, judgements, meta, pairwise, rounds, sessions
 from groupwise.server.routes import transfer as transfer_routes
 from groupwise.server.routes.frontend import mount_frontend
-from groupwise.server.security import GuardMiddleware, trusted_hosts
+from groupwise.server.security import JSON_TYPE, GuardMiddleware, trusted_hosts
 from groupwise.server.transfer import UnsupportedMediaError
 from groupwise.storage import ConflictError, InvalidError, NotFoundError, StorageError
 
@@ -67,7 +69,14 @@ def create_app(config: AppConfig) -> FastAPI:
         redoc_url=None,
     )
     app.state.context = context
-    app.add_middleware(GuardMiddleware, token=config.token, max_body_bytes=config.max_body_bytes)
+    for module in (meta, sessions, transfer_routes, rounds, judgements, pairwise, events, clips):
+        app.include_router(module.router)
+    app.add_middleware(
+        GuardMiddleware,
+        token=config.token,
+        max_body_bytes=config.max_body_bytes,
+        own_body_types=own_body_types(app),
+    )
     # Added last, so it runs first: a foreign Host is refused before anything else is checked.
     app.add_middleware(
         TrustedHostMiddleware, allowed_hosts=trusted_hosts(config.allowed_hosts), www_redirect=False
@@ -75,10 +84,24 @@ def create_app(config: AppConfig) -> FastAPI:
     app.add_exception_handler(StorageError, _storage_error)  # type: ignore[arg-type]
     app.add_exception_handler(RequestValidationError, _validation_error)  # type: ignore[arg-type]
     app.add_exception_handler(Exception, _unexpected_error)
-    for module in (meta, sessions, transfer_routes, rounds, judgements, pairwise, events, clips):
-        app.include_router(module.router)
     mount_frontend(app, config.static_root)
     return app
+
+
+def own_body_types(app: FastAPI) -> frozenset[str]:
+    """Paths whose documented request body names no JSON type: those routes take other
+    bodies (the import: JSONL, Parquet) and check the content type themselves.
+
+    Read from the OpenAPI schema, the routes' own declaration. A path with parameters would
+    need a pattern; none takes another body type, and one that did would answer 415 (loudly).
+    """
+    paths = set()
+    for path, operations in app.openapi()["paths"].items():
+        for operation in operations.values():
+            content = operation.get("requestBody", {}).get("content", {})
+            if content and JSON_TYPE not in content:
+                paths.add(path)
+    return frozenset(paths)
 
 
 def _storage_error(request: Request, error: StorageError) -> JSONResponse:
@@ -87,11 +110,26 @@ def _storage_error(request: Request, error: StorageError) -> JSONResponse:
 
 
 def _validation_error(request: Request, error: RequestValidationError) -> JSONResponse:
+    malformed = next((e for e in error.errors() if e.get("type") == "json_invalid"), None)
+    if malformed is not None:
+        return JSONResponse({"detail": _json_error(malformed, error.body)}, status_code=400)
     parts = []
     for item in error.errors()[:10]:
         where = ".".join(str(p) for p in item.get("loc", ()) if p != "body") or "body"
         parts.append(f"{where}: {item.get('msg', 'invalid')}")
     return JSONResponse({"detail": "; ".join(parts) or "invalid request"}, status_code=422)
+
+
+def _json_error(item: dict[str, Any], document: Any) -> str:
+    """One sentence for FastAPI's "JSON decode error" (whose ``loc`` is the character offset
+    and ``ctx`` the decoder's message), with the line and column the decoder would name."""
+    reason = str(item.get("ctx", {}).get("error", "invalid JSON"))
+    loc = item.get("loc", ())
+    position = loc[-1] if loc else None
+    if isinstance(document, str) and isinstance(position, int):
+        where = json.JSONDecodeError(reason, document, position)
+        reason = f"{reason} at line {where.lineno} column {where.colno}"
+    return f"request body is not valid JSON: {reason}"
 
 
 def _unexpected_error(request: Request, error: Exception) -> JSONResponse:

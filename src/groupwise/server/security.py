@@ -7,13 +7,24 @@ For every HTTP request, in this order:
    header"). A loopback server thereby refuses pages that reach it through DNS rebinding (a
    foreign name resolving to 127.0.0.1): without CORS a foreign page cannot read the
    answers, but could still send requests.
-2. **Token** (`GuardMiddleware`): with a token, every ``/api`` and ``/clips`` request needs
+2. **Same origin** (`GuardMiddleware`): a state change (POST, PUT, PATCH, DELETE) that a
+   browser marks as coming from another site → 403: ``Sec-Fetch-Site`` other than
+   ``same-origin`` or ``none``, or an ``Origin`` other than the server's own (scheme and
+   Host header). Clients that send neither header (scripts, the CLI, `WebTeacher`) are not
+   browsers acting for a foreign page; the token guards them.
+3. **Token** (`GuardMiddleware`): with a token, every ``/api`` and ``/clips`` request needs
    ``Authorization: Bearer <token>`` or ``?token=<token>`` (for ``<video src>``) → else 401.
    Compared in constant time. The built web UI's files stay public (they hold no data).
-3. **Body size** (`GuardMiddleware`): a body over `max_body_bytes` → 413, whether announced
+4. **Body size** (`GuardMiddleware`): a body over `max_body_bytes` → 413, whether announced
    by Content-Length or streamed in chunks (counted as it arrives).
+5. **JSON only** (`GuardMiddleware`): a state change under ``/api`` with a body that is not
+   ``application/json`` → 415, whether the Content-Type names another type or is missing
+   while a body is sent. The routes in `own_body_types` (the import, which takes JSONL and
+   Parquet) check their types themselves. A plain HTML form or a "simple" cross-site fetch
+   can only send form or text bodies, so this alone keeps them from changing anything.
 
-No CORS headers are ever added.
+No CORS headers are ever added, so a foreign page cannot send ``application/json`` at all
+(it needs a preflight, which is never granted).
 """
 
 import json
@@ -25,10 +36,16 @@ from starlette.exceptions import HTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 PROTECTED_PREFIXES = ("/api", "/clips")
+STATE_CHANGING = frozenset({"POST", "PUT", "PATCH", "DELETE"})
+SAME_ORIGIN_SITES = frozenset({"same-origin", "none"})
+"""``Sec-Fetch-Site`` values of requests from the app's own page (``none``: the user's own
+navigation, e.g. a bookmark)."""
+JSON_TYPE = "application/json"
 
 
-class _BodyTooLarge(HTTPException):
-    """Raised from `receive`: FastAPI passes HTTP exceptions on (others become 400s)."""
+class _Refused(HTTPException):
+    """Raised from `receive` (body too large, or a body without a type): FastAPI passes
+    HTTP exceptions on (others become 400s)."""
 
 
 async def _send_error(send: Send, status: int, detail: str, extra: dict[str, str]) -> None:
@@ -53,19 +70,71 @@ def trusted_hosts(allowed_hosts: tuple[str, ...] | None) -> list[str]:
     return [f"[{h}]" if ":" in h and not h.startswith("[") else h for h in allowed_hosts]
 
 
-class GuardMiddleware:
-    """Token check and body limit (module docstring); the Host check is Starlette's."""
+def cross_site(scope: Scope, headers: Headers) -> str | None:
+    """Why a browser request comes from another site (step 2 of the module docstring), or
+    None when it comes from the app's own page or from no browser at all.
 
-    def __init__(self, app: ASGIApp, *, token: str | None, max_body_bytes: int) -> None:
+    The server's own origin is its scheme and the Host header, as the browser that loaded
+    the page spelled it (behind a proxy that rewrites Host, the proxy must keep it).
+    """
+    site = headers.get("sec-fetch-site")
+    if site is not None and site.strip().lower() not in SAME_ORIGIN_SITES:
+        return f"a {site} request may not change anything here; use the app's own page"
+    origin = headers.get("origin")
+    own = f"{scope.get('scheme', 'http')}://{headers.get('host', '')}"
+    if origin is not None and origin.strip().lower() != own.lower():
+        return f"a request from {origin} may not change anything here; use the app's own page"
+    return None
+
+
+def not_json(headers: Headers) -> str | None:
+    """Why a state change's body is not JSON (step 5 of the module docstring), or None.
+
+    A request without Content-Type passes only when it announces no body; a streamed one is
+    checked as its body arrives (`GuardMiddleware`).
+    """
+    content_type = headers.get("content-type")
+    if content_type is None:
+        length = headers.get("content-length")
+        if length is not None and length.isdigit() and int(length) > 0:
+            return f"send the body as {JSON_TYPE}; the request names no Content-Type"
+        return None
+    kind = content_type.split(";", 1)[0].strip().lower()
+    if kind != JSON_TYPE:
+        return f"send the body as {JSON_TYPE}, not {kind or 'an empty Content-Type'}"
+    return None
+
+
+class GuardMiddleware:
+    """Same-origin check, token check, body limit and JSON-only bodies (module docstring);
+    the Host check is Starlette's.
+
+    `own_body_types`: paths of routes that take other bodies than JSON and check the type
+    themselves (the import).
+    """
+
+    def __init__(
+        self,
+        app: ASGIApp,
+        *,
+        token: str | None,
+        max_body_bytes: int,
+        own_body_types: frozenset[str] = frozenset(),
+    ) -> None:
         self.app = app
         self.token = token
         self.max_body_bytes = max_body_bytes
+        self.own_body_types = own_body_types
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
             await self.app(scope, receive, send)
             return
         headers = Headers(scope=scope)
+        changes = scope["method"] in STATE_CHANGING
+        if changes and (reason := cross_site(scope, headers)) is not None:
+            await _send_error(send, 403, reason, {})
+            return
         if self.token is not None and scope["path"].startswith(PROTECTED_PREFIXES):
             if not self._authorised(scope, headers):
                 await _send_error(
@@ -79,7 +148,13 @@ class GuardMiddleware:
         if length is not None and (not length.isdigit() or int(length) > self.max_body_bytes):
             await _send_error(send, 413, self._too_large(), {})
             return
-        await self._limited(scope, receive, send)
+        path = scope["path"]
+        json_only = changes and path.startswith("/api") and path not in self.own_body_types
+        if json_only and (reason := not_json(headers)) is not None:
+            await _send_error(send, 415, reason, {})
+            return
+        untyped = json_only and "content-type" not in headers
+        await self._limited(scope, receive, send, untyped)
 
     def _too_large(self) -> str:
         return f"the request body is larger than {self.max_body_bytes // 1024} KiB"
@@ -95,7 +170,8 @@ class GuardMiddleware:
         query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
         return any(secrets.compare_digest(v.encode(), expected) for v in query.get("token", []))
 
-    async def _limited(self, scope: Scope, receive: Receive, send: Send) -> None:
+    async def _limited(self, scope: Scope, receive: Receive, send: Send, untyped: bool) -> None:
+        """Run the app, counting the body as it arrives; `untyped`: a body → 415."""
         received = 0
         started = False
 
@@ -103,9 +179,12 @@ class GuardMiddleware:
             nonlocal received
             message = await receive()
             if message["type"] == "http.request":
-                received += len(message.get("body", b""))
+                chunk = len(message.get("body", b""))
+                received += chunk
                 if received > self.max_body_bytes:
-                    raise _BodyTooLarge(413, self._too_large())
+                    raise _Refused(413, self._too_large())
+                if untyped and chunk:
+                    raise _Refused(415, f"send the body as {JSON_TYPE}; it names no Content-Type")
             return message
 
         async def tracking_send(message: Message) -> None:
@@ -116,6 +195,6 @@ class GuardMiddleware:
 
         try:
             await self.app(scope, limited_receive, tracking_send)
-        except _BodyTooLarge:
+        except _Refused as refused:
             if not started:
-                await _send_error(send, 413, self._too_large(), {})
+                await _send_error(send, refused.status_code, refused.detail, {})
