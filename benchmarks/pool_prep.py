@@ -1,7 +1,8 @@
 """Benchmark: preparing a behaviour pool (SPEC §3.1-3.2, §4, §9): time per phase.
 
-Prepares a pool of 200 Hopper behaviours (L = 30, random policy, 240×240 clips, 2 render
-workers) into a temporary directory with `groupwise.prepare.prepare_pool` and prints a
+Prepares a pool of 200 Hopper behaviours (the env's clip duration, 1.5 s = 188 steps shown
+as 47 frames at real speed; `--length 30` for the study's L; random policy, 240×240 clips, 2
+render workers) into a temporary directory with `groupwise.prepare.prepare_pool` and prints a
 Markdown table. Render and encode run inside the workers, overlapping each other (a job's
 ffmpeg encodes while its worker renders the next window) and the parent's features, DTW and
 tree: their rows give worker-seconds (ffmpeg: CPU seconds) and the clip phase's wall time split
@@ -9,7 +10,8 @@ in proportion to them. The CPU time of all processes is printed too: unlike wall
 hardly changes when other processes compete for the cores.
 Target: total ≤ 20 s on a 2-core machine.
 
-    python benchmarks/pool_prep.py [--env Hopper] [--n 200] [--repeats 1] [--workers 2]
+    python benchmarks/pool_prep.py [--env Hopper] [--n 200] [--length L | --seconds S]
+                                   [--oversample 1] [--repeats 1] [--workers 2]
 """
 
 import argparse
@@ -23,6 +25,7 @@ from pathlib import Path
 
 import numpy as np
 
+from groupwise.clips.timing import env_clip_timing
 from groupwise.envs.rendering import ensure_gl_backend
 from groupwise.prepare import PoolConfig, PoolTimings, load_policy, prepare_pool
 
@@ -93,20 +96,33 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
     parser.add_argument("--env", default="Hopper")
     parser.add_argument("--n", type=int, default=200, help="behaviours in the pool")
-    parser.add_argument("--length", type=int, default=30)
+    parser.add_argument("--length", type=int, help="steps per behaviour (default: --seconds)")
+    parser.add_argument("--seconds", type=float, help="simulated seconds (default: the env's)")
+    parser.add_argument(
+        "--oversample", type=float, default=1.0, help="windows sampled per kept one (app: 2)"
+    )
     parser.add_argument("--workers", type=int, default=2)
     parser.add_argument("--repeats", type=int, default=1, help="runs; the median is shown")
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args([] if argv is None else list(argv))
     backend = ensure_gl_backend()
-    cfg = PoolConfig(env=args.env, size=args.n, length=args.length, workers=args.workers)
+    clip = env_clip_timing(args.env, args.seconds, steps=args.length)
+    cfg = PoolConfig(
+        env=args.env,
+        size=args.n,
+        length=clip.steps,
+        oversample=args.oversample,
+        workers=args.workers,
+    )
     load_before = os.getloadavg()[0]
     runs = [run_once(cfg, args.seed + k) for k in range(args.repeats)]
     load_after = os.getloadavg()[0]
     median = statistics.median(t.total_s for t, _ in runs)
     shown, cpu = min(runs, key=lambda run: abs(run[0].total_s - median))
     print(
-        f"Pool preparation: {args.n} {args.env} behaviours × {args.length} steps, random "
+        f"Pool preparation: {args.n} {args.env} behaviours × {clip.steps} steps "
+        f"({clip.seconds:.2f} s; clips of {clip.frames} frames, every {clip.stride}. step, "
+        f"{clip.fps:.4g} fps), {args.oversample:g}× windows sampled, random "
         f"policy, {cfg.width}×{cfg.height}, x264 {cfg.video.preset}, {cfg.workers} workers, "
         f"{os.cpu_count()} CPUs, MUJOCO_GL={backend}; load average {load_before:.1f} before, "
         f"{load_after:.1f} after.\n"

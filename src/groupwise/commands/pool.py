@@ -18,7 +18,19 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
         help='"random" or a checkpoint directory (…/checkpoints/round-NNNN)',
     )
     pool.add_argument("--n", type=positive_int, default=200, help="behaviours in the pool")
-    pool.add_argument("--length", type=positive_int, default=30, help="steps per behaviour")
+    pool.add_argument(
+        "--length",
+        type=positive_int,
+        default=None,
+        help="steps per behaviour (default: --seconds of simulated time)",
+    )
+    pool.add_argument(
+        "--seconds",
+        type=float,
+        default=None,
+        help="simulated seconds per behaviour, played at real speed (default: the env's, "
+        "e.g. 1.5 for Hopper)",
+    )
     pool.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
     pool.add_argument("--out", type=Path, required=True, help="output directory")
     pool.add_argument(
@@ -39,14 +51,18 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
 def run(args: argparse.Namespace) -> int:
     import numpy as np
 
+    from groupwise.clips.timing import env_clip_timing
     from groupwise.clips.video import VideoConfig
     from groupwise.prepare import PoolConfig, load_policy, prepare_pool
 
     try:
+        if args.length is not None and args.seconds is not None:
+            raise ValueError("give --length or --seconds, not both")
+        timing = env_clip_timing(args.env, args.seconds, steps=args.length)
         cfg = PoolConfig(
             env=args.env,
             size=args.n,
-            length=args.length,
+            length=timing.steps,
             width=args.size,
             height=args.size,
             workers=args.workers,
@@ -70,8 +86,10 @@ def run(args: argparse.Namespace) -> int:
     except ValueError as error:  # e.g. an env without a fixed horizon
         raise UsageError(str(error)) from None
     t = pool.timings
+    clip = pool.timing
     print(
-        f"{len(pool.fragments)} behaviours of {cfg.length} steps, "
+        f"{len(pool.fragments)} behaviours of {clip.steps} steps ({clip.seconds:.2f} s, "
+        f"clips of {clip.frames} frames at {clip.fps:.4g} fps: real speed), "
         f"{len(pool.candidates)} group candidates, in {t.total_s:.1f} s "
         f"(sample {t.sample_s:.1f}, clips {t.clips_s:.1f}, write {t.write_s:.1f})\n"
         f"pool: {out}\nclips: {pool.store.root}"
