@@ -1,10 +1,13 @@
-"""The six groupwise envs, their Gymnasium registrations, and how to make any env by name.
+"""The six groupwise envs, the three target envs, their Gymnasium registrations, and how to
+make any env by name.
 
 Every groupwise env has a fixed horizon and never terminates early (an episode's length must
 not leak reward information, SPEC §2): ``terminated`` is always False and ``truncated`` is
 True exactly at step `horizon`. The per-step true reward is the env's reward and is also in
 ``info["true_reward"]``. Ids live under the ``groupwise/`` namespace, e.g.
-``groupwise/Hopper-v0``; `make_standard_env` gives the unmodified Gymnasium env for
+``groupwise/Hopper-v0``. The target envs (`TARGET_ENVS`, e.g. ``groupwise/Hopper-backflip-v0``)
+are reward-free: their true reward is a case study's target score (`groupwise.envs.targets`).
+`make_standard_env` gives the unmodified Gymnasium env for
 evaluating a trained policy the way the rest of the field does. `make_env` also makes any
 other Gymnasium env, by id or as ``"module:Env-v0"``; such envs may terminate early and may
 have no time limit at all (`horizon` is then None).
@@ -18,6 +21,7 @@ import gymnasium as gym
 from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
 
 from groupwise.envs.rendering import OFFSCREEN_MODES, FastMujocoRendering
+from groupwise.envs.targets import TARGETS
 
 NAMESPACE = "groupwise"
 
@@ -108,10 +112,37 @@ ENVS: dict[str, EnvEntry] = {
 }
 """The groupwise envs by short name."""
 
+_TARGET_MAKERS = {
+    "hopper-backflip": "make_hopper_backflip",
+    "halfcheetah-standup": "make_half_cheetah_standup",
+    "walker-splits": "make_walker2d_splits",
+}
+
+TARGET_ENVS: dict[str, EnvEntry] = {
+    target.env: EnvEntry(
+        name=target.env,
+        entry_point=f"groupwise.envs.targets:{_TARGET_MAKERS[name]}",
+        horizon=ENVS[target.base].horizon,
+        standard_id=None,
+        changes=(
+            f"{target.base} with reward 0 and the {name} target score in "
+            f'info["target_score"] and info["true_reward"]; no termination'
+        ),
+    )
+    for name, target in TARGETS.items()
+}
+"""The case studies' target envs (`groupwise.envs.targets`) by short name, e.g.
+"Hopper-backflip": reward-free, their true reward is the target's score."""
+
+
+def _entry(name: str) -> EnvEntry | None:
+    return ENVS.get(name) or TARGET_ENVS.get(name)
+
 
 def register_envs() -> None:
-    """Register every env in `ENVS` with Gymnasium; calling it again does nothing."""
-    for entry in ENVS.values():
+    """Register every env in `ENVS` and `TARGET_ENVS` with Gymnasium; calling it again does
+    nothing."""
+    for entry in (*ENVS.values(), *TARGET_ENVS.values()):
         if entry.gym_id not in gym.registry:
             gym.register(
                 id=entry.gym_id,
@@ -121,7 +152,7 @@ def register_envs() -> None:
 
 
 def resolve_id(name: str) -> str:
-    """The Gymnasium id for a short name in `ENVS`, a registered Gymnasium id, or
+    """The Gymnasium id for a short name in `ENVS` or `TARGET_ENVS`, a registered Gymnasium id, or
     ``"module:Env-v0"``, the form `gymnasium.make` accepts for an env that importing its
     module registers (the module is imported here, so the bare id it returns can be made).
 
@@ -129,8 +160,8 @@ def resolve_id(name: str) -> str:
         ValueError: `name` is none of these, its module cannot be imported, or importing it
             registers no such id.
     """
-    if name in ENVS:
-        return ENVS[name].gym_id
+    if (entry := _entry(name)) is not None:
+        return entry.gym_id
     register_envs()
     if name in gym.registry:
         return name
@@ -144,8 +175,8 @@ def resolve_id(name: str) -> str:
             return gym_id
         raise ValueError(f"env {name!r}: importing {module!r} registered no env {gym_id!r}")
     raise ValueError(
-        f"unknown env {name!r}: use one of {', '.join(ENVS)}, a registered Gymnasium id, or "
-        "'module:Env-v0' for an env that importing its module registers"
+        f"unknown env {name!r}: use one of {', '.join([*ENVS, *TARGET_ENVS])}, a registered "
+        "Gymnasium id, or 'module:Env-v0' for an env that importing its module registers"
     )
 
 
@@ -195,8 +226,8 @@ def horizon(name: str) -> int | None:
     Raises:
         ValueError: unknown name.
     """
-    if name in ENVS:
-        return ENVS[name].horizon
+    if (entry := _entry(name)) is not None:
+        return entry.horizon
     return gym.spec(resolve_id(name)).max_episode_steps
 
 
