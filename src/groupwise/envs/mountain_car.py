@@ -5,13 +5,12 @@ left wall and the clamp at x = 0.6, where the car may sit once past the goal). O
 reward and the end of the episode differ; the horizon (250 steps) comes from the registration.
 """
 
-import os
 from typing import Any
 
 import numpy as np
 from gymnasium.envs.classic_control.continuous_mountain_car import Continuous_MountainCarEnv
 
-from groupwise.envs.rendering import DEFAULT_FRAME_SIZE
+from groupwise.envs.rendering import DEFAULT_FRAME_SIZE, use_headless_sdl
 from groupwise.envs.true_reward import TRUE_REWARD_KEY
 
 GOAL_POSITION = 0.45
@@ -62,8 +61,6 @@ class DenseMountainCarEnv(Continuous_MountainCarEnv):
 
     def render(self) -> Any:
         """A (height, width, 3) uint8 frame in "rgb_array" mode (see the class docstring)."""
-        os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
         if self.render_mode != "human":
-            # pygame.display.init() would otherwise connect to $DISPLAY if one is set.
-            os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
+            use_headless_sdl()
         return super().render()

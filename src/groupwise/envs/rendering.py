@@ -1,4 +1,5 @@
-"""Offscreen rendering: choosing MuJoCo's GL backend and rendering MuJoCo envs fast on a CPU.
+"""Offscreen rendering: choosing MuJoCo's GL backend and rendering MuJoCo envs fast on a CPU,
+and keeping pygame (Gymnasium's classic-control renderer) away from the desktop.
 
 No function here ever needs an X server. MuJoCo renders through EGL or OSMesa, chosen once per
 process by `ensure_gl_backend` (the choice is stored in ``MUJOCO_GL`` so that worker processes
@@ -43,6 +44,31 @@ context.make_current()
 mujoco.MjrContext(mujoco.MjModel.from_xml_string("<mujoco/>"), mujoco.mjtFontScale.mjFONTSCALE_100)
 context.free()
 """
+
+
+HEADLESS_SDL: dict[str, str] = {
+    "SDL_VIDEODRIVER": "dummy",
+    "SDL_AUDIODRIVER": "dummy",
+    "PYGAME_HIDE_SUPPORT_PROMPT": "1",
+}
+"""What `use_headless_sdl` sets, unless the user set it: SDL draws into memory and plays no
+sound, and pygame prints no greeting."""
+
+
+def use_headless_sdl() -> None:
+    """Make pygame render offscreen, quietly, in this process and the ones it starts.
+
+    Gymnasium's classic-control envs (Pendulum-v1, MountainCar, CartPole, ...) draw their
+    ``rgb_array`` frames with pygame, whose SDL would probe the desktop's video drivers: with
+    no Wayland session it prints "XDG_RUNTIME_DIR is invalid or not set in the environment"
+    on stderr (once per process: three times for ``groupwise serve --env Pendulum-v1``, the
+    worker and its two render processes), and with ``$DISPLAY`` set it connects to the X
+    server. Each variable of `HEADLESS_SDL` is set only when unset, so a user's choice
+    stands. SDL reads them when pygame's display is first initialised, so this must run
+    before an env's first frame; spawned processes inherit them.
+    """
+    for key, value in HEADLESS_SDL.items():
+        os.environ.setdefault(key, value)
 
 
 class RenderingUnavailableError(RuntimeError):

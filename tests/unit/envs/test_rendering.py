@@ -2,6 +2,8 @@
 
 import gc
 import os
+import subprocess
+import sys
 from typing import Any
 
 import gymnasium as gym
@@ -139,3 +141,37 @@ def test_failing_gl_context_gives_a_clear_error(monkeypatch: pytest.MonkeyPatch)
     with pytest.raises(RenderingUnavailableError, match="MUJOCO_GL='egl'") as caught:
         env.render()
     assert "libegl1 libgl1-mesa-dri" in str(caught.value)
+
+
+_PENDULUM_FRAME = """
+from groupwise.clips.replay import FrameSettings, make_render_env
+env = make_render_env(FrameSettings("Pendulum-v1", 32, 32))
+env.reset(seed=0)
+print(env.render().shape)
+"""
+
+
+def test_a_classic_control_frame_renders_without_desktop_warnings() -> None:
+    # as the app's worker would: no desktop session, no SDL settings of the user's
+    scrubbed = ("XDG_RUNTIME_DIR", "DISPLAY", "WAYLAND_DISPLAY", *rendering.HEADLESS_SDL)
+    env = {k: v for k, v in os.environ.items() if k not in scrubbed}
+    result = subprocess.run(
+        [sys.executable, "-c", _PENDULUM_FRAME],
+        env=env,
+        capture_output=True,
+        text=True,
+        timeout=120,
+        check=False,
+    )
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip() == "(500, 500, 3)"  # Pendulum draws at its own size
+    assert "XDG_RUNTIME_DIR" not in result.stderr, result.stderr
+    assert "pygame" not in result.stdout + result.stderr  # no greeting either
+
+
+def test_headless_sdl_leaves_the_users_choice(monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setenv("SDL_VIDEODRIVER", "x11")
+    monkeypatch.delenv("SDL_AUDIODRIVER", raising=False)
+    rendering.use_headless_sdl()
+    assert os.environ["SDL_VIDEODRIVER"] == "x11"
+    assert os.environ["SDL_AUDIODRIVER"] == "dummy"
