@@ -353,6 +353,27 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/sessions/{session_id}/rounds/{round_index}/shown": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Shown
+         * @description A page shows the open round: the first report starts its timer (409 for a round that
+         *     is not the open one).
+         */
+        post: operations["shown_api_sessions__session_id__rounds__round_index__shown_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/sessions/{session_id}/rounds/{round_index}/tree": {
         parameters: {
             query?: never;
@@ -1038,9 +1059,14 @@ export interface components {
             paused: boolean;
             /**
              * Running
-             * @description whether the timer runs now (ready and not paused)
+             * @description whether the timer runs now (the round is open, shown and not paused)
              */
             running: boolean;
+            /**
+             * Shown At
+             * @description when a page first showed the current round; its timer runs from then (null: not shown yet, POST …/rounds/{r}/shown)
+             */
+            shown_at?: string | null;
         };
         /**
          * TreeNodeOut
@@ -2518,6 +2544,85 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["SuggestionOut"];
+                };
+            };
+            /** @description bad request */
+            400: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description missing or wrong token */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description unknown session, round or judgement */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not possible in the session's current phase */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description body too large */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description invalid input */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+        };
+    };
+    shown_api_sessions__session_id__rounds__round_index__shown_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description a session id */
+                session_id: string;
+                /** @description a round index */
+                round_index: number;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["SessionState"];
                 };
             };
             /** @description bad request */

@@ -62,7 +62,14 @@ class Timer(_Out):
     elapsed_s: float = Field(description="seconds the open round's timer has run")
     budget_s: float = Field(description="the round's time budget (0 = no limit)")
     paused: bool
-    running: bool = Field(description="whether the timer runs now (ready and not paused)")
+    running: bool = Field(
+        description="whether the timer runs now (the round is open, shown and not paused)"
+    )
+    shown_at: datetime | None = Field(
+        default=None,
+        description="when a page first showed the current round; its timer runs from then "
+        "(null: not shown yet, POST …/rounds/{r}/shown)",
+    )
 
 
 class Counts(_Out):

@@ -7,6 +7,8 @@ that should have ended (the supervisor also checks, for sessions nobody is looki
 
 from datetime import datetime
 
+from sqlalchemy.orm import Session as OrmSession
+
 from groupwise.envs import horizon
 from groupwise.server import schemas
 from groupwise.server.context import AppContext
@@ -17,8 +19,10 @@ from groupwise.storage.models import SessionRow, utcnow
 from groupwise.storage.settings import SessionSettings
 
 
-def state_of(session: SessionRow, counts: repo.Counts, now: datetime) -> schemas.SessionState:
-    """The `SessionState` of a session row."""
+def state_of(
+    session: SessionRow, counts: repo.Counts, now: datetime, shown_at: datetime | None = None
+) -> schemas.SessionState:
+    """The `SessionState` of a session row (`shown_at`: its current round's)."""
     settings = SessionSettings.model_validate(session.settings)
     return schemas.SessionState(
         id=session.id,
@@ -40,6 +44,7 @@ def state_of(session: SessionRow, counts: repo.Counts, now: datetime) -> schemas
             budget_s=settings.round_seconds,
             paused=session.paused,
             running=session.timer_started_at is not None,
+            shown_at=shown_at,
         ),
         counts=schemas.Counts(
             comparisons_round=counts.comparisons_round,
@@ -66,19 +71,22 @@ def close_if_due(db: Database, session_id: str) -> int:
         return repo.get_session(s, session_id).revision
 
 
+def _state(s: OrmSession, session: SessionRow, now: datetime) -> schemas.SessionState:
+    return state_of(session, repo.counts(s, session), now, repo.shown_at(s, session))
+
+
 def read_state(db: Database, session_id: str) -> schemas.SessionState:
     """The session's current state. Raises NotFoundError."""
     close_if_due(db, session_id)
     with db.read() as s:
-        session = repo.get_session(s, session_id)
-        return state_of(session, repo.counts(s, session), utcnow())
+        return _state(s, repo.get_session(s, session_id), utcnow())
 
 
 def list_states(db: Database) -> list[schemas.SessionState]:
     """Every session's state, newest first."""
     now = utcnow()
     with db.read() as s:
-        return [state_of(row, repo.counts(s, row), now) for row in repo.list_sessions(s)]
+        return [_state(s, row, now) for row in repo.list_sessions(s)]
 
 
 def check_env(env: str, settings: SessionSettings) -> None:
@@ -109,6 +117,14 @@ def create_session(context: AppContext, request: schemas.SessionCreate) -> schem
 def pause(db: Database, session_id: str) -> schemas.SessionState:
     with db.write() as s:
         repo.pause(s, session_id)
+    return read_state(db, session_id)
+
+
+def show_round(db: Database, session_id: str, round_index: int) -> schemas.SessionState:
+    """A page shows the open round: its timer starts the first time. Raises NotFoundError,
+    ConflictError."""
+    with db.write() as s:
+        repo.show_round(s, session_id, round_index)
     return read_state(db, session_id)
 
 

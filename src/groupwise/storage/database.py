@@ -26,7 +26,7 @@ from contextlib import contextmanager, nullcontext
 from pathlib import Path
 from typing import Any
 
-from sqlalchemy import Engine, create_engine, event
+from sqlalchemy import Engine, create_engine, event, inspect
 from sqlalchemy.engine import make_url
 from sqlalchemy.orm import Session, sessionmaker
 
@@ -83,8 +83,10 @@ class Database:
         return engine
 
     def create_schema(self) -> None:
-        """Create every table that does not exist yet (idempotent)."""
+        """Create every table that does not exist yet, and add the nullable columns a
+        database made by an older version lacks (idempotent)."""
         Base.metadata.create_all(self.write_engine)
+        add_missing_columns(self.write_engine)
 
     @contextmanager
     def read(self) -> Iterator[Session]:
@@ -107,6 +109,34 @@ class Database:
         self.read_engine.dispose()
         if self.write_engine is not self.read_engine:
             self.write_engine.dispose()
+
+
+def add_missing_columns(engine: Engine) -> list[str]:
+    """Add the model's nullable columns missing from existing tables; "table.column" of each.
+
+    A column added by a later version (``rounds.shown_at``) is nullable, so an older
+    database gains it with a portable ``ALTER TABLE … ADD COLUMN`` and keeps its rows.
+    Raises RuntimeError for a missing column that is not nullable (that needs a migration).
+    """
+    added: list[str] = []
+    with engine.begin() as connection:
+        existing = inspect(connection)
+        for table in Base.metadata.sorted_tables:
+            have = {column["name"] for column in existing.get_columns(table.name)}
+            for column in table.columns:
+                if column.name in have:
+                    continue
+                if not column.nullable:
+                    raise RuntimeError(
+                        f"the database lacks {table.name}.{column.name}; it was made by an "
+                        "incompatible version of groupwise"
+                    )
+                kind = column.type.compile(dialect=engine.dialect)
+                connection.exec_driver_sql(
+                    f'ALTER TABLE "{table.name}" ADD COLUMN "{column.name}" {kind}'
+                )
+                added.append(f"{table.name}.{column.name}")
+    return added
 
 
 def _sqlite_connect(dbapi_connection: Any, record: Any) -> None:

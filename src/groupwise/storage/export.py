@@ -4,7 +4,8 @@ JSONL (``format: groupwise.session-export/1``), one JSON object a line:
 
     {"type": "session", "format": …, "id", "env", "mode", "settings", "annotator",
      "phase", "round", "created_at"}
-    {"type": "round", "round": r, "pool_dir", "opened_at", "closed_at", "close_reason"}  …
+    {"type": "round", "round": r, "pool_dir", "opened_at", "shown_at", "closed_at",
+     "close_reason"}  …
     {"type": "judgement", "id", "seq", "client_id", "round", "left": [names],
      "right": [names], "label", "source", "seconds", "edits", "annotator", "created_at",
      "undone", "pairs": [{"a", "b", "label"}, …]}  … oldest first
@@ -72,6 +73,7 @@ class RoundLine(_Strict):
     round: int = Field(ge=0, le=10_000)
     pool_dir: str | None = Field(default=None, max_length=1000)
     opened_at: datetime | None = None
+    shown_at: datetime | None = None
     closed_at: datetime | None = None
     close_reason: str | None = Field(default=None, max_length=32)
 
@@ -132,6 +134,7 @@ def export_session(s: Session, session_id: str) -> SessionExport:
                 round=r.index,
                 pool_dir=r.pool_dir,
                 opened_at=r.opened_at,
+                shown_at=r.shown_at,
                 closed_at=r.closed_at,
                 close_reason=r.close_reason,
             )
@@ -324,6 +327,7 @@ def import_session(s: Session, export: SessionExport, now: datetime | None = Non
             phase=ROUND_CLOSED,
             pool_dir=line.pool_dir,
             opened_at=line.opened_at,
+            shown_at=line.shown_at,
             closed_at=line.closed_at,
             close_reason=line.close_reason,
         )

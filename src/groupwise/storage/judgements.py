@@ -238,7 +238,8 @@ def _check_groups(
     known = _behaviour_indices(s, round_id, [*judgement.left, *judgement.right])
     unknown = [name for name in (*judgement.left, *judgement.right) if name not in known]
     if unknown:
-        raise InvalidError(f"{', '.join(unknown)} are not behaviours of round {judgement.round}")
+        what = "is not a behaviour" if len(unknown) == 1 else "are not behaviours"
+        raise InvalidError(f"{', '.join(unknown)} {what} of round {judgement.round}")
     return (
         tuple(known[name] for name in judgement.left),
         tuple(known[name] for name in judgement.right),

@@ -89,7 +89,8 @@ class SessionRow(Base):
     timer_elapsed_s: Mapped[float] = mapped_column(Float, default=0.0)
     """Seconds the open round's timer ran before its current run (see `timer_started_at`)."""
     timer_started_at: Mapped[datetime | None] = mapped_column(default=None)
-    """When the timer's current run started; None while it is stopped (paused, no round)."""
+    """When the timer's current run started; None while it is stopped (paused, no round
+    open, or the open round not shown in a page yet)."""
     paused: Mapped[bool] = mapped_column(default=False)
     judgement_seq: Mapped[int] = mapped_column(Integer, default=0)
     """Judgements numbered so far (the next gets this number): seeds their pair derivation."""
@@ -117,6 +118,9 @@ class RoundRow(Base):
     phase: Mapped[str] = mapped_column(String(16))
     pool_dir: Mapped[str | None] = mapped_column(Text, default=None)
     opened_at: Mapped[datetime | None] = mapped_column(default=None)
+    """When the worker opened the round (its pool is ready)."""
+    shown_at: Mapped[datetime | None] = mapped_column(default=None)
+    """When a page first showed the open round; its timer runs from then (docs/app.md)."""
     closed_at: Mapped[datetime | None] = mapped_column(default=None)
     close_reason: Mapped[str | None] = mapped_column(String(32), default=None)
     """Why the round ended: "user", "comparisons", "time" (or "imported")."""

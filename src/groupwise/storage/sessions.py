@@ -229,6 +229,36 @@ def resume(s: Session, session_id: str, now: datetime | None = None) -> SessionR
     return session
 
 
+def show_round(
+    s: Session, session_id: str, round_index: int, now: datetime | None = None
+) -> RoundRow:
+    """A page shows the open round `round_index`: the first time, record the round's
+    `shown_at` and start its timer (unless it is paused; `resume` starts it then).
+    Idempotent. Raises NotFoundError, ConflictError (the round is not the open one)."""
+    now = now or utcnow()
+    session = get_session(s, session_id, lock=True)
+    _require_ready(session, f"show round {round_index}")
+    if round_index != session.round:
+        state = "closed" if round_index < session.round else "not open yet"
+        raise ConflictError(f"round {round_index} is {state}; the open round is {session.round}")
+    row = get_round(s, session_id, round_index)
+    if row.shown_at is None:
+        row.shown_at = now
+        if not session.paused and session.timer_started_at is None:
+            session.timer_started_at = now
+        touch(session, now)
+    return row
+
+
+def shown_at(s: Session, session: SessionRow) -> datetime | None:
+    """When a page first showed the session's current round (None: not yet, or no round)."""
+    return s.scalars(
+        select(RoundRow.shown_at).where(
+            RoundRow.session_id == session.id, RoundRow.index == session.round
+        )
+    ).one_or_none()
+
+
 def round_due(session: SessionRow, now: datetime | None = None) -> bool:
     """Whether the open round's time budget is used up (never with a budget of 0)."""
     if session.phase != READY:
@@ -246,16 +276,18 @@ def _require_ready(session: SessionRow, action: str) -> None:
 
 
 def open_round(s: Session, session: SessionRow, now: datetime | None = None) -> RoundRow:
-    """The worker prepared the current round: open it, start its timer, phase ``ready``."""
+    """The worker prepared the current round: open it, phase ``ready``. Its timer starts
+    when a page first shows it (`show_round`), so a round nobody looks at uses no time."""
     now = now or utcnow()
     row = get_round(s, session.id, session.round)
     row.phase = ROUND_OPEN
     row.opened_at = now
+    row.shown_at = None
     session.phase = READY
     session.failed_phase = None
     session.error = None
     session.timer_elapsed_s = 0.0
-    session.timer_started_at = now
+    session.timer_started_at = None
     session.paused = False
     _set_progress(session, "ready", 1.0, f"round {session.round} is open")
     touch(session, now)

@@ -118,7 +118,8 @@ def test_judgement_validation(prepared):
     assert judge(client, sid, [], ["b2"]).status_code == 422
     assert judge(client, sid, [f"b{i}" for i in range(9)], ["b15"]).status_code == 422
     unknown = judge(client, sid, ["b1"], ["b77"])
-    assert unknown.status_code == 422 and "b77" in unknown.json()["detail"]
+    assert unknown.status_code == 422
+    assert unknown.json()["detail"] == "b77 is not a behaviour of round 0"
     assert judge(client, sid, ["x1"], ["b2"]).status_code == 422
     assert judge(client, sid, ["b1"], ["b2"], label="better").status_code == 422
     future = judge(client, sid, ["b1"], ["b2"], round_index=3)
@@ -145,11 +146,34 @@ def test_submit_retry_list_undo(prepared):
 
 def test_pause_resume_and_timer(prepared):
     client, sid, _ = prepared
+    client.post(f"/api/sessions/{sid}/rounds/0/shown")
     paused = client.post(f"/api/sessions/{sid}/pause").json()
     assert paused["timer"]["paused"] and not paused["timer"]["running"]
     assert client.get(f"/api/sessions/{sid}").json()["timer"] == paused["timer"]
     resumed = client.post(f"/api/sessions/{sid}/resume").json()
     assert not resumed["timer"]["paused"] and resumed["timer"]["running"]
+
+
+def test_the_timer_starts_when_a_page_shows_the_round(client):
+    sid = new_session(client)["id"]
+    run_worker_once(client)
+    opened = client.get(f"/api/sessions/{sid}").json()
+    assert opened["phase"] == "ready"
+    assert opened["timer"] == {
+        "elapsed_s": 0.0,
+        "budget_s": opened["settings"]["round_seconds"],
+        "paused": False,
+        "running": False,
+        "shown_at": None,
+    }
+    shown = client.post(f"/api/sessions/{sid}/rounds/0/shown").json()
+    assert shown["timer"]["running"] and shown["timer"]["shown_at"] is not None
+    again = client.post(f"/api/sessions/{sid}/rounds/0/shown").json()
+    assert again["timer"]["shown_at"] == shown["timer"]["shown_at"]
+    later = client.post(f"/api/sessions/{sid}/rounds/1/shown")
+    assert later.status_code == 409
+    assert later.json()["detail"] == "round 1 is not open yet; the open round is 0"
+    assert client.post("/api/sessions/s-000000000000/rounds/0/shown").status_code == 404
 
 
 def test_pairwise_next_gives_the_pair_and_the_following_one(prepared):

@@ -20,6 +20,8 @@ from groupwise.storage.judgements import JudgementInput, add_judgement, undo_jud
 def _session_with_history(db, open_session) -> str:
     sid = open_session()
     with db.write() as s:
+        repo.show_round(s, sid, 0)
+    with db.write() as s:
         add_judgement(
             s, sid, JudgementInput("a", 0, ("b1", "b2"), ("b3",), "left", "explored", 4.5, 2)
         )
@@ -44,6 +46,7 @@ def test_export_import_round_trip(db, open_session, write, read):
     with db.read() as s:
         original = export_session(s, sid)
     assert len(original.judgements) == 3 and original.judgements[2].undone
+    assert original.rounds[0].shown_at is not None
     data = write(original)
     with db.write() as s:
         imported = import_session(s, read(data))

@@ -91,7 +91,8 @@ def test_undo_removes_the_pairs_and_keeps_the_record(db, open_session):
     [
         (("b1", "b3"), ("b3",), "b3 cannot be in both groups"),
         (("b1", "b1"), ("b3",), "twice"),
-        (("b1",), ("b99",), "b99 are not behaviours of round 0"),
+        (("b1",), ("b99",), "^b99 is not a behaviour of round 0$"),
+        (("b98",), ("b99",), "^b98, b99 are not behaviours of round 0$"),
         (tuple(f"b{i}" for i in range(9)), ("b10",), "at most 8"),
         ((), ("b3",), "left group is empty"),
     ],
@@ -153,8 +154,9 @@ def test_the_comparison_budget_closes_the_round(db, open_session):
 
 def test_no_judgements_once_the_time_is_up(db, open_session):
     sid = open_session(round_seconds=60)
-    with db.read() as s:
-        started = repo.get_session(s, sid).timer_started_at
+    with db.write() as s:
+        started = repo.show_round(s, sid, 0).shown_at
+    assert started is not None
     with db.write() as s:
         add_judgement(s, sid, judgement("in time"), now=started + timedelta(seconds=59))
     with pytest.raises(ConflictError, match="time of round 0 is up"), db.write() as s:

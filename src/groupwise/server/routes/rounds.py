@@ -1,13 +1,20 @@
-"""A round's pool: the tree, the pairwise suggestion edges, the next group suggestion."""
+"""A round's pool: the tree, the pairwise suggestion edges, the next group suggestion; and
+the page's report that it shows the round (which starts the round's timer)."""
 
 from typing import Annotated
 
 from fastapi import APIRouter, Query
 
-from groupwise.server import pool_views
+from groupwise.server import pool_views, state
 from groupwise.server.deps import Context, RoundIndex, SessionId
 from groupwise.server.routes import ERRORS
-from groupwise.server.schemas import Edge, RoundTree, SuggestionOut, SuggestionRequest
+from groupwise.server.schemas import (
+    Edge,
+    RoundTree,
+    SessionState,
+    SuggestionOut,
+    SuggestionRequest,
+)
 
 router = APIRouter(prefix="/api/sessions/{session_id}/rounds", tags=["rounds"], responses=ERRORS)
 
@@ -39,3 +46,10 @@ def next_suggestion(
     """The best group suggestion not answered yet and not excluded (null when none)."""
     exclude = request.exclude if request is not None else None
     return pool_views.next_suggestion(context.db, session_id, round_index, exclude)
+
+
+@router.post("/{round_index}/shown")
+def shown(session_id: SessionId, round_index: RoundIndex, context: Context) -> SessionState:
+    """A page shows the open round: the first report starts its timer (409 for a round that
+    is not the open one)."""
+    return state.show_round(context.db, session_id, round_index)
