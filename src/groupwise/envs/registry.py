@@ -124,6 +124,7 @@ TARGET_ENVS: dict[str, EnvEntry] = {
         entry_point=f"groupwise.envs.targets:{_TARGET_MAKERS[name]}",
         horizon=ENVS[target.base].horizon,
         standard_id=None,
+        clip_seconds=ENVS[target.base].clip_seconds,
         changes=(
             f"{target.base} with reward 0 and the {name} target score in "
             f'info["target_score"] and info["true_reward"]; no termination'

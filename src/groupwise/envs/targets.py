@@ -107,7 +107,7 @@ TARGETS: dict[str, Target] = {
             moment_s=1.0,
             description=(
                 "net backward turns of the torso made while the centre of mass is at least "
-                "0.5 m high; step score: backward turns per second at such steps"
+                "0.5 m high; step score: backward rotation, rad/s, at such steps"
             ),
             start=BackflipScorer,
         ),
@@ -120,9 +120,10 @@ TARGETS: dict[str, Target] = {
             stretch=3.0,
             moment_s=3.0,
             description=(
-                "completed cycles of standing on the back legs (front raised 60-120°, rear "
-                "of the torso >= 0.3 m up) for >= 0.5 s and sitting down again, plus half "
-                "the mean upness; step score: upness, +30 when a cycle completes"
+                "completed cycles of standing on the back legs (upness >= 0.8: front raised "
+                ">= 48°, rear of the torso >= 0.26 m up) for >= 0.5 s and sitting down again "
+                "(upness <= 0.2), plus half the mean upness; step score: the front's raise, "
+                "rad, up to 60°, + 1.5 s of that when a cycle completes"
             ),
             start=StandSitScorer,
         ),
@@ -136,7 +137,7 @@ TARGETS: dict[str, Target] = {
             moment_s=1.0,
             description=(
                 "longest hold, s, of a split: thighs >= 90° apart, torso within 60° of "
-                "vertical, both feet on the floor; step score: separation / 90° × "
+                "vertical, both feet on the floor; step score: separation, rad, × "
                 "uprightness × share of feet down"
             ),
             start=SplitsScorer,

@@ -2,7 +2,7 @@
 
 from fastapi import APIRouter
 
-from groupwise.envs import ENVS
+from groupwise.envs import ENVS, TARGET_ENVS
 from groupwise.server.deps import Context
 from groupwise.server.routes import ERRORS
 from groupwise.server.schemas import Health
@@ -12,8 +12,9 @@ router = APIRouter(prefix="/api", tags=["meta"], responses=ERRORS)
 
 @router.get("/envs")
 def list_envs() -> list[str]:
-    """The short env names; any registered Gymnasium id with a fixed horizon works too."""
-    return list(ENVS)
+    """The short env names, the case studies' reward-free target envs last; any registered
+    Gymnasium id with a fixed horizon works too."""
+    return [*ENVS, *TARGET_ENVS]
 
 
 @router.get("/health")
