@@ -2,7 +2,7 @@
 
 from collections.abc import Callable
 
-from groupwise.commands import clustering_study, pool, report, serve, study, train
+from groupwise.commands import case_study, clustering_study, pool, report, serve, study, train
 
 COMMANDS: list[Callable] = [
     train.register,
@@ -11,5 +11,6 @@ COMMANDS: list[Callable] = [
     study.register,
     report.register,
     serve.register,
+    case_study.register,
 ]
 """Each adds its subparser and sets `handler` to a function (args) -> exit code."""

@@ -1,0 +1,299 @@
+"""A case study (paper §"Example Cases"): teach a behaviour that has no reward and measure it
+by its target score.
+
+The loop is `groupwise train`'s (`loop.run_rounds` over a `Session`; the same checkpoints,
+``config.json`` and ``rounds.csv``); the target env pays PPO nothing, its per-step target
+score is the true reward the simulated decision-maker perceives (with the SPEC §7 noise).
+After every round the greedy policy is evaluated on the target: ``case-study.csv`` gets
+the preferences so far, the target score (mean, sd), the success and stretch rates, the
+label error and the wall time of each phase. At the end the evaluated episode with the
+highest target score is filmed (``final.mp4``, ``strip.png``, `groupwise.film`) and
+``summary.json`` states the target, its thresholds and the final evaluation.
+"""
+
+import csv
+import dataclasses
+import json
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from groupwise.config import RunConfig
+from groupwise.envs import TARGET_TOTAL_KEY, Target
+from groupwise.envs.targets import TARGET_SCORE_KEY
+from groupwise.film import Film, film_episode, write_film
+from groupwise.loop import (
+    CONFIG_FILE,
+    RESULTS_FILE,
+    RoundRecord,
+    Session,
+    eval_rng,
+    run_rounds,
+    write_records,
+)
+from groupwise.oracles import ORACLES, Oracle
+from groupwise.rl.policy import Policy
+from groupwise.rl.rollout import EnvFactory
+from groupwise.types import FloatArray
+
+CASE_FILE = "case-study.csv"
+VIDEO_FILE = "final.mp4"
+STRIP_FILE = "strip.png"
+SUMMARY_FILE = "summary.json"
+
+
+@dataclass(frozen=True)
+class TargetEvaluation:
+    """Episodes of a policy scored by a target (their actions kept for filming)."""
+
+    scores: FloatArray  # (E,) episode target scores
+    returns: FloatArray  # (E,) sums of the per-step scores (the env's true return)
+    reset_seeds: tuple[int, ...]  # (E,)
+    actions: tuple[np.ndarray, ...]  # E × (T, *action_shape) raw env actions
+    step_scores: tuple[FloatArray, ...]  # E × (T,)
+
+    def success_rate(self, target: Target) -> float:
+        return float(np.mean([target.succeeds(s) for s in self.scores]))
+
+    def stretch_rate(self, target: Target) -> float:
+        return float(np.mean([target.stretches(s) for s in self.scores]))
+
+
+def evaluate_target(
+    make_env: EnvFactory, policy: Policy, n_episodes: int, rng: np.random.Generator
+) -> TargetEvaluation:
+    """`n_episodes` whole episodes of `policy` side by side in a target env from `make_env`,
+    each reset with a seed drawn from `rng`; the score of each is the env's
+    ``info["target_total"]`` at its last step.
+
+    Raises:
+        ValueError: `n_episodes` < 1.
+    """
+    if n_episodes < 1:
+        raise ValueError(f"need at least one episode, got {n_episodes}")
+    envs = [make_env() for _ in range(n_episodes)]
+    seeds = [int(s) for s in rng.integers(0, 2**31 - 1, size=n_episodes)]
+    try:
+        obs = np.stack([env.reset(seed=s)[0] for env, s in zip(envs, seeds, strict=True)])
+        actions: list[list[np.ndarray]] = [[] for _ in envs]
+        scores: list[list[float]] = [[] for _ in envs]
+        totals = np.zeros(n_episodes)
+        running = list(range(n_episodes))
+        while running:
+            batch = np.asarray(policy.act(obs[running].astype(np.float32), rng))
+            still = []
+            for i, action in zip(running, batch, strict=True):
+                obs[i], _, terminated, truncated, info = envs[i].step(action)
+                actions[i].append(action)
+                scores[i].append(float(info[TARGET_SCORE_KEY]))
+                totals[i] = info[TARGET_TOTAL_KEY]
+                if not (terminated or truncated):
+                    still.append(i)
+            running = still
+    finally:
+        for env in envs:
+            env.close()
+    steps = tuple(np.asarray(s) for s in scores)
+    return TargetEvaluation(
+        scores=totals,
+        returns=np.array([s.sum() for s in steps]),
+        reset_seeds=tuple(seeds),
+        actions=tuple(np.asarray(a) for a in actions),
+        step_scores=steps,
+    )
+
+
+@dataclass(frozen=True)
+class CaseRecord:
+    """One row of ``case-study.csv``: a round and the target score after it."""
+
+    round: int
+    comparisons_total: int
+    """Comparisons asked so far (queries, skipped ones included)."""
+    judgements_total: int
+    pairs_total: int
+    """Binary preferences (pairs) so far: what the paper counts (601, 616, 1,032)."""
+    label_error_rate: float
+    label_error_rate_total: float
+    env_steps: int
+    target_score_mean: float
+    target_score_std: float
+    success_rate: float
+    """Share of evaluation episodes at or above the target's threshold."""
+    stretch_rate: float
+    true_return_mean: float
+    """Mean sum of per-step target scores (what the decision-maker perceives, noise-free)."""
+    sample_s: float
+    feedback_s: float
+    reward_s: float
+    ppo_s: float
+    eval_s: float
+    """The target evaluation (the loop's own evaluation is off: ``eval_episodes`` = 0)."""
+    wall_s: float
+    """Wall time since the study started, evaluations included."""
+
+    @classmethod
+    def of(
+        cls,
+        record: RoundRecord,
+        previous: "CaseRecord | None",
+        evaluation: TargetEvaluation,
+        target: Target,
+        eval_s: float,
+        wall_s: float,
+    ) -> "CaseRecord":
+        return cls(
+            round=record.round,
+            comparisons_total=record.comparisons + (previous.comparisons_total if previous else 0),
+            judgements_total=record.judgements + (previous.judgements_total if previous else 0),
+            pairs_total=record.pairs_total,
+            label_error_rate=record.label_error_rate,
+            label_error_rate_total=record.label_error_rate_total,
+            env_steps=record.env_steps,
+            target_score_mean=float(evaluation.scores.mean()),
+            target_score_std=float(evaluation.scores.std()),
+            success_rate=evaluation.success_rate(target),
+            stretch_rate=evaluation.stretch_rate(target),
+            true_return_mean=float(evaluation.returns.mean()),
+            sample_s=record.sample_s,
+            feedback_s=record.feedback_s,
+            reward_s=record.reward_s,
+            ppo_s=record.ppo_s,
+            eval_s=eval_s,
+            wall_s=wall_s,
+        )
+
+
+@dataclass(frozen=True)
+class CaseStudy:
+    """What a case study produced."""
+
+    records: list[CaseRecord]
+    evaluation: TargetEvaluation
+    """The last round's evaluation."""
+    filmed: int | None
+    """Index in `evaluation` of the filmed episode (None: not filmed)."""
+
+
+def run_case_study(
+    cfg: RunConfig,
+    target: Target,
+    out: Path,
+    *,
+    eval_episodes: int = 5,
+    film: bool = True,
+    show_progress: bool = True,
+    oracle: Oracle | None = None,
+) -> CaseStudy:
+    """Run `cfg` (its env must be `target.env`) into `out` (module docstring).
+
+    Raises:
+        ValueError: the config's env is not the target's, its decision-maker is unknown, or
+            `eval_episodes` < 1.
+        RenderingUnavailableError: filming without an offscreen GL backend.
+    """
+    if cfg.loop.env != target.env:
+        raise ValueError(f"the config's env {cfg.loop.env!r} is not {target.name}'s {target.env}")
+    if eval_episodes < 1:
+        raise ValueError(f"need at least one evaluation episode, got {eval_episodes}")
+    if oracle is None:
+        if cfg.loop.oracle not in ORACLES:
+            raise ValueError(f"no simulated decision-maker {cfg.loop.oracle!r}")
+        oracle = ORACLES[cfg.loop.oracle](cfg.loop)
+    out.mkdir(parents=True, exist_ok=True)
+    cfg.save(out / CONFIG_FILE)
+    started = time.perf_counter()
+    session = Session.create(cfg, out)
+    rows: list[CaseRecord] = []
+    evaluations: list[TargetEvaluation] = []
+
+    def finished(record: RoundRecord) -> None:
+        session.save(out)
+        write_records(out / RESULTS_FILE, session.records)
+        begin = time.perf_counter()
+        evaluation = evaluate_target(
+            session.make_env,
+            session.agent.policy(deterministic=True),
+            eval_episodes,
+            eval_rng(cfg.loop.seed),
+        )
+        now = time.perf_counter()
+        previous = rows[-1] if rows else None
+        rows.append(CaseRecord.of(record, previous, evaluation, target, now - begin, now - started))
+        evaluations.append(evaluation)
+        _write_rows(out / CASE_FILE, rows)
+
+    try:
+        run_rounds(session, oracle, show_progress, finished)
+    finally:
+        session.ppo.close()
+    evaluation = evaluations[-1]
+    best = int(np.argmax(evaluation.scores))
+    movie = None
+    if film:
+        movie = film_episode(
+            target,
+            evaluation.actions[best],
+            evaluation.reset_seeds[best],
+            evaluation.step_scores[best],
+        )
+        write_film(movie, out / VIDEO_FILE, out / STRIP_FILE)
+    summary = _summary(cfg, target, rows, evaluation, best if film else None, movie)
+    (out / SUMMARY_FILE).write_text(json.dumps(summary, indent=2) + "\n")
+    return CaseStudy(rows, evaluation, best if film else None)
+
+
+def _write_rows(path: Path, rows: list[CaseRecord]) -> None:
+    tmp = path.with_suffix(".tmp")
+    with tmp.open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=[f.name for f in dataclasses.fields(CaseRecord)])
+        writer.writeheader()
+        writer.writerows(dataclasses.asdict(r) for r in rows)
+    tmp.replace(path)
+
+
+def _summary(
+    cfg: RunConfig,
+    target: Target,
+    rows: list[CaseRecord],
+    evaluation: TargetEvaluation,
+    filmed: int | None,
+    movie: Film | None,
+) -> dict[str, Any]:
+    last = rows[-1]
+    summary: dict[str, Any] = {
+        "target": {
+            "name": target.name,
+            "env": target.env,
+            "unit": target.unit,
+            "threshold": target.threshold,
+            "stretch": target.stretch,
+            "description": target.description,
+        },
+        "decision_maker": cfg.loop.oracle,
+        "comparisons": last.comparisons_total,
+        "preference_pairs": last.pairs_total,
+        "env_steps": last.env_steps,
+        "wall_s": last.wall_s,
+        "final": {
+            "scores": evaluation.scores.tolist(),
+            "score_mean": last.target_score_mean,
+            "success_rate": last.success_rate,
+            "stretch_rate": last.stretch_rate,
+        },
+    }
+    if filmed is not None and movie is not None:
+        summary["filmed"] = {
+            "episode": filmed,
+            "reset_seed": evaluation.reset_seeds[filmed],
+            "score": float(evaluation.scores[filmed]),
+            "why": "the final evaluation's episode with the highest target score",
+            "video": VIDEO_FILE,
+            "fps": movie.fps,
+            "strip": STRIP_FILE,
+            "strip_seconds": [round(float(t) * movie.step_seconds, 4) for t in movie.strip_steps],
+        }
+    return summary

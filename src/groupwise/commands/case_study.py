@@ -1,0 +1,108 @@
+"""`groupwise case-study`: teach one of the paper's case-study behaviours to a simulated
+decision-maker and measure it by the behaviour's target score (docs/case-studies.md)."""
+
+import argparse
+import dataclasses
+from pathlib import Path
+
+from groupwise.commands.arguments import UsageError, non_negative_int, positive_int, writable_dir
+from groupwise.envs import TARGETS
+
+
+def _positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {value}")
+    return value
+
+
+def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    case = subparsers.add_parser(
+        "case-study",
+        help="teach a case-study behaviour without a reward (backflip, stand-up, splits)",
+        description=(
+            "Run the RLHF loop on a reward-free target env with a simulated decision-maker "
+            "who perceives the target score; write per round the preferences so far, the "
+            "greedy policy's target score and success rate, the label error and the phase "
+            "times (case-study.csv), then a video and a five-frame strip of the best final "
+            "episode."
+        ),
+    )
+    case.add_argument("--target", required=True, choices=sorted(TARGETS), help="the behaviour")
+    case.add_argument("--dm", default="groupwise", help="simulated decision-maker (ORACLES)")
+    case.add_argument(
+        "--preferences",
+        type=positive_int,
+        default=1000,
+        help="total comparisons over the rounds (a group comparison gives several pairs)",
+    )
+    case.add_argument("--rounds", type=positive_int, default=10, help="feedback rounds")
+    case.add_argument("--steps", type=positive_int, default=100_000, help="PPO steps per round")
+    case.add_argument(
+        "--seconds",
+        type=_positive_float,
+        help="simulated seconds per behaviour (default: the env's clip duration)",
+    )
+    case.add_argument(
+        "--eval-episodes", type=positive_int, default=5, help="episodes scored after each round"
+    )
+    case.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
+    case.add_argument("--out", type=Path, required=True, help="output directory")
+    case.add_argument("--no-video", action="store_true", help="skip the video and the strip")
+    case.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
+    case.set_defaults(handler=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from groupwise.case_study import CASE_FILE, STRIP_FILE, VIDEO_FILE, run_case_study
+    from groupwise.clips.timing import clip_timing, default_clip_seconds, env_step_seconds
+    from groupwise.config import LoopConfig, RunConfig
+    from groupwise.oracles import ORACLES
+
+    if args.dm not in ORACLES:
+        raise UsageError(f"unknown decision-maker {args.dm!r}; choose from {', '.join(ORACLES)}")
+    target = TARGETS[args.target]
+    seconds = args.seconds or default_clip_seconds(target.base)
+    length = clip_timing(env_step_seconds(target.env), seconds).steps
+    try:
+        base = RunConfig()
+        loop = LoopConfig(
+            **{
+                **dataclasses.asdict(base.loop),
+                "env": target.env,
+                "oracle": args.dm,
+                "comparisons": args.preferences,
+                "rounds": args.rounds,
+                "steps": args.steps * args.rounds,
+                "fragment_length": length,
+                "eval_episodes": 0,  # the case study scores the target itself
+                "seed": args.seed,
+            }
+        )
+        cfg = dataclasses.replace(base, loop=loop)
+    except ValueError as error:
+        raise UsageError(str(error)) from None
+    out = writable_dir(args.out)
+    study = run_case_study(
+        cfg,
+        target,
+        out,
+        eval_episodes=args.eval_episodes,
+        film=not args.no_video,
+        show_progress=not args.quiet,
+    )
+    last = study.records[-1]
+    films = ""
+    if study.filmed is not None:
+        films = f"\nvideo: {out / VIDEO_FILE}, strip: {out / STRIP_FILE}"
+    print(
+        f"{target.name}: {last.pairs_total} preference pairs from {last.comparisons_total} "
+        f"comparisons in {last.wall_s:.0f} s; target score {last.target_score_mean:.2f} "
+        f"± {last.target_score_std:.2f} {target.unit} (success ≥ {target.threshold:g}: "
+        f"{last.success_rate:.0%}, stretch ≥ {target.stretch:g}: {last.stretch_rate:.0%})\n"
+        f"per round: {out / CASE_FILE}{films}"
+    )
+    return 0

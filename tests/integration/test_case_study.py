@@ -1,0 +1,139 @@
+"""`groupwise case-study`: a tiny run per target writes its per-round CSV, the video and the
+strip; bad input is one line and exit code 2."""
+
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from groupwise.case_study import CASE_FILE, STRIP_FILE, SUMMARY_FILE, VIDEO_FILE, CaseRecord
+from groupwise.cli import main
+from groupwise.clips.video import probe
+from groupwise.envs import TARGETS, horizon
+from groupwise.loop import CONFIG_FILE, RESULTS_FILE
+
+COLUMNS = [
+    "round",
+    "comparisons_total",
+    "judgements_total",
+    "pairs_total",
+    "label_error_rate",
+    "label_error_rate_total",
+    "env_steps",
+    "target_score_mean",
+    "target_score_std",
+    "success_rate",
+    "stretch_rate",
+    "true_return_mean",
+    "sample_s",
+    "feedback_s",
+    "reward_s",
+    "ppo_s",
+    "eval_s",
+    "wall_s",
+]
+
+
+def _case_study(out, target: str, dm: str, seconds: str, *extra: str) -> int:
+    return main(
+        [
+            "case-study",
+            "--target",
+            target,
+            "--dm",
+            dm,
+            "--preferences",
+            "20",
+            "--rounds",
+            "2",
+            "--steps",
+            "2048",
+            "--seconds",
+            seconds,
+            "--eval-episodes",
+            "2",
+            "--seed",
+            "0",
+            "--out",
+            str(out),
+            "-q",
+            *extra,
+        ]
+    )
+
+
+def _rows(out) -> list[dict[str, str]]:
+    with (out / CASE_FILE).open() as handle:
+        reader = csv.DictReader(handle)
+        assert reader.fieldnames == COLUMNS
+        return list(reader)
+
+
+def test_backflip_case_study_writes_rounds_video_and_strip(tmp_path, capsys):
+    out = tmp_path / "backflip"
+    assert _case_study(out, "hopper-backflip", "groupwise", "0.24") == 0
+    assert "hopper-backflip:" in capsys.readouterr().out
+    for name in (CASE_FILE, RESULTS_FILE, CONFIG_FILE, SUMMARY_FILE, VIDEO_FILE, STRIP_FILE):
+        assert (out / name).is_file(), name
+    rows = _rows(out)
+    assert [int(r["round"]) for r in rows] == [0, 1]
+    assert [int(r["comparisons_total"]) for r in rows] == [2, 20]  # 10 % in round 0
+    assert 0 < int(rows[0]["pairs_total"]) <= int(rows[1]["pairs_total"])
+    assert [int(r["env_steps"]) for r in rows] == [2048, 4096]
+    for row in rows:
+        assert 0.0 <= float(row["success_rate"]) <= 1.0
+        assert math.isfinite(float(row["target_score_mean"]))
+        assert all(float(row[f"{phase}_s"]) > 0 for phase in ("sample", "reward", "ppo", "eval"))
+    assert float(rows[1]["wall_s"]) > float(rows[0]["wall_s"])
+
+    config = json.loads((out / CONFIG_FILE).read_text())["loop"]
+    assert config["env"] == "Hopper-backflip" and config["oracle"] == "groupwise"
+    assert config["fragment_length"] == 30 and config["steps"] == 4096
+    summary = json.loads((out / SUMMARY_FILE).read_text())
+    assert summary["target"]["threshold"] == TARGETS["hopper-backflip"].threshold
+    assert summary["final"]["score_mean"] == pytest.approx(float(rows[1]["target_score_mean"]))
+    filmed = summary["filmed"]
+    assert filmed["score"] == max(summary["final"]["scores"])
+
+    video = probe(out / VIDEO_FILE)
+    assert video.fps == pytest.approx(31.25)  # every 4th step of 0.008 s: real speed
+    assert video.frames == math.ceil((horizon("Hopper-backflip") + 1) / 4)
+    strip = np.asarray(Image.open(out / STRIP_FILE))
+    assert strip.shape == (240, 5 * 240 + 4 * 4, 3)
+    assert len(filmed["strip_seconds"]) == 5
+    assert filmed["strip_seconds"][-1] - filmed["strip_seconds"][0] == pytest.approx(1.0)
+
+
+@pytest.mark.parametrize(
+    ("target", "dm", "seconds"),
+    [("walker-splits", "pairwise", "0.24"), ("halfcheetah-standup", "interactive", "1.5")],
+)
+def test_other_targets_and_decision_makers_run(tmp_path, target, dm, seconds):
+    out = tmp_path / target
+    assert _case_study(out, target, dm, seconds, "--no-video") == 0
+    rows = _rows(out)
+    assert len(rows) == 2 and int(rows[1]["comparisons_total"]) == 20
+    assert int(rows[1]["judgements_total"]) > 0
+    assert not (out / VIDEO_FILE).exists()
+    assert [f.name for f in CaseRecord.__dataclass_fields__.values()] == COLUMNS
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [
+        (["--target", "hopper-backflip", "--dm", "psychic"], "psychic"),
+        (["--target", "cartwheel"], "invalid choice"),
+        (["--target", "hopper-backflip", "--seconds", "0"], "> 0"),
+    ],
+)
+def test_bad_input_is_one_line_and_exit_code_2(tmp_path, capsys, args, message):
+    try:
+        code = main(["case-study", *args, "--out", str(tmp_path / "out"), "-q"])
+    except SystemExit as exit_:  # argparse rejects bad choices and numbers itself
+        code = exit_.code
+    assert code == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and "Traceback" not in err
