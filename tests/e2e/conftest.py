@@ -108,6 +108,11 @@ class Server:
                 raise AssertionError(f"session {sid} stuck in {state['phase']}\n{self.tail()}")
             time.sleep(0.3)
 
+    def text(self, path: str) -> str:
+        """A GET answered with text (the JSONL export)."""
+        with urllib.request.urlopen(self.url + path, timeout=30) as response:
+            return str(response.read().decode())
+
     def judgements(
         self, sid: str, round_index: int, include_undone: bool = False
     ) -> list[dict[str, Any]]:
@@ -184,15 +189,35 @@ def browser() -> Iterator[Any]:
         b.close()
 
 
-@pytest.fixture
-def page(browser: Any) -> Iterator[Any]:
+GUIDE_SEEN = (
+    "for (const mode of ['groupwise', 'pairwise'])"
+    " localStorage.setItem('groupwise:guide-seen:' + mode, '1');"
+)
+"""Marks the app's guide as closed before (web/src/lib/guide.ts), so it does not open."""
+
+
+def _page(browser: Any, guide_seen: bool) -> Iterator[Any]:
     context = browser.new_context(viewport={"width": 1366, "height": 768})
+    if guide_seen:
+        context.add_init_script(GUIDE_SEEN)
     pg = context.new_page()
     errors: list[str] = []
     pg.on("pageerror", lambda e: errors.append(str(e)))
     yield pg
     context.close()
     assert not errors, f"uncaught errors in the page: {errors}"
+
+
+@pytest.fixture
+def page(browser: Any) -> Iterator[Any]:
+    """A 1366 × 768 page of a browser that has seen the app's guide before."""
+    yield from _page(browser, guide_seen=True)
+
+
+@pytest.fixture
+def first_visit(browser: Any) -> Iterator[Any]:
+    """A 1366 × 768 page of a fresh browser profile: the app's guide opens by itself."""
+    yield from _page(browser, guide_seen=False)
 
 
 @pytest.fixture

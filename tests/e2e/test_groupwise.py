@@ -292,10 +292,20 @@ def test_arcs_by_keyboard_and_previews(server: Server, page: Page, ui: Any, shot
     shot(page, "groupwise-2560")
 
 
+def _export_rounds(server: Server, sid: str) -> tuple[list[int], list[int]]:
+    """The round numbers of the session's JSONL export: its round lines, its judgements."""
+    lines = [json.loads(line) for line in server.text(f"/api/sessions/{sid}/export").splitlines()]
+    rounds = [line["round"] for line in lines if line["type"] == "round"]
+    return rounds, [line["round"] for line in lines if line["type"] == "judgement"]
+
+
 def test_round_end_progress_next_round(server: Server, page: Page, ui: Any, shot: Any) -> None:
+    """Also: the page, the progress text and the export number the rounds alike (from 0)."""
     sid = server.new_session("groupwise")
     _open(page, server, sid)
-    expect(page.locator(".statusbar .round")).to_have_text("Round 1 of 2")
+    expect(page.locator(".statusbar .round")).to_have_text("Round 0 of 0–1")
+    expect(page.locator(".exploration .panel-sub")).to_contain_text("round 0 ·")
+    assert server.api("GET", f"/api/sessions/{sid}")["progress"]["message"] == "round 0 is open"
 
     # Pause and resume the round's timer.
     page.get_by_role("button", name="Pause the round timer").click()
@@ -307,6 +317,7 @@ def test_round_end_progress_next_round(server: Server, page: Page, ui: Any, shot
     _fill_groups(page, server, sid, ui)
     page.keyboard.press("a")
     expect(page.locator(".statusbar .counts")).to_contain_text("Comparisons1")
+    assert _export_rounds(server, sid) == ([0], [0])
     end = page.locator(".end-round")
     end.click()
     expect(end).to_have_text("Click again to end the round")
@@ -315,7 +326,7 @@ def test_round_end_progress_next_round(server: Server, page: Page, ui: Any, shot
     overlay = page.locator(".workspace.groupwise .progress-overlay")
     expect(overlay).to_be_visible()
     expect(overlay.locator(".progress-title")).to_have_text(
-        re.compile(r"Round 1 ended|Preparing round 2 of 2")
+        re.compile(r"Round 0 ended|Preparing round 1 of 0–1")
     )
     expect(overlay.get_by_role("progressbar")).to_have_attribute(
         "aria-valuenow", re.compile(r"^\d+$")
@@ -324,9 +335,11 @@ def test_round_end_progress_next_round(server: Server, page: Page, ui: Any, shot
     shot(page, "round-progress")
 
     server.wait_phase(sid, "ready", round_index=1)  # fails fast, with the server log, on "failed"
-    expect(page.locator(".statusbar .round")).to_have_text("Round 2 of 2", timeout=30_000)
+    expect(page.locator(".statusbar .round")).to_have_text("Round 1 of 0–1", timeout=30_000)
     expect(page.locator(".statusbar .phase")).to_have_text("ready", timeout=180_000)
     expect(overlay).to_be_hidden()
-    expect(page.locator(".exploration .panel-sub")).to_contain_text("round 2")
+    expect(page.locator(".exploration .panel-sub")).to_contain_text("round 1 ·")
+    assert server.api("GET", f"/api/sessions/{sid}")["progress"]["message"] == "round 1 is open"
+    assert _export_rounds(server, sid) == ([0, 1], [0])
     expect(page.locator(".arc.leaf")).to_have_count(POOL)
     _expect_prefilled_or_empty_state(page, server, sid, round_index=1)

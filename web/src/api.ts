@@ -231,6 +231,13 @@ export function createApi(options: ApiOptions = {}) {
       return state;
     },
 
+    /** The page shows the open round `round` (its timer starts the first time). */
+    async shown(sid: string, round: number) {
+      const state = await request<SessionState>("POST", `${s(sid)}/rounds/${round}/shown`);
+      latest.invalidate("session");
+      return state;
+    },
+
     clipUrl: (clip: string) => url(`clips/${encodeURIComponent(clip)}`, {}, true),
     exportUrl: (sid: string, format: "jsonl" | "parquet" = "jsonl") =>
       url(`${s(sid)}/export`, { format }, true),

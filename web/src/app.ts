@@ -4,6 +4,7 @@
  */
 import { type Api, type Edge, type JudgementOut, createApi } from "./api";
 import { type Controller, createController } from "./controller";
+import { guideSeen, rememberGuideSeen } from "./lib/guide";
 import { type KeyInput, keyCommand } from "./lib/keys";
 import type { Tree } from "./lib/tree";
 import { type State, type Store, comparedLeaves, createStore } from "./state";
@@ -11,6 +12,7 @@ import { startTogether } from "./views/clips";
 import { type ClipRef, renderComparison } from "./views/comparison";
 import { h } from "./views/dom";
 import { type HistoryEdge, renderExploration } from "./views/exploration";
+import { renderGuide } from "./views/guide";
 import { renderPairwise } from "./views/pairwise";
 import { renderProgress } from "./views/progress";
 import { renderStart } from "./views/start";
@@ -51,6 +53,22 @@ export interface AppOptions {
   search?: string;
 }
 
+/** The key hint of the message bar, per mode. */
+const KEYS_HINT = {
+  groupwise:
+    "Keys: ← A better · → B better · ↑ equal · N next suggestion · U undo · G switch group · " +
+    "Shift + arrows move through the chart · Enter selects · ? guide",
+  pairwise: "Keys: ← left better · → right better · ↑ equal · ↓ skip · U undo · ? guide",
+} as const;
+
+function localStore(): Storage | null {
+  try {
+    return globalThis.localStorage ?? null;
+  } catch {
+    return null; // storage disabled by the browser
+  }
+}
+
 export function startApp(root: HTMLElement, options: AppOptions = {}): { store: Store; controller: Controller } {
   const params = new URLSearchParams(options.search ?? window.location.search);
   const api = options.api ?? createApi({ token: params.get("token") });
@@ -81,9 +99,24 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
     h("div", { class: "right" }, comparison, progressA),
   );
   const pairWorkspace = h("div", { class: "workspace pairwise-mode", hidden: true }, h("div", { class: "right" }, pairwise, progressB));
+  // The message bar: the key hint, and the toasts (confirmations, errors) in a strip of
+  // their own, so they never cover a control (docs/app.md).
   const toast = h("div", { class: "toast-host" });
+  const keysHint = h("p", { class: "keys-hint", "aria-hidden": "true" });
+  const messageBar = h("footer", { class: "messagebar" }, keysHint, toast);
+  const guide = h("div", {});
   const main = h("main", { class: "main" }, message, start, groupWorkspace, pairWorkspace);
-  root.replaceChildren(status, main, toast);
+  root.replaceChildren(status, main, messageBar, guide);
+  const guideStorage = localStore();
+  /** Modes whose guide this page already offered (it opens by itself once per mode). */
+  const offered = new Set<string>();
+
+  function closeGuide(): void {
+    const mode = store.getState().session?.mode;
+    if (mode) rememberGuideSeen(guideStorage, mode);
+    dispatch({ type: "guide", open: false });
+    void controller.reportShown();
+  }
 
   const clipsOf = memo1((tree: Tree | undefined) => (id: string): ClipRef | null => {
     const leaf = tree?.nodes.get(id);
@@ -118,6 +151,7 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
         resume: () => void controller.control("resume"),
         endRound: () => void controller.control("end-round"),
         sessions: () => void controller.showStart(),
+        guide: () => dispatch({ type: "guide", open: true }),
       });
       const progress = { session: s, exportUrl: api.exportUrl(s.id), busy: st.busy };
       const retry = { retry: () => void controller.control("retry") };
@@ -133,6 +167,12 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
       dismiss: (id) => dispatch({ type: "dismiss-toast", id }),
       undo: () => void controller.undo(),
     });
+    const hint = mode ? KEYS_HINT[mode] : "";
+    if (keysHint.textContent !== hint) {
+      keysHint.textContent = hint;
+      keysHint.title = hint;
+    }
+    renderGuide(guide, mode, st.guide && mode !== null, { close: closeGuide });
   }
 
   function renderGroupwise(st: State): void {
@@ -141,7 +181,7 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
     const open = s.phase === "ready" && round !== null && round.round === s.round;
     const placeholder =
       s.phase === "preparing"
-        ? `The behaviours of round ${s.round + 1} are being prepared…`
+        ? `The behaviours of round ${s.round} are being prepared…`
         : s.phase === "failed"
           ? "No behaviours to show: the worker failed."
           : "Loading the behaviours…";
@@ -238,6 +278,15 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
     );
   }
 
+  // The guide opens by itself the first time a mode is opened in this browser.
+  store.subscribe((st) => {
+    const mode = st.boot === "ready" ? st.session?.mode : undefined;
+    if (!mode || offered.has(mode)) return;
+    offered.add(mode);
+    if (!guideSeen(guideStorage, mode)) dispatch({ type: "guide", open: true });
+  });
+  document.addEventListener("visibilitychange", () => void controller.reportShown());
+
   let frame = 0;
   store.subscribe(() => {
     if (!frame) frame = requestAnimationFrame(() => {
@@ -250,6 +299,14 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
     const st = store.getState();
     const s = st.session;
     if (st.boot !== "ready" || !s) return;
+    if (st.guide) {
+      // A dialog: the answer keys rest until it is closed.
+      if (e.key === "Escape") {
+        e.preventDefault();
+        closeGuide();
+      }
+      return;
+    }
     const target = e.target as HTMLElement | null;
     const input: KeyInput = {
       key: e.key,
@@ -282,6 +339,9 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
         break;
       case "next-suggestion":
         void controller.suggest(false);
+        break;
+      case "guide":
+        dispatch({ type: "guide", open: true });
         break;
     }
   });

@@ -23,6 +23,8 @@ export interface ControllerOptions {
   storage?: Pick<Storage, "getItem" | "setItem"> | null;
   /** Puts the session id in the address bar. */
   setUrl?(sid: string | null): void;
+  /** Whether the page can be seen now (default: the document is not hidden). */
+  visible?(): boolean;
 }
 
 export function createController(store: Store, api: Api, options: ControllerOptions = {}) {
@@ -35,6 +37,11 @@ export function createController(store: Store, api: Api, options: ControllerOpti
   let roundKey: string | null = null;
   /** Suggestions of this round the person passed over with "next suggestion". */
   let passed: Array<[string[], string[]]> = [];
+  /** "sid:round" of the round whose data arrived (the views show it). */
+  let loadedKey: string | null = null;
+  /** "sid:round" of the round reported shown (or being reported). */
+  let shownKey: string | null = null;
+  const visible = options.visible ?? (() => globalThis.document?.visibilityState !== "hidden");
 
   function fail(err: unknown): void {
     const text = err instanceof Error ? err.message : String(err);
@@ -74,6 +81,7 @@ export function createController(store: Store, api: Api, options: ControllerOpti
   async function open(sid: string): Promise<void> {
     closeEvents?.();
     roundKey = null;
+    loadedKey = null;
     dispatch({ type: "boot", boot: "loading" });
     let session: SessionState | typeof STALE;
     try {
@@ -123,6 +131,7 @@ export function createController(store: Store, api: Api, options: ControllerOpti
         if (session.id !== get().session?.id) return;
         dispatch({ type: "session", session, at: Date.now() });
         void syncRound();
+        void reportShown();
       },
       judgement(j) {
         if (j.undone) dispatch({ type: "judgement-undone", id: j.id });
@@ -155,6 +164,8 @@ export function createController(store: Store, api: Api, options: ControllerOpti
     try {
       if (s.mode === "pairwise") await loadPairwiseRound(s);
       else await loadGroupRound(s);
+      if (roundKey === key) loadedKey = key;
+      void reportShown();
     } catch (err) {
       if (roundKey === key) roundKey = null;
       // A closed round's data may be gone; only an open round's failure needs a message.
@@ -184,6 +195,28 @@ export function createController(store: Store, api: Api, options: ControllerOpti
     if (judgements === STALE) return;
     dispatch({ type: "judgements", judgements });
     await pairwise.start();
+  }
+
+  /**
+   * Tells the server the open round is on screen, once per round: its timer starts then, so
+   * a round that waited for the person uses none of its time (docs/app.md, "The round
+   * timer"). On screen means its data arrived, the page is not hidden and the guide does not
+   * cover it; the page calls this again when any of these changes.
+   */
+  async function reportShown(): Promise<void> {
+    const st = get();
+    const s = st.session;
+    if (!s || st.boot !== "ready" || s.phase !== "ready" || s.timer.shown_at) return;
+    const key = `${s.id}:${s.round}`;
+    if (loadedKey !== key || shownKey === key || st.guide || !visible()) return;
+    shownKey = key;
+    try {
+      const session = await api.shown(s.id, s.round);
+      if (get().session?.id === session.id) dispatch({ type: "session", session, at: Date.now() });
+    } catch (err) {
+      // The round closed meanwhile (409): nothing to start. Otherwise try again next time.
+      if (!(err instanceof ApiError && err.status === 409) && shownKey === key) shownKey = null;
+    }
   }
 
   /* ------------------------------------------------------------- groups */
@@ -366,6 +399,7 @@ export function createController(store: Store, api: Api, options: ControllerOpti
     suggest,
     answer,
     undo,
+    reportShown,
     answerPair: pairwise.answer,
     skipPair: pairwise.skip,
     control,

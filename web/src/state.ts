@@ -98,6 +98,8 @@ export interface State {
   toast: Toast | null;
   connection: "connecting" | "open" | "lost";
   pairwise: PairwiseState;
+  /** The guide is open over the page (the answer keys rest meanwhile). */
+  guide: boolean;
 }
 
 export const FRESH_ORIGIN: Origin = { source: "explored", edits: 0, startedAt: null, suggestion: null };
@@ -131,6 +133,7 @@ export const initialState: State = {
     shownAt: null,
     exhausted: false,
   },
+  guide: false,
 };
 
 export type Action =
@@ -159,7 +162,8 @@ export type Action =
   | { type: "toast"; kind: Toast["kind"]; text: string; undo?: boolean }
   | { type: "dismiss-toast"; id?: number }
   | { type: "connection"; value: State["connection"] }
-  | { type: "pairwise"; patch: Partial<PairwiseState> };
+  | { type: "pairwise"; patch: Partial<PairwiseState> }
+  | { type: "guide"; open: boolean };
 
 let toastId = 0;
 
@@ -276,6 +280,8 @@ export function reduce(state: State, action: Action): State {
       return state.connection === action.value ? state : { ...state, connection: action.value };
     case "pairwise":
       return { ...state, pairwise: { ...state.pairwise, ...action.patch } };
+    case "guide":
+      return state.guide === action.open ? state : { ...state, guide: action.open };
   }
 }
 

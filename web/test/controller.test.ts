@@ -111,3 +111,38 @@ describe("controller (pairwise)", () => {
     expect(store.getState().pairwise.done).toContain(`${first.left}:${first.right}`);
   });
 });
+
+describe("controller (round timer)", () => {
+  it("reports the round shown once its data is on screen, and only once", async () => {
+    const { api, store, controller } = setup("groupwise");
+    const shown = vi.spyOn(api, "shown");
+    await controller.boot("s-demo");
+    await vi.waitFor(() => expect(shown).toHaveBeenCalledTimes(1));
+    expect(shown).toHaveBeenCalledWith("s-demo", 1);
+    expect(store.getState().session?.timer.shown_at).toBeTruthy();
+    await controller.reportShown();
+    expect(shown).toHaveBeenCalledTimes(1);
+  });
+
+  it("waits while the guide covers the page or the page is hidden", async () => {
+    const api = fakeApi(round, "pairwise");
+    const shown = vi.spyOn(api, "shown");
+    const store = createStore();
+    let visible = false;
+    const controller = createController(store, api, { storage: null, visible: () => visible });
+    let offered = false; // as the page does: the guide opens as the session does
+    store.subscribe((st) => {
+      if (st.boot !== "ready" || offered) return;
+      offered = true;
+      store.dispatch({ type: "guide", open: true });
+    });
+    await controller.boot("s-demo");
+    expect(shown).not.toHaveBeenCalled();
+    visible = true;
+    await controller.reportShown();
+    expect(shown).not.toHaveBeenCalled(); // the guide is open
+    store.dispatch({ type: "guide", open: false });
+    await controller.reportShown();
+    expect(shown).toHaveBeenCalledWith("s-demo", 1);
+  });
+});

@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { clock, elapsedNow, phaseName } from "../src/lib/format";
+import { clock, elapsedNow, phaseName, question, roundOf } from "../src/lib/format";
 import { bestGrid } from "../src/lib/grid";
 
 describe("format", () => {
@@ -12,6 +12,18 @@ describe("format", () => {
   it("runs the round timer only while it runs", () => {
     expect(elapsedNow({ elapsed_s: 10, paused: false, running: true }, 2500)).toBe(12.5);
     expect(elapsedNow({ elapsed_s: 10, paused: true, running: false }, 2500)).toBe(10);
+  });
+
+  it("numbers rounds from 0, as the API, the export and the checkpoints do", () => {
+    expect(roundOf(0, 5)).toBe("0 of 0–4");
+    expect(roundOf(4, 5)).toBe("4 of 0–4");
+    expect(roundOf(5, 5)).toBe("4 of 0–4"); // never past the last round
+    expect(roundOf(0, 1)).toBe("0 (the only one)");
+  });
+
+  it("asks the same question in both modes", () => {
+    expect(question("clip")).toBe("Which clip is closer to the behaviour you want?");
+    expect(question("group")).toBe("Which group is closer to the behaviour you want?");
   });
 
   it("names worker phases for people", () => {

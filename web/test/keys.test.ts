@@ -27,6 +27,11 @@ describe("keyCommand", () => {
     expect(keyCommand({ key: "A", shiftKey: true }, "groupwise")).toEqual({ type: "answer", label: "left" });
   });
 
+  it("opens the guide with ? in both modes", () => {
+    expect(keyCommand({ key: "?", shiftKey: true }, "groupwise")).toEqual({ type: "guide" });
+    expect(keyCommand({ key: "?", shiftKey: true }, "pairwise")).toEqual({ type: "guide" });
+  });
+
   it("has the group keys in groupwise mode and skip in pairwise mode", () => {
     expect(keyCommand({ key: "g" }, "groupwise")).toEqual({ type: "switch-group" });
     expect(keyCommand({ key: "2" }, "groupwise")).toEqual({ type: "target", group: "B" });

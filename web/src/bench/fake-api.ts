@@ -57,7 +57,7 @@ export function fakeApi(
     phase: "ready",
     progress: { phase: "", fraction: 0, message: "" },
     error: null,
-    timer: { elapsed_s: 95, budget_s: 600, paused: false, running: true },
+    timer: { elapsed_s: 95, budget_s: 600, paused: false, running: true, shown_at: null },
     counts: { comparisons_round: judgements.length, pairs_round: 0, comparisons_total: 24, pairs_total: 103 },
     created_at: new Date().toISOString(),
     ...state,
@@ -108,6 +108,11 @@ export function fakeApi(
       const j = judgements.find((x) => x.id === id)!;
       judgements = judgements.filter((x) => x.id !== id);
       return { ...j, undone: true };
+    },
+    shown: async () => {
+      session.timer.shown_at ??= new Date().toISOString();
+      session.timer.running = !session.timer.paused;
+      return { ...session };
     },
     control: async (_sid, action) => {
       if (action === "pause") session.timer.paused = true;

@@ -45,3 +45,18 @@ const PHASES: Record<string, string> = {
 export function phaseName(phase: string): string {
   return PHASES[phase] ?? phase.charAt(0).toUpperCase() + phase.slice(1).replace(/[_-]/g, " ");
 }
+
+/**
+ * A round as people read it: "2 of 0–4". Rounds are numbered from 0 on the page as in the
+ * API, the export and the checkpoint folders (`round-0000`), so every place a person reads
+ * a round number agrees (docs/app.md, "Round numbering").
+ */
+export function roundOf(round: number, rounds: number): string {
+  const last = Math.max(0, rounds - 1);
+  return last === 0 ? `${round} (the only one)` : `${Math.min(round, last)} of 0–${last}`;
+}
+
+/** The question an answer replies to, in both modes' words. */
+export function question(of: "group" | "clip"): string {
+  return `Which ${of} is closer to the behaviour you want?`;
+}

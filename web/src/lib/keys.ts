@@ -1,7 +1,8 @@
 /**
  * Keyboard map (SPEC §9): ← left better, → right better, ↑ equal, ↓ skip (pairwise), with the
  * left-hand alternatives A / D / W / S; G switches the group that clicks fill (1 / 2 pick
- * A / B), N asks for the next suggestion, U or Ctrl+Z undoes the last answer.
+ * A / B), N asks for the next suggestion, U or Ctrl+Z undoes the last answer, ? shows the
+ * guide.
  *
  * The answer keys act wherever focus is on the page except in form fields, the chart
  * included: the chart's own keyboard navigation uses Shift + arrows (and Home / End), so it
@@ -15,7 +16,8 @@ export type KeyCommand =
   | { type: "switch-group" }
   | { type: "target"; group: GroupId }
   | { type: "next-suggestion" }
-  | { type: "undo" };
+  | { type: "undo" }
+  | { type: "guide" };
 
 export interface KeyInput {
   key: string;
@@ -46,6 +48,7 @@ export function keyCommand(e: KeyInput, mode: "groupwise" | "pairwise"): KeyComm
   if (e.repeat) return null;
   const label = ANSWERS[key];
   if (label) return { type: "answer", label };
+  if (key === "?") return { type: "guide" };
   if (mode === "pairwise") {
     if (key === "ArrowDown" || key === "s") return { type: "skip" };
     if (key === "u") return { type: "undo" };

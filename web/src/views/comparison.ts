@@ -7,6 +7,7 @@
  * video keeps playing; the clips restart together only when the set of behaviours changes.
  */
 import type { Label } from "../api";
+import { question } from "../lib/format";
 import { bestGrid } from "../lib/grid";
 import type { GroupId, Groups } from "../lib/selection";
 import { MAX_GROUP, otherGroup } from "../lib/selection";
@@ -173,8 +174,7 @@ function build(element: HTMLElement): View {
   const head = h(
     "header",
     { class: "panel-head" },
-    h("h2", { id: "comparison-title" }, "Compare"),
-    origin,
+    h("div", { class: "head-title" }, h("h2", { id: "comparison-title" }, question("group")), origin),
     h("div", { class: "head-tools" }, h("label", { class: "speed" }, "Speed ", speed), restart),
   );
 

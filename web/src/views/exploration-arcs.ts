@@ -56,7 +56,7 @@ export function buildArcs(chart: Chart, round: RoundData | null): void {
   const first = layout.rings[0]?.[0];
   if (first) setFocusable(chart, first.node.id);
   const n = round.tree.leaves.length;
-  text(chart.subtitle, `round ${round.round + 1} · ${n} behaviours · ${layout.levels} levels`);
+  text(chart.subtitle, `round ${round.round} · ${n} behaviours · ${layout.levels} levels`);
 }
 
 /** The one arc reached by Tab (a roving tabindex). */

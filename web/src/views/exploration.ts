@@ -125,18 +125,12 @@ function build(element: HTMLElement): Chart {
       "and right along a ring, up to the enclosing cluster, down into it. The arrow keys " +
       "alone answer the comparison, wherever the focus is.",
   );
-  const keysHint = h(
-    "p",
-    { class: "keys-hint", "aria-hidden": "true" },
-    "Keys: ← A better · → B better · ↑ equal · Shift + arrows move through the chart · " +
-      "Enter selects",
-  );
 
   const legend = createLegend((patch) => chart.handlers?.view(patch));
 
   element.classList.add("panel", "exploration");
   element.setAttribute("aria-labelledby", "exploration-title");
-  element.replaceChildren(head, wrap, help, keysHint, legend.element);
+  element.replaceChildren(head, wrap, help, legend.element);
 
   const chart: Chart = {
     svg,
@@ -150,7 +144,8 @@ function build(element: HTMLElement): Chart {
     subtitle,
     targetButtons,
     legend,
-    preview: createPreview(),
+    // Inside the chart's area: beside it lie the answer buttons and the legend's controls.
+    preview: createPreview(document.body, () => wrap.getBoundingClientRect()),
     data: null,
     handlers: null,
     round: null,

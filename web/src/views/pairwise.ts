@@ -4,6 +4,7 @@
  * place when the current pair is answered, so the next pair shows at once.
  */
 import type { Label, PairQuery } from "../api";
+import { question } from "../lib/format";
 import { clipVideo, startTogether, unloadVideo } from "./clips";
 import { h, kbd, memo, text } from "./dom";
 
@@ -156,7 +157,7 @@ function build(element: HTMLElement): View {
     h(
       "header",
       { class: "panel-head" },
-      h("h2", { id: "pairwise-title" }, "Which clip is closer to the behaviour you want?"),
+      h("h2", { id: "pairwise-title" }, question("clip")),
       h("div", { class: "head-tools" }, h("label", { class: "speed" }, "Speed ", speed)),
     ),
     pair,

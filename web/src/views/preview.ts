@@ -2,7 +2,10 @@
  * The floating clip preview beside the pointer (SPEC §9): a leaf's clip, or a cluster's size
  * and up to three representative clips (its medoids). Videos are muted, looping, and
  * unloaded when the preview hides, so sweeping over the chart does not pile up decoders.
+ * It stays inside the area `bounds` gives (the chart's), so it never covers the controls
+ * beside the chart, such as the answer buttons.
  */
+import { type Bounds, placeBeside } from "../lib/tooltip";
 import type { TreeNode } from "../lib/tree";
 import type { RoundData } from "../state";
 import { h, text } from "./dom";
@@ -31,8 +34,12 @@ export interface Preview {
 }
 
 const OFFSET = 18;
+const MARGIN = 8;
 
-export function createPreview(parent: HTMLElement = document.body): Preview {
+/**
+ * `bounds`: the area (viewport pixels) the preview must stay in; the viewport when omitted.
+ */
+export function createPreview(parent: HTMLElement = document.body, bounds?: () => Bounds): Preview {
   const title = h("div", { class: "preview-title" });
   const detail = h("div", { class: "preview-detail" });
   const clips = h("div", { class: "preview-clips" });
@@ -50,15 +57,23 @@ export function createPreview(parent: HTMLElement = document.body): Preview {
   }
 
   function place(x: number, y: number): void {
-    const w = element.offsetWidth;
-    const hgt = element.offsetHeight;
-    const vw = document.documentElement.clientWidth;
-    const vh = document.documentElement.clientHeight;
-    let left = x + OFFSET;
-    let top = y + OFFSET;
-    if (left + w > vw - 8) left = x - OFFSET - w;
-    if (top + hgt > vh - 8) top = Math.max(8, vh - 8 - hgt);
-    element.style.transform = `translate(${Math.max(8, left)}px, ${Math.max(8, top)}px)`;
+    const view = {
+      left: MARGIN,
+      top: MARGIN,
+      right: document.documentElement.clientWidth - MARGIN,
+      bottom: document.documentElement.clientHeight - MARGIN,
+    };
+    const area = bounds?.();
+    const box = area
+      ? {
+          left: Math.max(view.left, area.left),
+          top: Math.max(view.top, area.top),
+          right: Math.min(view.right, area.right),
+          bottom: Math.min(view.bottom, area.bottom),
+        }
+      : view;
+    const { left, top } = placeBeside(x, y, element.offsetWidth, element.offsetHeight, box, OFFSET);
+    element.style.transform = `translate(${left}px, ${top}px)`;
   }
 
   return {

@@ -4,7 +4,7 @@
  * the session, or the failure with its reason and a retry.
  */
 import type { SessionState } from "../api";
-import { phaseName } from "../lib/format";
+import { phaseName, roundOf } from "../lib/format";
 import { h, memo, text } from "./dom";
 
 export interface ProgressData {
@@ -41,7 +41,7 @@ export function renderProgress(element: HTMLElement, data: ProgressData, handler
   if (!s || phase === "ready") return;
   element.dataset.phase = phase;
   const p = s.progress;
-  const round = Math.min(s.round + 1, s.rounds);
+  const round = Math.min(s.round, s.rounds - 1);
   const fraction = Math.max(0, Math.min(1, p?.fraction ?? 0));
   const showBar = phase === "preparing" || phase === "training";
   view.bar.hidden = !showBar;
@@ -53,7 +53,7 @@ export function renderProgress(element: HTMLElement, data: ProgressData, handler
   if (data.exportUrl) view.exportLink.href = data.exportUrl;
   switch (phase) {
     case "preparing":
-      text(view.title, `Preparing round ${round} of ${s.rounds}`);
+      text(view.title, `Preparing round ${roundOf(round, s.rounds)}`);
       text(view.note, "The new behaviours appear here by themselves when they are ready.");
       break;
     case "training":
@@ -64,7 +64,8 @@ export function renderProgress(element: HTMLElement, data: ProgressData, handler
       text(view.title, "Session finished");
       text(
         view.note,
-        `${s.counts.comparisons_total} comparisons and ${s.counts.pairs_total} preference pairs over ${s.rounds} rounds. Thank you.`,
+        `${s.counts.comparisons_total} comparisons and ${s.counts.pairs_total} preference pairs over ` +
+          `${s.rounds === 1 ? "1 round (round 0)" : `${s.rounds} rounds (0–${s.rounds - 1})`}. Thank you.`,
       );
       break;
     case "failed":

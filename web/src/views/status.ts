@@ -1,9 +1,10 @@
 /**
  * The status bar: session, round and phase, the round's timer (pause / resume), counters of
- * comparisons and preference pairs (this round and in total), and "end round".
+ * comparisons and preference pairs (this round and in total), "end round", and "?" (the
+ * guide).
  */
 import type { SessionState } from "../api";
-import { clock, elapsedNow } from "../lib/format";
+import { clock, elapsedNow, roundOf } from "../lib/format";
 import type { State } from "../state";
 import { attr, h, memo, text } from "./dom";
 
@@ -20,6 +21,7 @@ export interface StatusHandlers {
   resume(): void;
   endRound(): void;
   sessions(): void;
+  guide(): void;
 }
 
 interface View {
@@ -32,6 +34,7 @@ interface View {
   pairs: HTMLElement;
   end: HTMLButtonElement;
   conn: HTMLElement;
+  help: HTMLButtonElement;
   data: StatusData | null;
   handlers: StatusHandlers | null;
   confirmUntil: number;
@@ -40,10 +43,14 @@ interface View {
 const views = new WeakMap<Element, View>();
 const CONFIRM_MS = 4000;
 
-/** "Round 2 of 5" (rounds count from 1 for people; the server counts from 0). */
+/** "Round 2 of 0–4": numbered from 0, as in the API and the export (`roundOf`). */
 export function roundText(s: Pick<SessionState, "round" | "rounds">): string {
-  return `Round ${Math.min(s.round + 1, s.rounds)} of ${s.rounds}`;
+  return `Round ${roundOf(s.round, s.rounds)}`;
 }
+
+const ROUND_TITLE =
+  "Rounds are numbered from 0, as in the progress messages, the export and the checkpoint " +
+  "folders (round-0000)";
 
 export function renderStatus(element: HTMLElement, data: StatusData, handlers: StatusHandlers): void {
   const view = memo(views, element, () => build(element));
@@ -107,6 +114,12 @@ function build(element: HTMLElement): View {
   const pairs = h("span", { class: "num" });
   const end = h("button", { type: "button", class: "end-round" }, "End round");
   const conn = h("span", { class: "conn", role: "status" });
+  const help = h(
+    "button",
+    { type: "button", class: "help", title: "How to use this page (?)", "aria-label": "Show the guide" },
+    "?",
+  );
+  round.title = ROUND_TITLE;
   const sessions = h("button", { type: "button", class: "brand", title: "Sessions" }, "groupwise");
   element.classList.add("statusbar");
   element.replaceChildren(
@@ -124,6 +137,7 @@ function build(element: HTMLElement): View {
     ),
     conn,
     end,
+    help,
   );
   const view: View = {
     meta,
@@ -135,6 +149,7 @@ function build(element: HTMLElement): View {
     pairs,
     end,
     conn,
+    help,
     data: null,
     handlers: null,
     confirmUntil: 0,
@@ -154,6 +169,7 @@ function build(element: HTMLElement): View {
     text(end, "Click again to end the round");
   });
   sessions.addEventListener("click", () => view.handlers?.sessions());
+  help.addEventListener("click", () => view.handlers?.guide());
   window.setInterval(() => tick(view), 500);
   return view;
 }

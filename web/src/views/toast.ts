@@ -1,4 +1,8 @@
-/** Confirmations and error messages: one at a time, bottom centre, announced politely. */
+/**
+ * Confirmations and error messages: one at a time, in the message bar under the workspace
+ * (a strip of their own, so they never cover a control); errors are announced at once,
+ * confirmations politely.
+ */
 import type { Toast } from "../state";
 import { h, memo, text } from "./dom";
 
@@ -32,6 +36,7 @@ export function renderToast(element: HTMLElement, toast: Toast | null, canUndo: 
   // Errors are alerts (read at once); confirmations are polite.
   view.box.setAttribute("role", toast.kind === "error" ? "alert" : "status");
   text(view.message, toast.text);
+  view.message.title = toast.text; // the bar shows two lines; the whole text on hover
   window.clearTimeout(view.timer);
   if (toast.kind !== "error") {
     const id = toast.id;

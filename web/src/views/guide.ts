@@ -1,0 +1,107 @@
+/**
+ * The guide: a few lines on what to do, shown over the page the first time a mode is opened
+ * in this browser and again from the status bar's "?" (or the ? key). A dialog: the answer
+ * keys rest while it is open; Escape, "Got it" or a click beside it closes it.
+ */
+import { question } from "../lib/format";
+import { h, kbd, memo } from "./dom";
+
+export type GuideMode = "groupwise" | "pairwise";
+
+export interface GuideHandlers {
+  close(): void;
+}
+
+interface View {
+  box: HTMLElement;
+  body: HTMLElement;
+  ok: HTMLButtonElement;
+  mode: GuideMode | null;
+  open: boolean;
+  handlers: GuideHandlers | null;
+  /** What had the focus before the guide opened (it gets it back). */
+  before: Element | null;
+}
+
+const views = new WeakMap<Element, View>();
+
+type Line = Array<Node | string>;
+
+/** The guide's lines per mode: what the page shows and what each interaction does. */
+function lines(mode: GuideMode): Line[] {
+  if (mode === "pairwise") {
+    return [
+      ["Two clips play side by side; each is a short behaviour of the agent."],
+      [h("strong", {}, question("clip"))],
+      [kbd("←", "A"), " left · ", kbd("→", "D"), " right · ", kbd("↑", "W"), " about equal · ", kbd("↓", "S"), " skip this pair"],
+      [kbd("U"), " undoes your last answer. The round ends after its time or its comparisons, or when you press End round; then the agent learns from your answers."],
+    ];
+  }
+  return [
+    [
+      "Each arc of the chart is a behaviour of the agent (inner ring) or a cluster of similar " +
+        "behaviours (outer rings). Hover an arc to watch it.",
+    ],
+    [
+      h("strong", {}, "Click"),
+      " an arc to put its behaviours in group A, ",
+      h("strong", {}, "Shift-click"),
+      " to add them, ",
+      h("strong", {}, "right-click"),
+      " (or Alt-click) to fill group B. ",
+      kbd("G"),
+      " switches the group that clicks fill.",
+    ],
+    [kbd("N"), " shows the next suggested comparison instead of choosing groups yourself."],
+    [h("strong", {}, question("group"))],
+    [kbd("←", "A"), " group A · ", kbd("→", "D"), " group B · ", kbd("↑", "W"), " about equal · ", kbd("U"), " undo the last answer"],
+    ["The round ends after its time or its comparisons, or when you press End round; then the agent learns from your answers."],
+  ];
+}
+
+export function renderGuide(element: HTMLElement, mode: GuideMode | null, open: boolean, handlers: GuideHandlers): void {
+  const view = memo(views, element, () => build(element));
+  view.handlers = handlers;
+  const show = open && mode !== null;
+  if (mode !== null && mode !== view.mode) {
+    view.mode = mode;
+    view.body.replaceChildren(...lines(mode).map((line) => h("li", {}, ...line)));
+  }
+  if (show === view.open) return;
+  view.open = show;
+  element.hidden = !show;
+  if (show) {
+    view.before = document.activeElement;
+    view.ok.focus();
+  } else if (view.before instanceof HTMLElement && view.before.isConnected) {
+    view.before.focus();
+  }
+}
+
+function build(element: HTMLElement): View {
+  const body = h("ul", { class: "guide-lines" });
+  const ok = h("button", { type: "button", class: "primary" }, "Got it");
+  const close = h("button", { type: "button", class: "ghost close", "aria-label": "Close the guide" }, "×");
+  const box = h(
+    "section",
+    { class: "guide", role: "dialog", "aria-modal": "true", "aria-labelledby": "guide-title" },
+    h("header", { class: "guide-head" }, h("h2", { id: "guide-title" }, "How this page works"), close),
+    body,
+    h(
+      "footer",
+      { class: "guide-foot" },
+      h("span", { class: "muted" }, "The ", h("strong", {}, "?"), " button in the top bar shows this again."),
+      ok,
+    ),
+  );
+  element.classList.add("guide-backdrop");
+  element.hidden = true;
+  element.replaceChildren(box);
+  const view: View = { box, body, ok, mode: null, open: false, handlers: null, before: null };
+  ok.addEventListener("click", () => view.handlers?.close());
+  close.addEventListener("click", () => view.handlers?.close());
+  element.addEventListener("click", (e) => {
+    if (e.target === element) view.handlers?.close();
+  });
+  return view;
+}
