@@ -4,8 +4,10 @@ import importlib
 import sys
 
 BENCHMARKS = ["ppo_throughput", "render_fps", "dtw", "pool_prep", "submit_latency", "web_render"]
-ON_DEMAND = ["peer"]
-"""Run only when named: `peer` (groupwise against imitation) takes about 45 minutes."""
+ON_DEMAND = ["peer", "faults", "fuzz"]
+"""Run only when named: `peer` (groupwise against imitation) takes about 45 minutes,
+`faults` (100 kills of server or worker under load, then `fuzz`) about 25, `fuzz`
+(schemathesis, 10,000 requests to the live API) about 5."""
 
 
 def main(names: list[str]) -> None:
