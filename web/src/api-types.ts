@@ -13,7 +13,8 @@ export interface paths {
         };
         /**
          * List Envs
-         * @description The short env names; any registered Gymnasium id with a fixed horizon works too.
+         * @description The short env names, the case studies' reward-free target envs last; any registered
+         *     Gymnasium id with a fixed horizon works too.
          */
         get: operations["list_envs_api_envs_get"];
         put?: never;
@@ -418,6 +419,47 @@ export interface paths {
 export type webhooks = Record<string, never>;
 export interface components {
     schemas: {
+        /**
+         * ClipTiming
+         * @description How a pool's clips show its behaviours (docs/app.md, "Clips"; `clips.timing`).
+         */
+        ClipTiming: {
+            /**
+             * Fps
+             * @description playback frames per second, 1 / (stride · step_seconds)
+             */
+            fps: number;
+            /**
+             * Frames
+             * @description frames per clip, ⌈steps / stride⌉
+             */
+            frames: number;
+            /**
+             * Seconds
+             * @description simulated time a behaviour covers, steps · step_seconds
+             */
+            seconds: number;
+            /**
+             * Speed
+             * @description playback speed relative to simulated time (1: real speed)
+             */
+            speed: number;
+            /**
+             * Step Seconds
+             * @description dt, simulated seconds per env step
+             */
+            step_seconds: number;
+            /**
+             * Steps
+             * @description L, env steps per behaviour
+             */
+            steps: number;
+            /**
+             * Stride
+             * @description a frame every stride-th step
+             */
+            stride: number;
+        };
         /** Counts */
         Counts: {
             /** Comparisons Round */
@@ -655,6 +697,8 @@ export interface components {
         };
         /** PairwiseNext */
         PairwiseNext: {
+            /** @description the open round's clip timing (null: a pool from before it) */
+            clip?: components["schemas"]["ClipTiming"] | null;
             following: components["schemas"]["PairQuery"] | null;
             pair: components["schemas"]["PairQuery"] | null;
         };
@@ -773,6 +817,8 @@ export interface components {
         };
         /** RoundTree */
         RoundTree: {
+            /** @description the pool's clip timing (null: a pool from before it) */
+            clip?: components["schemas"]["ClipTiming"] | null;
             /**
              * Compared
              * @description behaviours already in a judgement of the round
@@ -815,7 +861,6 @@ export interface components {
              *       "driver": "app",
              *       "eval_episodes": 5,
              *       "exploration_fraction": 0.25,
-             *       "fragment_length": 30,
              *       "frame_size": 240,
              *       "pair_derivation": "cover",
              *       "pool_size": 100,
@@ -881,6 +926,11 @@ export interface components {
          */
         SessionSettings: {
             /**
+             * Clip Seconds
+             * @description simulated seconds a behaviour covers, played at real speed (null: the env's default, e.g. 1.5 s for Hopper; with fragment_length too, they must agree)
+             */
+            clip_seconds?: number | null;
+            /**
              * Comparisons Per Round
              * @description round ends after this many judgements (0 = no limit)
              * @default 20
@@ -907,10 +957,9 @@ export interface components {
             exploration_fraction: number;
             /**
              * Fragment Length
-             * @description L, steps per behaviour
-             * @default 30
+             * @description L, steps per behaviour (null: clip_seconds of simulated time)
              */
-            fragment_length: number;
+            fragment_length?: number | null;
             /**
              * Frame Size
              * @description clip width, height

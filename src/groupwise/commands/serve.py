@@ -34,6 +34,7 @@ def _number(text: str) -> float:
 SETTING_FLAGS: dict[str, Callable[[str], Any]] = {
     "pool_size": int_at_least(0),
     "fragment_length": int_at_least(0),
+    "clip_seconds": _number,
     "round_seconds": _number,
     "comparisons_per_round": int_at_least(0),
     "ppo_steps_per_round": int_at_least(0),
@@ -161,7 +162,7 @@ def choose_session(
                 return Chosen(found.id, found.env, found.mode, "resuming")
             if env is None:
                 raise UsageError("--env is required unless --session names a session")
-            check_env(env, settings)
+            settings = check_env(env, settings)
             resumable = None if new else repo.find_resumable(s, env, mode)
             if resumable is not None:
                 _check_same_settings(resumable.id, resumable.settings, overrides)

@@ -192,7 +192,7 @@ def pool_config(env: str, settings: SessionSettings, workers: int) -> PoolConfig
     return PoolConfig(
         env=env,
         size=settings.pool_size,
-        length=settings.fragment_length,
+        length=settings.clip_timing(env).steps,
         exploration_fraction=settings.exploration_fraction,
         width=settings.frame_size,
         height=settings.frame_size,

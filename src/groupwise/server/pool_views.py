@@ -1,5 +1,5 @@
 """A round's pool as the views need it: the tree, suggestion edges, group suggestions, and
-the pairwise baseline's next pairs.
+the pairwise baseline's next pairs; with them, how the pool's clips play (`clip_timing`).
 
 The tree and medoids come from the prepared pool's directory (`groupwise.prepare` layout),
 read once per round and cached: a prepared pool never changes. Everything else is read from
@@ -39,6 +39,15 @@ def _pool_directory(context: AppContext, row: RoundRow) -> Path:
     if not directory.is_relative_to(root) or not (directory / "tree.json").is_file():
         raise NotFoundError(f"the pool of round {row.index} is not available")
     return directory
+
+
+def clip_timing(directory: Path) -> schemas.ClipTiming | None:
+    """The clip timing a pool's ``pool.json`` records (None for pools from before it)."""
+    try:
+        clip = json.loads((directory / "pool.json").read_text()).get("clip")
+        return schemas.ClipTiming.model_validate(clip) if clip else None
+    except (OSError, ValueError):
+        return None
 
 
 def _node(obj: dict[str, Any]) -> schemas.TreeNodeOut:
@@ -81,7 +90,12 @@ def round_tree(context: AppContext, session_id: str, index: int) -> schemas.Roun
     with context.db.read() as s:
         compared = repo.compared(s, row)
     return schemas.RoundTree(
-        round=index, levels=levels, tree=tree, medoids=medoids, compared=compared
+        round=index,
+        levels=levels,
+        clip=clip_timing(_pool_directory(context, row)),
+        tree=tree,
+        medoids=medoids,
+        compared=compared,
     )
 
 
@@ -125,8 +139,9 @@ def _open_round(db: Database, session_id: str) -> RoundRow:
         return get_round(s, session_id, session.round)
 
 
-def pairwise_next(db: Database, session_id: str) -> schemas.PairwiseNext:
+def pairwise_next(context: AppContext, session_id: str) -> schemas.PairwiseNext:
     """The pair to ask now and the one after it (the page preloads both clips)."""
+    db = context.db
     row = _open_round(db, session_id)
     with db.read() as s:
         queue = repo.pairwise_next(s, row.id, 2)
@@ -144,14 +159,20 @@ def pairwise_next(db: Database, session_id: str) -> schemas.PairwiseNext:
         )
 
     pairs = [query(entry) for entry in queue]
+    try:
+        clip = clip_timing(_pool_directory(context, row))
+    except NotFoundError:
+        clip = None
     return schemas.PairwiseNext(
-        pair=pairs[0] if pairs else None, following=pairs[1] if len(pairs) > 1 else None
+        pair=pairs[0] if pairs else None,
+        following=pairs[1] if len(pairs) > 1 else None,
+        clip=clip,
     )
 
 
-def skip_pair(db: Database, session_id: str, skip: schemas.PairSkip) -> schemas.PairwiseNext:
+def skip_pair(context: AppContext, session_id: str, skip: schemas.PairSkip) -> schemas.PairwiseNext:
     """Skip a pair of the open round's queue; the next pairs. Raises NotFoundError."""
-    row = _open_round(db, session_id)
-    with db.write() as s:
+    row = _open_round(context.db, session_id)
+    with context.db.write() as s:
         repo.skip_pair(s, row.id, skip.left, skip.right)
-    return pairwise_next(db, session_id)
+    return pairwise_next(context, session_id)

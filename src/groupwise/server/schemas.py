@@ -114,9 +114,24 @@ class TreeNodeOut(_Out):
     poster: str | None = None
 
 
+class ClipTiming(_Out):
+    """How a pool's clips show its behaviours (docs/app.md, "Clips"; `clips.timing`)."""
+
+    steps: int = Field(description="L, env steps per behaviour")
+    stride: int = Field(description="a frame every stride-th step")
+    frames: int = Field(description="frames per clip, ⌈steps / stride⌉")
+    fps: float = Field(description="playback frames per second, 1 / (stride · step_seconds)")
+    seconds: float = Field(description="simulated time a behaviour covers, steps · step_seconds")
+    speed: float = Field(description="playback speed relative to simulated time (1: real speed)")
+    step_seconds: float = Field(description="dt, simulated seconds per env step")
+
+
 class RoundTree(_Out):
     round: int
     levels: int
+    clip: ClipTiming | None = Field(
+        default=None, description="the pool's clip timing (null: a pool from before it)"
+    )
     tree: TreeNodeOut
     medoids: dict[str, list[str]] = Field(
         description="inner node id → up to 3 representative behaviour ids"
@@ -207,6 +222,9 @@ class PairQuery(_Out):
 class PairwiseNext(_Out):
     pair: PairQuery | None
     following: PairQuery | None
+    clip: ClipTiming | None = Field(
+        default=None, description="the open round's clip timing (null: a pool from before it)"
+    )
 
 
 class PairSkip(_In):

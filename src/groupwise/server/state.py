@@ -89,26 +89,28 @@ def list_states(db: Database) -> list[schemas.SessionState]:
         return [_state(s, row, now) for row in repo.list_sessions(s)]
 
 
-def check_env(env: str, settings: SessionSettings) -> None:
-    """Raise InvalidError unless `env` is known and its episodes hold a fragment."""
+def check_env(env: str, settings: SessionSettings) -> SessionSettings:
+    """The settings a new session of `env` stores (`SessionSettings.for_env`: its L in
+    steps). Raises InvalidError unless `env` is known and its episodes hold a behaviour."""
     try:
         steps = horizon(env)
+        resolved = settings.for_env(env)
     except ValueError as error:
         raise InvalidError(str(error)) from None
-    if steps is None or steps < settings.fragment_length:
+    length = resolved.fragment_length
+    if steps is None or length is None or steps < length:
         raise InvalidError(
-            f"env {env} needs a fixed horizon of at least fragment_length = "
-            f"{settings.fragment_length} steps; it has {steps}"
+            f"env {env} needs a fixed horizon of at least fragment_length = {length} steps "
+            f"({resolved.clip_timing(env).seconds:.3g} s); it has {steps}"
         )
+    return resolved
 
 
 def create_session(context: AppContext, request: schemas.SessionCreate) -> schemas.SessionState:
     """Create a session (its round 0 is queued for the worker). Raises InvalidError."""
-    check_env(request.env, request.settings)
+    settings = check_env(request.env, request.settings)
     with context.db.write() as s:
-        session = repo.create_session(
-            s, request.env, request.mode, request.settings, request.annotator
-        )
+        session = repo.create_session(s, request.env, request.mode, settings, request.annotator)
         session_id = session.id
     context.supervisor.ensure_worker_soon()
     return read_state(context.db, session_id)

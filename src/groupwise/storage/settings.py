@@ -7,14 +7,19 @@ config (`groupwise.config`), not a mirror: PPO and the reward model are the core
 `run_config` is the session as a `RunConfig` (written beside its checkpoints). What only the
 app has (per-round budgets, the round timer, suggestions, clip size) lives here alone.
 
+A behaviour covers `clip_seconds` of simulated time (the env's default when null), played at
+real speed (`groupwise.clips.timing`); a new session stores its L in steps (`for_env`), and
+sessions stored before clips were measured in seconds keep the L = 30 steps they stored.
+
 The fields after `seed` are advanced knobs that the page does not show; tests and the
 latency benchmark use them to make rounds take seconds.
 """
 
-from typing import Annotated, Any, Literal
+from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
+from groupwise.clips.timing import ClipTiming, default_clip_seconds, env_clip_timing
 from groupwise.config import (
     ExplorationFraction,
     LoopConfig,
@@ -27,7 +32,10 @@ from groupwise.config import (
 )
 from groupwise.preferences.judgement import MAX_GROUP
 
-__all__ = ["HUMAN", "LIBRARY", "MAX_GROUP", "SessionSettings"]
+__all__ = ["HUMAN", "LIBRARY", "MAX_GROUP", "MIN_FRAGMENT_LENGTH", "SessionSettings"]
+
+MIN_FRAGMENT_LENGTH = 5
+"""Fewest steps of a behaviour in the app."""
 
 HUMAN = "human"
 """`LoopConfig.oracle` of a session a person answers (through the page)."""
@@ -42,7 +50,19 @@ class SessionSettings(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
     pool_size: int = Field(default=100, ge=8, le=200, description="behaviours per round")
-    fragment_length: Annotated[int, Field(ge=5, le=200, description="L, steps per behaviour")] = 30
+    fragment_length: int | None = Field(
+        default=None,
+        ge=MIN_FRAGMENT_LENGTH,
+        le=1000,
+        description="L, steps per behaviour (null: clip_seconds of simulated time)",
+    )
+    clip_seconds: float | None = Field(
+        default=None,
+        gt=0,
+        le=20,
+        description="simulated seconds a behaviour covers, played at real speed (null: the "
+        "env's default, e.g. 1.5 s for Hopper; with fragment_length too, they must agree)",
+    )
     round_seconds: float = Field(
         default=600, ge=0, le=86_400, description="round time budget in seconds (0 = no limit)"
     )
@@ -92,6 +112,48 @@ class SessionSettings(BaseModel):
                     data = {**data, key: {k: v for k, v in data[key].items() if v is not None}}
         return data
 
+    def clip_timing(self, env: str) -> ClipTiming:
+        """L and how a clip of `env` plays it (`clips.timing`): `fragment_length` steps if
+        set, else `clip_seconds` (default: the env's) of simulated time.
+
+        Raises:
+            ValueError: unknown env.
+        """
+        return env_clip_timing(env, self.clip_seconds, steps=self.fragment_length)
+
+    def for_env(self, env: str) -> "SessionSettings":
+        """These settings with `fragment_length` fixed for `env` (and `clip_seconds` the
+        duration asked for, when L was not given in steps): what a new session stores, so
+        that its L never changes, whatever later versions choose as the env's default.
+
+        Raises:
+            ValueError: unknown env; both set and disagreeing; or a clip under
+                `MIN_FRAGMENT_LENGTH` steps.
+        """
+        timing = self.clip_timing(env)
+        if self.fragment_length is None:
+            seconds = self.clip_seconds or default_clip_seconds(env)
+            return self.model_copy(
+                update={"fragment_length": timing.steps, "clip_seconds": seconds}
+            )._checked(env)
+        if self.clip_seconds is not None:
+            asked = env_clip_timing(env, self.clip_seconds).steps
+            if asked != self.fragment_length:
+                raise ValueError(
+                    f"fragment_length {self.fragment_length} and clip_seconds "
+                    f"{self.clip_seconds} ({asked} steps of {env}) disagree: give one of them"
+                )
+        return self._checked(env)
+
+    def _checked(self, env: str) -> "SessionSettings":
+        steps = self.clip_timing(env).steps
+        if steps < MIN_FRAGMENT_LENGTH:
+            raise ValueError(
+                f"clip_seconds {self.clip_seconds} is {steps} steps of {env}; a behaviour "
+                f"needs at least {MIN_FRAGMENT_LENGTH}"
+            )
+        return self
+
     def run_config(self, env: str) -> RunConfig:
         """The session as the core's configuration; its feedback comes from a person."""
         loop = LoopConfig(
@@ -100,7 +162,7 @@ class SessionSettings(BaseModel):
             comparisons=max(1, self.comparisons_per_round * self.rounds),
             rounds=self.rounds,
             steps=self.ppo_steps_per_round * self.rounds,
-            fragment_length=self.fragment_length,
+            fragment_length=self.clip_timing(env).steps,
             exploration_fraction=self.exploration_fraction,
             pool_cap=max(2, self.pool_size),
             eval_episodes=self.eval_episodes,

@@ -5,7 +5,10 @@ import socket
 import pytest
 
 from groupwise.cli import main
-from groupwise.commands.serve import _bind, _is_loopback
+from groupwise.commands.arguments import UsageError
+from groupwise.commands.serve import _bind, _is_loopback, choose_session
+from groupwise.storage import Database, sqlite_url
+from groupwise.storage import sessions as repo
 
 
 def _serve(tmp_path, capsys, *args: str) -> tuple[int, str]:
@@ -27,6 +30,7 @@ def _serve(tmp_path, capsys, *args: str) -> tuple[int, str]:
         (["--env", "GridWorld", "--settings", '{"frame_size": 33}'], "setting frame_size"),
         (["--env", "GridWorld", "--settings", '{"colour": 1}'], "setting colour"),
         (["--env", "GridWorld", "--fragment-length", "2000"], "--fragment-length"),
+        (["--env", "Hopper", "--clip-seconds", "20"], "horizon of at least"),  # 2500 steps
         (["--session", "s-nope"], "no session 's-nope'"),
         ([], "--env is required"),
         (["--env", "GridWorld", "--token", " "], "--token must not be empty"),
@@ -60,6 +64,21 @@ def test_resuming_with_other_settings_needs_new(tmp_path, capsys):
             tmp_path, capsys, "--env", "GridWorld", "--pool-size", "50", "--port", port
         )
     assert code == 2 and "--new" in err
+
+
+def test_a_session_stores_its_clip_duration_in_steps_and_resumes_with_it(tmp_path):
+    url = sqlite_url(tmp_path / "groupwise.db")
+    first = choose_session(url, "Hopper", "groupwise", {"clip_seconds": 2.0}, None, False)
+    database = Database(url)
+    with database.read() as s:
+        stored = repo.get_session(s, first.session_id).settings
+    database.dispose()
+    assert (stored["fragment_length"], stored["clip_seconds"]) == (250, 2.0)
+    for same in ({"clip_seconds": 2.0}, {}, {"fragment_length": 250}):
+        again = choose_session(url, "Hopper", "groupwise", same, None, False)
+        assert (again.session_id, again.verb) == (first.session_id, "resuming")
+    with pytest.raises(UsageError, match="--new"):
+        choose_session(url, "Hopper", "groupwise", {"clip_seconds": 1.0}, None, False)
 
 
 @pytest.mark.parametrize(

@@ -51,6 +51,9 @@ def test_a_new_session_waits_for_its_first_pool(client):
     [
         ({"env": "GridWorld", "settings": {"pool_size": 500}}, "settings.pool_size"),
         ({"env": "GridWorld", "settings": {"fragment_length": 2}}, "settings.fragment_length"),
+        ({"env": "GridWorld", "settings": {"clip_seconds": 0}}, "settings.clip_seconds"),
+        ({"env": "Hopper", "settings": {"clip_seconds": 20}}, "horizon"),  # 2500 steps
+        ({"env": "Hopper", "settings": {"fragment_length": 30, "clip_seconds": 1}}, "disagree"),
         ({"env": "GridWorld", "settings": {"colour": "red"}}, "settings.colour"),
         ({"env": "GridWorld", "mode": "psychic"}, "mode"),
         ({"env": "NoSuchEnv"}, "NoSuchEnv"),
@@ -89,6 +92,35 @@ def test_the_round_tree_has_every_behaviour_with_its_clip(prepared):
     assert "true_return" not in str(tree)
     clip = client.get(f"/clips/{found[0]['clip']}")
     assert clip.status_code == 200 and clip.headers["content-type"] == "video/mp4"
+
+
+def test_the_round_and_the_pairs_say_how_their_clips_play(prepared):
+    client, groupwise, pairwise = prepared
+    # GridWorld runs at 30 steps a second: L = 10 steps are 1/3 s, a frame per step
+    expected = {"steps": 10, "stride": 1, "frames": 10, "fps": 30.0, "speed": 1.0}
+    tree = client.get(f"/api/sessions/{groupwise}/rounds/0/tree").json()
+    assert expected.items() <= tree["clip"].items()
+    assert tree["clip"]["seconds"] == pytest.approx(1 / 3, abs=1e-6)
+    pairs = client.get(f"/api/sessions/{pairwise}/pairwise/next").json()
+    assert pairs["clip"] == tree["clip"]
+
+
+def test_a_new_session_stores_its_behaviours_length_in_steps(client):
+    hopper = client.post("/api/sessions", json={"env": "Hopper"}).json()
+    assert hopper["settings"]["fragment_length"] == 188  # the env's 1.5 s of 0.008 s steps
+    assert hopper["settings"]["clip_seconds"] == 1.5
+    longer = client.post("/api/sessions", json={"env": "Hopper", "settings": {"clip_seconds": 2}})
+    assert longer.json()["settings"]["fragment_length"] == 250
+    steps = client.post(
+        "/api/sessions", json={"env": "Hopper", "settings": {"fragment_length": 30}}
+    )
+    assert (
+        steps.json()["settings"]["fragment_length"],
+        steps.json()["settings"]["clip_seconds"],
+    ) == (
+        30,
+        None,
+    )
 
 
 def test_edges_are_the_best_pairs_scaled_into_0_1(prepared):

@@ -15,10 +15,10 @@ router = APIRouter(
 @router.get("/next")
 def next_pair(session_id: SessionId, context: Context) -> PairwiseNext:
     """The next unanswered pair of the open round's queue and the one after it."""
-    return pool_views.pairwise_next(context.db, session_id)
+    return pool_views.pairwise_next(context, session_id)
 
 
 @router.post("/skip")
 def skip(session_id: SessionId, request: PairSkip, context: Context) -> PairwiseNext:
     """Skip a pair of the queue (it is not asked again this round); the next pairs."""
-    return pool_views.skip_pair(context.db, session_id, request)
+    return pool_views.skip_pair(context, session_id, request)
