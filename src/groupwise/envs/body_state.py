@@ -41,23 +41,30 @@ class BodyState:
     @classmethod
     def read(cls, env: MujocoEnv) -> "BodyState":
         """The current state of `env` (after a step, a reset or ``set_state``, all of which
-        update the positions this reads)."""
-        model, data = env.model, env.data
-        return cls(
+        update the positions this reads); `StateReader` reads many states faster."""
+        return StateReader(env)()
+
+
+class StateReader:
+    """Reads `BodyState`s of one env, its capsules looked up once (~10 µs a state)."""
+
+    def __init__(self, env: MujocoEnv) -> None:
+        model = env.model
+        self._data = env.data
+        self._capsules = np.flatnonzero(model.geom_type == mujoco.mjtGeom.mjGEOM_CAPSULE)
+        self._names = [model.geom(int(g)).name for g in self._capsules]
+        # a capsule's axis is its local z; size = (radius, half length)
+        self._radius = model.geom_size[self._capsules, 0].copy()
+        self._half_length = model.geom_size[self._capsules, 1].copy()
+
+    def __call__(self) -> BodyState:
+        data = self._data
+        axis_z = data.geom_xmat[self._capsules, 8]
+        lowest = data.geom_xpos[self._capsules, 2] - np.abs(axis_z) * self._half_length
+        return BodyState(
             time=float(data.time),
             qpos=data.qpos.copy(),
             qvel=data.qvel.copy(),
             com_height=float(data.subtree_com[ROBOT_BODY, 2]),
-            bottoms=_capsule_bottoms(model, data),
+            bottoms=dict(zip(self._names, (lowest - self._radius).tolist(), strict=True)),
         )
-
-
-def _capsule_bottoms(model: mujoco.MjModel, data: mujoco.MjData) -> dict[str, float]:
-    bottoms = {}
-    for g in np.flatnonzero(model.geom_type == mujoco.mjtGeom.mjGEOM_CAPSULE):
-        # a capsule's axis is its local z; size = (radius, half length)
-        axis_z = data.geom_xmat[g, 8]
-        radius, half_length = model.geom_size[g, 0], model.geom_size[g, 1]
-        lowest = data.geom_xpos[g, 2] - abs(axis_z) * half_length - radius
-        bottoms[model.geom(g).name] = float(lowest)
-    return bottoms

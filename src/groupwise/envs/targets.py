@@ -21,7 +21,7 @@ from gymnasium.envs.mujoco.hopper_v5 import HopperEnv
 from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
 from gymnasium.envs.mujoco.walker2d_v5 import Walker2dEnv
 
-from groupwise.envs.body_state import BodyState
+from groupwise.envs.body_state import BodyState, StateReader
 from groupwise.envs.rendering import DEFAULT_FRAME_SIZE, FastMujocoRendering
 from groupwise.envs.scorers import BackflipScorer, SplitsScorer, StandSitScorer
 from groupwise.envs.true_reward import TRUE_REWARD_KEY
@@ -156,19 +156,20 @@ class TargetScoreInfo(gym.Wrapper[Any, Any, Any, Any]):
         if not isinstance(base, MujocoEnv):
             raise TypeError(f"a target needs a MuJoCo env, got {type(base).__name__}")
         self._base: MujocoEnv = base
+        self._read = StateReader(base)
         self.target = target
         self._scorer: EpisodeScorer | None = None
 
     def reset(self, **kwargs: Any) -> tuple[Any, dict[str, Any]]:
         obs, info = self.env.reset(**kwargs)
-        self._scorer = self.target.start(BodyState.read(self._base), self._base.dt)
+        self._scorer = self.target.start(self._read(), self._base.dt)
         return obs, info
 
     def step(self, action: Any) -> tuple[Any, SupportsFloat, bool, bool, dict[str, Any]]:
         if self._scorer is None:
             raise RuntimeError("reset the env before stepping it")
         obs, _, terminated, truncated, info = self.env.step(action)
-        score = self._scorer.step(BodyState.read(self._base))
+        score = self._scorer.step(self._read())
         info[TARGET_SCORE_KEY] = info[TRUE_REWARD_KEY] = score
         info[TARGET_TOTAL_KEY] = self._scorer.total()
         return obs, 0.0, terminated, truncated, info
