@@ -94,6 +94,7 @@ def test_select_answer_reload_undo(server: Server, page: Page, ui: Any, shot: An
     _open(page, server, sid)
 
     _expect_prefilled_or_empty_state(page, server, sid)
+    expect(page.locator(".comparison .clip-timing")).to_have_text("1 s · real speed")
     shot(page, "groupwise-start")
     if page.locator(".clip").count():
         page.get_by_role("button", name="Clear groups").click()

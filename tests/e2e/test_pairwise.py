@@ -17,6 +17,8 @@ def test_pairwise_round_trip(server: Server, page: Page, ui: Any, shot: Any) -> 
     first = ui.pair()
     expect(page.locator(".pair-left figcaption")).to_have_text(f"Left · {first[0]}")
     expect(page.locator(".pair video")).to_have_count(2)
+    # GridWorld's default behaviour: 30 steps at its 30 frames/s
+    expect(page.locator(".pairwise .clip-timing")).to_have_text("1 s · real speed")
     shot(page, "pairwise")
 
     # ← left better: the following pair (prefetched) is on screen at once.

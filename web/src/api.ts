@@ -24,6 +24,7 @@ export type SessionCreate = Omit<Schemas["SessionCreate"], "settings" | "annotat
   annotator?: string;
 };
 export type RoundTree = Schemas["RoundTree"];
+export type ClipTiming = Schemas["ClipTiming"];
 export type TreeNodeJson = Schemas["TreeNodeOut"];
 export type Edge = Schemas["Edge"];
 export type Suggestion = Schemas["Suggestion"];

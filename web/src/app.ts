@@ -4,6 +4,7 @@
  */
 import { type Api, type Edge, type JudgementOut, createApi } from "./api";
 import { type Controller, createController } from "./controller";
+import { clipCaption } from "./lib/clip-timing";
 import { guideSeen, rememberGuideSeen } from "./lib/guide";
 import { type KeyInput, keyCommand } from "./lib/keys";
 import type { Tree } from "./lib/tree";
@@ -227,6 +228,7 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
         clipOf: clipsOf(round?.tree),
         highlighted: highlighted(st.hover, round?.tree),
         speed: st.view.speed,
+        clipCaption: clipCaption(round?.clip, st.view.speed),
         canAnswer: hint === "",
         answerHint: hint,
         submitting: st.submitting,
@@ -268,6 +270,7 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
         exhausted: pw.exhausted,
         canUndo: open && st.judgements.length > 0 && !st.undoing,
         speed: st.view.speed,
+        clipCaption: clipCaption(pw.clip, st.view.speed),
       },
       {
         answer: (label) => controller.answerPair(label),

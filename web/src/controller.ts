@@ -183,7 +183,13 @@ export function createController(store: Store, api: Api, options: ControllerOpti
     passed = [];
     dispatch({
       type: "round-data",
-      round: { sid: s.id, round: tree.round, tree: buildTree(tree.tree, tree.levels), medoids: tree.medoids },
+      round: {
+        sid: s.id,
+        round: tree.round,
+        tree: buildTree(tree.tree, tree.levels),
+        medoids: tree.medoids,
+        clip: tree.clip ?? null,
+      },
     });
     dispatch({ type: "suggestions", edges });
     dispatch({ type: "judgements", judgements });

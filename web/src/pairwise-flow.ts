@@ -42,6 +42,7 @@ async function nextPair(skip?: PairQuery): Promise<void> {
         loading: false,
         exhausted: reply.pair === null,
         shownAt: pw.current ? pw.shownAt : Date.now(),
+        clip: reply.clip ?? null,
       },
     });
   } catch (err) {

@@ -3,6 +3,7 @@
  * Every view derives from `State`; nothing else holds app state (views keep only DOM).
  */
 import type {
+  ClipTiming,
   Edge,
   JudgementOut,
   PairQuery,
@@ -37,6 +38,8 @@ export interface RoundData {
   round: number;
   tree: Tree;
   medoids: Record<string, string[]>;
+  /** How the round's clips play (null: a pool from before it was recorded). */
+  clip?: ClipTiming | null;
 }
 
 /** How the current groups came about: SPEC §8 logs source, time taken and edits. */
@@ -70,6 +73,8 @@ export interface PairwiseState {
   shownAt: number | null;
   /** True once the server said there is no pair left. */
   exhausted: boolean;
+  /** How the open round's clips play. */
+  clip?: ClipTiming | null;
 }
 
 export interface State {

@@ -27,6 +27,8 @@ export interface ComparisonData {
   /** Behaviours to highlight (the hovered leaf, or the leaves of the hovered cluster). */
   highlighted: ReadonlySet<string>;
   speed: number;
+  /** What a clip shows and how fast it plays, e.g. "1.5 s · real speed". */
+  clipCaption: string;
   /** Answers are possible (both groups filled, round open, nothing in flight). */
   canAnswer: boolean;
   /** Why answering is not possible, when it is not. */
@@ -73,6 +75,7 @@ interface View {
   items: Map<string, ClipItem>;
   origin: HTMLElement;
   speed: HTMLSelectElement;
+  timing: HTMLElement;
   answers: Record<Label, HTMLButtonElement>;
   hint: HTMLElement;
   next: HTMLButtonElement;
@@ -122,6 +125,7 @@ export function renderComparison(
   view.clear.disabled = data.groups.A.length + data.groups.B.length === 0;
   view.undo.disabled = !data.canUndo || data.undoing;
   text(view.origin, originText(data));
+  text(view.timing, data.clipCaption);
 }
 
 function originText(d: ComparisonData): string {
@@ -166,6 +170,7 @@ function build(element: HTMLElement): View {
   const origin = h("span", { class: "panel-sub origin", role: "status" });
   const speed = h("select", { "aria-label": "Playback speed" });
   for (const s of SPEEDS) speed.append(h("option", { value: s }, `${s}×`));
+  const timing = h("span", { class: "clip-timing", title: "Simulated time each clip shows, and how fast it plays" });
   const restart = h(
     "button",
     { type: "button", class: "ghost", title: "Start all clips together again", "aria-label": "Restart all clips together" },
@@ -175,7 +180,7 @@ function build(element: HTMLElement): View {
     "header",
     { class: "panel-head" },
     h("div", { class: "head-title" }, h("h2", { id: "comparison-title" }, question("group")), origin),
-    h("div", { class: "head-tools" }, h("label", { class: "speed" }, "Speed ", speed), restart),
+    h("div", { class: "head-tools" }, timing, h("label", { class: "speed" }, "Speed ", speed), restart),
   );
 
   const answer = (label: Label, content: Array<Node | string>, shortcut: string, name: string) => {
@@ -214,6 +219,7 @@ function build(element: HTMLElement): View {
     items: new Map(),
     origin,
     speed,
+    timing,
     answers,
     hint,
     next,

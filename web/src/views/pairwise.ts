@@ -19,6 +19,8 @@ export interface PairwiseData {
   exhausted: boolean;
   canUndo: boolean;
   speed: number;
+  /** What a clip shows and how fast it plays, e.g. "1.5 s · real speed". */
+  clipCaption: string;
 }
 
 export interface PairwiseHandlers {
@@ -40,6 +42,7 @@ interface View {
   undo: HTMLButtonElement;
   hint: HTMLElement;
   speed: HTMLSelectElement;
+  timing: HTMLElement;
   /** Loaded videos by source URL: visible, prefetching, or about to be dropped. */
   videos: Map<string, HTMLVideoElement>;
   shownKey: string;
@@ -110,6 +113,7 @@ export function renderPairwise(element: HTMLElement, data: PairwiseData, handler
   }
   for (const v of view.videos.values()) if (v.playbackRate !== data.speed) v.playbackRate = data.speed;
   view.speed.value = String(data.speed);
+  text(view.timing, data.clipCaption);
   text(view.leftCaption, cur ? `Left · ${cur.left}` : "Left");
   text(view.rightCaption, cur ? `Right · ${cur.right}` : "Right");
   view.empty.hidden = cur !== null;
@@ -151,6 +155,7 @@ function build(element: HTMLElement): View {
   const hint = h("p", { class: "answer-hint", role: "status" });
   const speed = h("select", { "aria-label": "Playback speed" });
   for (const s of SPEEDS) speed.append(h("option", { value: s }, `${s}×`));
+  const timing = h("span", { class: "clip-timing", title: "Simulated time each clip shows, and how fast it plays" });
   element.classList.add("panel", "pairwise");
   element.setAttribute("aria-labelledby", "pairwise-title");
   element.replaceChildren(
@@ -158,7 +163,7 @@ function build(element: HTMLElement): View {
       "header",
       { class: "panel-head" },
       h("h2", { id: "pairwise-title" }, question("clip")),
-      h("div", { class: "head-tools" }, h("label", { class: "speed" }, "Speed ", speed)),
+      h("div", { class: "head-tools" }, timing, h("label", { class: "speed" }, "Speed ", speed)),
     ),
     pair,
     h(
@@ -184,6 +189,7 @@ function build(element: HTMLElement): View {
     undo,
     hint,
     speed,
+    timing,
     videos: new Map(),
     shownKey: "\u0000",
     handlers: null,
