@@ -20,7 +20,7 @@ from typing import Any
 
 import gymnasium as gym
 
-from groupwise.envs import ENVS, make_env
+from groupwise.envs import env_entry, make_env
 
 TARGET_FPS = 30.0
 """Frame rate a clip's stride aims at (browsers and people are at ease with 25-60)."""
@@ -136,7 +136,7 @@ def env_step_seconds(env: str) -> float:
 def default_clip_seconds(env: str) -> float:
     """The simulated seconds a behaviour of `env` covers by default (its `EnvEntry`'s, else
     `DEFAULT_CLIP_SECONDS`)."""
-    entry = ENVS.get(env)
+    entry = env_entry(env)
     seconds = entry.clip_seconds if entry is not None else None
     return float(seconds) if seconds is not None else DEFAULT_CLIP_SECONDS
 

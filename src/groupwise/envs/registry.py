@@ -136,7 +136,8 @@ TARGET_ENVS: dict[str, EnvEntry] = {
 "Hopper-backflip": reward-free, their true reward is the target's score."""
 
 
-def _entry(name: str) -> EnvEntry | None:
+def env_entry(name: str) -> EnvEntry | None:
+    """The `EnvEntry` of a short name in `ENVS` or `TARGET_ENVS`; None for any other name."""
     return ENVS.get(name) or TARGET_ENVS.get(name)
 
 
@@ -161,7 +162,7 @@ def resolve_id(name: str) -> str:
         ValueError: `name` is none of these, its module cannot be imported, or importing it
             registers no such id.
     """
-    if (entry := _entry(name)) is not None:
+    if (entry := env_entry(name)) is not None:
         return entry.gym_id
     register_envs()
     if name in gym.registry:
@@ -227,7 +228,7 @@ def horizon(name: str) -> int | None:
     Raises:
         ValueError: unknown name.
     """
-    if (entry := _entry(name)) is not None:
+    if (entry := env_entry(name)) is not None:
         return entry.horizon
     return gym.spec(resolve_id(name)).max_episode_steps
 

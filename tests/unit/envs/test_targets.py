@@ -8,6 +8,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
+from groupwise.clips.timing import default_clip_seconds
 from groupwise.envs import (
     ENVS,
     TARGET_ENVS,
@@ -82,6 +83,8 @@ def test_target_envs_are_registered_beside_the_six() -> None:
         assert horizon(target.env) == 1000
         assert 0 < target.threshold < target.stretch
         assert make_standard_env(target.env).spec.id == resolve_id(target.env)
+        # behaviours last as long as the base env's (the app's and case study's default)
+        assert default_clip_seconds(target.env) == default_clip_seconds(target.base) == 1.5
 
 
 @pytest.mark.parametrize("name", sorted(TARGET_ENVS))
