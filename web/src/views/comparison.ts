@@ -179,7 +179,8 @@ function build(element: HTMLElement): View {
   const head = h(
     "header",
     { class: "panel-head" },
-    h("div", { class: "head-title" }, h("h2", { id: "comparison-title" }, question("group")), origin),
+    h("h2", { id: "comparison-title" }, question("group")),
+    origin,
     h("div", { class: "head-tools" }, timing, h("label", { class: "speed" }, "Speed ", speed), restart),
   );
 
