@@ -28,7 +28,7 @@ from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
 
 from groupwise.clips.video import VideoConfig
 from groupwise.envs import make_env
-from groupwise.envs.rendering import DEFAULT_FRAME_SIZE, use_headless_sdl
+from groupwise.envs.rendering import DEFAULT_FRAME_SIZE
 from groupwise.fragments import Trajectory
 
 PLANE_GRID_CELLS = 40
@@ -60,13 +60,11 @@ def make_render_env(settings: FrameSettings) -> gym.Env[Any, Any]:
     """A fresh env that renders `rgb_array` frames of the requested size.
 
     Gymnasium ids whose constructor takes no width/height are made at their own size.
-    Classic-control envs render with pygame on SDL's dummy drivers (`use_headless_sdl`).
 
     Raises:
         RenderingUnavailableError: no offscreen GL backend (names the system packages).
         ValueError: unknown env.
     """
-    use_headless_sdl()
     try:
         env = make_env(
             settings.env, render_mode="rgb_array", width=settings.width, height=settings.height

@@ -20,7 +20,7 @@ from typing import Any
 import gymnasium as gym
 from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
 
-from groupwise.envs.rendering import OFFSCREEN_MODES, FastMujocoRendering
+from groupwise.envs.rendering import OFFSCREEN_MODES, FastMujocoRendering, use_headless_sdl
 from groupwise.envs.targets import TARGETS
 
 NAMESPACE = "groupwise"
@@ -187,13 +187,16 @@ def make_env(name: str, render_mode: str | None = None, **kwargs: Any) -> gym.En
     (see `resolve_id`).
 
     Gymnasium MuJoCo envs that are not ours also get `FastMujocoRendering` (fixed camera)
-    when rendered offscreen. `kwargs` go to the env's constructor (for ours: width, height).
+    when rendered offscreen; for offscreen modes pygame is set up headless first
+    (`use_headless_sdl`). `kwargs` go to the env's constructor (for ours: width, height).
 
     Raises:
         ValueError: unknown name (the message lists the known short names), or a module that
             cannot be imported or does not register the id.
     """
     gym_id = resolve_id(name)
+    if render_mode in OFFSCREEN_MODES:
+        use_headless_sdl()  # pygame-drawn envs (classic control) draw offscreen, quietly
     env = gym.make(gym_id, render_mode=render_mode, **kwargs)
     return _with_fast_rendering(env)
 
@@ -214,6 +217,8 @@ def make_standard_env(
     entry = ENVS.get(name)
     if entry is None or entry.standard_id is None:
         return make_env(name, render_mode=render_mode, **kwargs)
+    if render_mode in OFFSCREEN_MODES:
+        use_headless_sdl()
     env = gym.make(entry.standard_id, render_mode=render_mode, **kwargs)
     return _with_fast_rendering(env)
 

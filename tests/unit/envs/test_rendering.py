@@ -144,8 +144,8 @@ def test_failing_gl_context_gives_a_clear_error(monkeypatch: pytest.MonkeyPatch)
 
 
 _PENDULUM_FRAME = """
-from groupwise.clips.replay import FrameSettings, make_render_env
-env = make_render_env(FrameSettings("Pendulum-v1", 32, 32))
+from groupwise.envs import make_env
+env = make_env("Pendulum-v1", render_mode="rgb_array")
 env.reset(seed=0)
 print(env.render().shape)
 """
