@@ -26,7 +26,8 @@ def test_a_session_may_ask_for_seconds_or_steps() -> None:
     assert (steps.fragment_length, steps.clip_seconds) == (30, None)
     assert steps.clip_timing("Hopper").seconds == pytest.approx(0.24)
     agreeing = SessionSettings(fragment_length=250, clip_seconds=2.0)
-    assert agreeing.for_env("Hopper") == agreeing
+    resolved = agreeing.for_env("Hopper")
+    assert (resolved.fragment_length, resolved.clip_seconds) == (250, 2.0)
 
 
 def test_disagreeing_or_too_short_clips_are_refused() -> None:
