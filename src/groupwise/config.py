@@ -80,6 +80,8 @@ class RewardConfig:
     standardise_output: bool = False
     """After each fit, centre and scale every member's reward to mean 0, sd 1 over the
     dataset's steps in the reward PPO sees (`RewardEnsemble.standardise_output`)."""
+    use_actions: bool = True
+    """The members see [obs ; act] (SPEC §3); off, the observation alone."""
 
 
 @dataclass(frozen=True, config=_STRICT)

@@ -1,7 +1,8 @@
 """The reward-model ensemble as the rest of the system sees it: numpy in, numpy out (SPEC §3).
 
 Inputs are the concatenated [obs ; encoded action] of each step (one-hot for discrete
-actions, see `groupwise.envs.spaces`). Every prediction runs under `torch.inference_mode`
+actions, see `groupwise.envs.spaces`), or the observation alone (`RewardConfig.use_actions`
+off; the actions are still taken, checked and ignored). Every prediction runs under `torch.inference_mode`
 and never changes the input normaliser; only `fit` (in `bradley_terry`) and
 `update_normalizer` / `refit_normalizer` do.
 
@@ -60,7 +61,11 @@ class RewardEnsemble:
         self.cfg = cfg
         generator = torch.Generator().manual_seed(int(rng.integers(0, 2**63 - 1)))
         self.net = RewardNet(
-            cfg.ensemble_size, obs_dim + act_dim, cfg.hidden_sizes, cfg.activation, generator
+            cfg.ensemble_size,
+            obs_dim + act_dim if cfg.use_actions else obs_dim,
+            cfg.hidden_sizes,
+            cfg.activation,
+            generator,
         )
         self.net.eval()
         self.l2_weight = float(cfg.initial_l2)
@@ -87,7 +92,7 @@ class RewardEnsemble:
 
     @property
     def in_dim(self) -> int:
-        return self.obs_dim + self.act_dim
+        return self.obs_dim + self.act_dim if self.cfg.use_actions else self.obs_dim
 
     # ---------------------------------------------------------------- prediction
 
@@ -105,6 +110,8 @@ class RewardEnsemble:
             )
         if obs.shape[:-1] != acts.shape[:-1]:
             raise ValueError(f"obs {obs.shape} and acts {acts.shape} differ in batch shape")
+        if not self.cfg.use_actions:
+            return torch.from_numpy(obs)
         return torch.from_numpy(np.concatenate([obs, acts], axis=-1))
 
     def step_rewards(self, obs: np.ndarray, acts: np.ndarray) -> FloatArray:
@@ -137,16 +144,16 @@ class RewardEnsemble:
 
         Raises ValueError when the inputs are not (B, obs_dim) and (B, act_dim).
         """
-        x = torch.from_numpy(
-            np.concatenate(
-                [np.asarray(obs, dtype=np.float32), np.asarray(acts, dtype=np.float32)], axis=-1
-            )
-        )
-        if x.dim() != 2 or x.shape[1] != self.in_dim:
+        obs = np.asarray(obs, dtype=np.float32)
+        acts = np.asarray(acts, dtype=np.float32)
+        x = torch.from_numpy(np.concatenate([obs, acts], axis=-1))
+        if x.dim() != 2 or x.shape[1] != self.obs_dim + self.act_dim:
             raise ValueError(
                 f"expected obs (B, {self.obs_dim}) and acts (B, {self.act_dim}), "
                 f"got {np.shape(obs)} and {np.shape(acts)}"
             )
+        if not self.cfg.use_actions:
+            x = x[:, : self.obs_dim]
         with torch.inference_mode():
             out = (self.net(x) - self.output_shift) / self.output_scale
             return out.mean(dim=0).numpy()

@@ -138,3 +138,20 @@ def test_reinitialise_draws_fresh_seeded_weights():
     b.reinitialise(np.random.default_rng(5))
     assert not np.allclose(a.step_rewards(obs, acts), before)
     np.testing.assert_array_equal(a.step_rewards(obs, acts), b.step_rewards(obs, acts))
+
+
+def test_observation_only_members_ignore_the_actions_but_check_them(tmp_path: Path):
+    ens = _ensemble(3, RewardConfig(use_actions=False, hidden_sizes=(8, 8)))
+    assert ens.in_dim == OBS
+    obs, acts = _inputs(4, 3)
+    other_acts = acts + 5.0
+    np.testing.assert_array_equal(ens.returns(obs, acts), ens.returns(obs, other_acts))
+    np.testing.assert_array_equal(
+        ens.mean_reward(obs[:, 0], acts[:, 0]), ens.mean_reward(obs[:, 0], other_acts[:, 0])
+    )
+    with pytest.raises(ValueError):
+        ens.mean_reward(obs[:, 0], acts[:, 0, :1])
+    ens.save(tmp_path / "reward.pt")
+    rebuilt = RewardEnsemble.load(tmp_path / "reward.pt")
+    assert not rebuilt.cfg.use_actions
+    np.testing.assert_array_equal(rebuilt.returns(obs, acts), ens.returns(obs, acts))
