@@ -12,7 +12,9 @@ stays light and the app's extras are needed only for `WebTeacher`:
 - answering: `SimulatedTeacher`, `Perception`, `PairwiseTeacher`, `WebTeacher` (a person on
   the app's page), `Feedback` (a strategy and a teacher), `ORACLES` (the study's DMs);
 - judgements and learning: `Judgement`, `covering_pairs`, `PreferenceDataset`,
-  `RewardEnsemble`, `fit`, `LearnedRewardVecEnv`, `PPOAgent`, `SB3Agent`.
+  `RewardEnsemble`, `fit`, `LearnedRewardVecEnv`, `PPOAgent`, `SB3Agent`;
+- the result: `load_agent` (an ``agent.zip`` from the app or `groupwise train --from-session`)
+  → `TrainedAgent` with `predict(obs)` and `evaluate(env, episodes, seed)`.
 """
 
 import importlib
@@ -56,6 +58,8 @@ _EXPORTS = {
     "LearnedRewardVecEnv": "groupwise.rl.learned_reward",
     "PPOAgent": "groupwise.rl.ppo",
     "SB3Agent": "groupwise.rl.agents",
+    "load_agent": "groupwise.trained_agent",
+    "TrainedAgent": "groupwise.trained_agent",
 }
 
 __all__ = ["__version__", *_EXPORTS]

@@ -109,6 +109,89 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/sessions/{session_id}/agent": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Agent
+         * @description The finished session's agent: its round, steps and true return per round (409
+         *     before the session is finished, 404 for a session without one).
+         */
+        get: operations["agent_api_sessions__session_id__agent_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/sessions/{session_id}/agent.mp4": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Agent Video
+         * @description The final agent's video: one greedy episode at real speed.
+         */
+        get: operations["agent_video_api_sessions__session_id__agent_mp4_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/sessions/{session_id}/agent.zip": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Agent Zip
+         * @description The final agent as one zip (policy, normaliser, reward ensemble, settings, README);
+         *     `groupwise.load_agent` loads it.
+         */
+        get: operations["agent_zip_api_sessions__session_id__agent_zip_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/sessions/{session_id}/continue": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Continue Training
+         * @description Train a finished session again: `steps` more PPO steps on the frozen learned reward,
+         *     or `rounds` more feedback rounds, then the final phase (409 unless finished).
+         */
+        post: operations["continue_training_api_sessions__session_id__continue_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/sessions/{session_id}/end-round": {
         parameters: {
             query?: never;
@@ -163,6 +246,27 @@ export interface paths {
         get: operations["export_api_sessions__session_id__export_get"];
         put?: never;
         post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/sessions/{session_id}/finish": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Finish
+         * @description No more rounds after the current one: the open round ends now (a round being
+         *     prepared is dropped), then the final phase (409 when finishing, finished or failed).
+         */
+        post: operations["finish_api_sessions__session_id__finish_post"];
         delete?: never;
         options?: never;
         head?: never;
@@ -420,6 +524,80 @@ export type webhooks = Record<string, never>;
 export interface components {
     schemas: {
         /**
+         * AgentOut
+         * @description The finished session's agent: what the download holds and how it came about.
+         */
+        AgentOut: {
+            /** Env */
+            env: string;
+            /** Env Steps */
+            env_steps: number;
+            /**
+             * Measure
+             * @description what true_return_mean measures: "true return" or a target env's score
+             */
+            measure: string;
+            /**
+             * Round
+             * @description the round whose checkpoint the agent is
+             */
+            round: number;
+            /** Rounds */
+            rounds: components["schemas"]["AgentRound"][];
+            /** True Return Mean */
+            true_return_mean: number | null;
+            /** True Return Std */
+            true_return_std: number | null;
+            video: components["schemas"]["AgentVideo"] | null;
+        };
+        /**
+         * AgentRound
+         * @description One round of the session, as the finished page's chart shows it.
+         */
+        AgentRound: {
+            /** Env Steps */
+            env_steps: number;
+            /**
+             * Feedback
+             * @description false: PPO on the frozen learned reward only
+             */
+            feedback: boolean;
+            /** Judgements */
+            judgements: number;
+            /** Pairs Total */
+            pairs_total: number;
+            /** Round */
+            round: number;
+            /**
+             * True Return Mean
+             * @description null: not evaluated
+             */
+            true_return_mean: number | null;
+            /** True Return Std */
+            true_return_std: number | null;
+        };
+        /**
+         * AgentVideo
+         * @description The final agent's video (GET …/agent.mp4): one greedy episode, at real speed.
+         */
+        AgentVideo: {
+            /**
+             * Episode Return
+             * @description the filmed episode's true return
+             */
+            episode_return: number;
+            /** Fps */
+            fps: number;
+            /** Frames */
+            frames: number;
+            /** Height */
+            height: number;
+            /** Seconds */
+            seconds: number;
+            /** Width */
+            width: number;
+        };
+        /**
          * ClipTiming
          * @description How a pool's clips show its behaviours (docs/app.md, "Clips"; `clips.timing`).
          */
@@ -459,6 +637,22 @@ export interface components {
              * @description a frame every stride-th step
              */
             stride: number;
+        };
+        /**
+         * ContinueIn
+         * @description More training for a finished session: PPO steps on the frozen reward, or rounds.
+         */
+        ContinueIn: {
+            /**
+             * Rounds
+             * @description more feedback rounds
+             */
+            rounds?: number | null;
+            /**
+             * Steps
+             * @description PPO env steps on the frozen reward
+             */
+            steps?: number | null;
         };
         /** Counts */
         Counts: {
@@ -805,6 +999,11 @@ export interface components {
              */
             standardise_output: boolean;
             /**
+             * Use Actions
+             * @default true
+             */
+            use_actions: boolean;
+            /**
              * Validation Fraction
              * @default 0.2
              */
@@ -909,6 +1108,7 @@ export interface components {
              *         "lr": 0.001,
              *         "min_pairs_for_validation": 10,
              *         "standardise_output": false,
+             *         "use_actions": true,
              *         "validation_fraction": 0.2,
              *         "warm_start": true
              *       },
@@ -955,6 +1155,11 @@ export interface components {
              * @default 0.25
              */
             exploration_fraction: number;
+            /**
+             * Final Steps
+             * @description PPO env steps on the frozen learned reward after the last round (null: 2 × ppo_steps_per_round, at most 10,000,000)
+             */
+            final_steps?: number | null;
             /**
              * Fragment Length
              * @description L, steps per behaviour (null: clip_seconds of simulated time)
@@ -1008,7 +1213,7 @@ export interface components {
             round_seconds: number;
             /**
              * Rounds
-             * @description rounds in the session
+             * @description rounds in the session (the final phase's round follows the last)
              * @default 5
              */
             rounds: number;
@@ -1058,7 +1263,7 @@ export interface components {
              * Phase
              * @enum {string}
              */
-            phase: "preparing" | "ready" | "training" | "finished" | "failed";
+            phase: "preparing" | "ready" | "training" | "finishing" | "finished" | "failed";
             progress: components["schemas"]["Progress"];
             /** Round */
             round: number;
@@ -1614,6 +1819,325 @@ export interface operations {
             };
         };
     };
+    agent_api_sessions__session_id__agent_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description a session id */
+                session_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["AgentOut"];
+                };
+            };
+            /** @description bad request */
+            400: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description missing or wrong token */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description unknown session, round or judgement */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not possible in the session's current phase */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description body too large */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description invalid input */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+        };
+    };
+    agent_video_api_sessions__session_id__agent_mp4_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description a session id */
+                session_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "video/mp4": unknown;
+                };
+            };
+            /** @description a byte range */
+            206: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
+            };
+            /** @description bad request */
+            400: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description missing or wrong token */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description unknown session, round or judgement */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not possible in the session's current phase */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description body too large */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description invalid input */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+        };
+    };
+    agent_zip_api_sessions__session_id__agent_zip_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description a session id */
+                session_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/zip": unknown;
+                };
+            };
+            /** @description bad request */
+            400: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description missing or wrong token */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description unknown session, round or judgement */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not possible in the session's current phase */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description body too large */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description invalid input */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+        };
+    };
+    continue_training_api_sessions__session_id__continue_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description a session id */
+                session_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["ContinueIn"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["SessionState"];
+                };
+            };
+            /** @description bad request */
+            400: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description missing or wrong token */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description unknown session, round or judgement */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not possible in the session's current phase */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description body too large */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description invalid input */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+        };
+    };
     end_round_api_sessions__session_id__end_round_post: {
         parameters: {
             query?: never;
@@ -1792,6 +2316,83 @@ export interface operations {
                 content: {
                     "application/vnd.apache.parquet": unknown;
                     "application/x-ndjson": unknown;
+                };
+            };
+            /** @description bad request */
+            400: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description missing or wrong token */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description unknown session, round or judgement */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not possible in the session's current phase */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description body too large */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description invalid input */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+        };
+    };
+    finish_api_sessions__session_id__finish_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description a session id */
+                session_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["SessionState"];
                 };
             };
             /** @description bad request */

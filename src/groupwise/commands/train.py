@@ -1,21 +1,41 @@
-"""`groupwise train`: a headless RLHF session with a simulated decision-maker."""
+"""`groupwise train`: a headless RLHF session with a simulated decision-maker, or the
+continuation of an app session (`--from-session DIR`)."""
 
 import argparse
 import dataclasses
+import math
 from pathlib import Path
 
 from groupwise.commands.arguments import UsageError, non_negative_int, positive_int, writable_dir
 
+FROM_SESSION_EXCLUDES = ("env", "config", "out", "final_steps", "seed")
+"""Options --from-session takes from DIR itself (its config.json)."""
+
 
 def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
     train = subparsers.add_parser(
-        "train", help="run a headless RLHF session with a simulated decision-maker"
+        "train",
+        help="run a headless RLHF session with a simulated decision-maker, or continue an "
+        "app session (--from-session)",
     )
-    train.add_argument("--env", required=True, help="GridWorld, Hopper, ... or a Gymnasium id")
-    train.add_argument("--oracle", default="pairwise", help="simulated decision-maker")
+    train.add_argument("--env", help="GridWorld, Hopper, ... or a Gymnasium id")
+    train.add_argument(
+        "--oracle",
+        "--dm",
+        dest="oracle",
+        help="simulated decision-maker (default pairwise; with --from-session it answers "
+        "the extra --rounds)",
+    )
     train.add_argument("--comparisons", type=positive_int, help="total comparisons")
-    train.add_argument("--rounds", type=positive_int, help="feedback rounds")
-    train.add_argument("--steps", type=non_negative_int, help="total PPO steps over the rounds")
+    train.add_argument(
+        "--rounds", type=positive_int, help="feedback rounds (--from-session: more rounds)"
+    )
+    train.add_argument(
+        "--steps",
+        type=non_negative_int,
+        help="total PPO steps over the rounds (--from-session: more PPO steps on the frozen "
+        "learned reward)",
+    )
     train.add_argument(
         "--final-steps",
         type=non_negative_int,
@@ -23,25 +43,37 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
     )
     train.add_argument("--seed", type=non_negative_int, help="random seed")
     train.add_argument("--config", type=Path, help="JSON config (as written by a previous run)")
-    train.add_argument("--out", type=Path, required=True, help="output directory")
+    train.add_argument("--out", type=Path, help="output directory (not with --from-session)")
     train.add_argument(
         "--resume", action="store_true", help="continue from the last checkpoint in --out"
+    )
+    train.add_argument(
+        "--from-session",
+        type=Path,
+        metavar="DIR",
+        help="continue an app session's directory (DATA/sessions/s-…) or a train output in "
+        "place, from its latest checkpoint: --steps N or --rounds N --dm NAME",
     )
     train.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
     train.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.from_session is not None:
+        return _from_session(args)
     from groupwise.config import LoopConfig, RunConfig
     from groupwise.envs import make_env
     from groupwise.loop import RESULTS_FILE, ConfigMismatchError, run_session
     from groupwise.oracles import ORACLES
 
-    if args.oracle not in ORACLES:
-        raise UsageError(f"unknown oracle {args.oracle!r}; choose from {', '.join(ORACLES)}")
+    if args.env is None or args.out is None:
+        raise UsageError("train needs --env and --out (or --from-session DIR)")
+    oracle = args.oracle or "pairwise"
+    if oracle not in ORACLES:
+        raise UsageError(f"unknown oracle {oracle!r}; choose from {', '.join(ORACLES)}")
     overrides = {
         "env": args.env,
-        "oracle": args.oracle,
+        "oracle": oracle,
         "comparisons": args.comparisons,
         "rounds": args.rounds,
         "steps": args.steps,
@@ -68,5 +100,58 @@ def run(args: argparse.Namespace) -> int:
         f"true return {last.true_return_mean:.2f} ± {last.true_return_std:.2f}\n"
         f"results: {out / RESULTS_FILE}\ncheckpoints: {out / 'checkpoints'}\n"
         f"tensorboard: tensorboard --logdir {out / 'tb'}"
+    )
+    return 0
+
+
+def _from_session(args: argparse.Namespace) -> int:
+    """More PPO steps on the frozen reward, or more rounds by a simulated DM (docs/app.md)."""
+    from groupwise.final import continue_run
+    from groupwise.loop import CONFIG_FILE, RESULTS_FILE
+    from groupwise.trained_agent import AGENT_VIDEO, AGENT_ZIP
+
+    given = [
+        f"--{name.replace('_', '-')}"
+        for name in FROM_SESSION_EXCLUDES
+        if getattr(args, name) is not None
+    ]
+    if given or args.resume:
+        raise UsageError(
+            f"--from-session continues DIR with its own config.json, in place; leave out "
+            f"{', '.join(given or ['--resume'])}"
+        )
+    if (args.steps is None) == (args.rounds is None):
+        raise UsageError("--from-session needs either --steps N or --rounds N")
+    if args.steps == 0:
+        raise UsageError("--steps must be at least 1")
+    if args.rounds is not None and args.oracle is None:
+        raise UsageError(
+            "--rounds needs --dm NAME: nobody answers a headless round but a simulated "
+            "decision-maker"
+        )
+    directory = args.from_session
+    if not (directory / CONFIG_FILE).is_file():
+        raise UsageError(f"{directory} is not a session directory: it has no {CONFIG_FILE}")
+    writable_dir(directory)
+    per_round = None
+    if args.comparisons is not None and args.rounds is not None:
+        per_round = math.ceil(args.comparisons / args.rounds)
+    try:
+        records = continue_run(
+            directory,
+            steps=args.steps,
+            rounds=args.rounds,
+            oracle=args.oracle,
+            comparisons=per_round,
+            show_progress=not args.quiet,
+        )
+    except (ValueError, FileNotFoundError) as error:
+        raise UsageError(str(error)) from None
+    last = records[-1]
+    print(
+        f"round {last.round}: {last.env_steps:,} PPO steps in all, "
+        f"true return {last.true_return_mean:.2f} ± {last.true_return_std:.2f}\n"
+        f"results: {directory / RESULTS_FILE}\nagent: {directory / AGENT_ZIP} "
+        f"(groupwise.load_agent), video: {directory / AGENT_VIDEO}"
     )
     return 0

@@ -24,7 +24,16 @@ from starlette.middleware.trustedhost import TrustedHostMiddleware
 
 from groupwise.server.config import AppConfig
 from groupwise.server.context import AppContext
-from groupwise.server.routes import clips, events, judgements, meta, pairwise, rounds, sessions
+from groupwise.server.routes import (
+    agent,
+    clips,
+    events,
+    judgements,
+    meta,
+    pairwise,
+    rounds,
+    sessions,
+)
 from groupwise.server.routes import transfer as transfer_routes
 from groupwise.server.routes.frontend import mount_frontend
 from groupwise.server.security import JSON_TYPE, GuardMiddleware, trusted_hosts
@@ -69,7 +78,17 @@ def create_app(config: AppConfig) -> FastAPI:
         redoc_url=None,
     )
     app.state.context = context
-    for module in (meta, sessions, transfer_routes, rounds, judgements, pairwise, events, clips):
+    for module in (
+        meta,
+        sessions,
+        transfer_routes,
+        rounds,
+        judgements,
+        pairwise,
+        events,
+        clips,
+        agent,
+    ):
         app.include_router(module.router)
     app.add_middleware(
         GuardMiddleware,

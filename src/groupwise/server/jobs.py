@@ -42,6 +42,7 @@ from groupwise.config import RunConfig
 from groupwise.loop import (
     CONFIG_FILE,
     RESULTS_FILE,
+    RoundRecord,
     Session,
     limit_pairs,
     round_streams,
@@ -80,6 +81,7 @@ from groupwise.storage.sessions import (
     session_directory,
     settings_of,
 )
+from groupwise.trained_agent import SETTINGS_FILE
 
 log = logging.getLogger(__name__)
 
@@ -93,10 +95,12 @@ class Job:
 
     session_id: str
     env: str
-    phase: str  # "preparing" or "training"
+    phase: str  # "preparing", "training" or "finishing"
     round: int
     settings: SessionSettings
     elapsed_s: float  # the round's timer when training started (for the round record)
+    frozen_steps: int | None = None
+    """PPO steps of the current round when it is one without feedback (`RoundRow`)."""
 
 
 def run_config(env: str, settings: SessionSettings) -> RunConfig:
@@ -104,12 +108,15 @@ def run_config(env: str, settings: SessionSettings) -> RunConfig:
     return settings.run_config(env)
 
 
-def _load(job: Job, data_dir: Path, before: int) -> tuple[RunConfig, Session, Path]:
-    """The session's ensemble and agent as they were after round `before` (fresh for -1)."""
+def load_session(job: Job, data_dir: Path, before: int) -> tuple[RunConfig, Session, Path]:
+    """The session's ensemble and agent as they were after round `before` (fresh for -1);
+    writes its ``config.json`` and ``settings.json`` (the settings may have changed since:
+    "Finish now", "Continue training")."""
     cfg = run_config(job.env, job.settings)
     out = data_dir / session_directory(job.session_id)
     out.mkdir(parents=True, exist_ok=True)
     cfg.save(out / CONFIG_FILE)
+    (out / SETTINGS_FILE).write_text(job.settings.model_dump_json(indent=2) + "\n")
     session = Session.create(cfg, out)
     if before >= 0:
         directory = checkpoint_dir(out, before)
@@ -125,7 +132,7 @@ def prepare(
     settings, r = job.settings, job.round
     streams = round_streams(settings.seed, r)
     progress.report("load", 0.02, "loading the policy and reward model", force=True)
-    _, session, _ = _load(job, data_dir, r - 1)
+    _, session, _ = load_session(job, data_dir, r - 1)
     try:
         progress.report(
             "pool", 0.05, f"sampling and rendering {settings.pool_size} behaviours", force=True
@@ -239,7 +246,7 @@ def train(job: Job, db: Database, data_dir: Path, progress: ProgressReporter) ->
     settings, r = job.settings, job.round
     streams = round_streams(settings.seed, r)
     progress.report("load", 0.01, "loading the policy and reward model", force=True)
-    cfg, session, out = _load(job, data_dir, r - 1)
+    cfg, session, out = load_session(job, data_dir, r - 1)
     steps = settings.ppo_steps_per_round
     try:
         with db.read() as s:
@@ -280,12 +287,8 @@ def train(job: Job, db: Database, data_dir: Path, progress: ProgressReporter) ->
     finally:
         session.ppo.close()
     checkpoint = checkpoint_dir(Path(session_directory(job.session_id)), r)
-    stats = {
-        k: (None if isinstance(v, float) and not math.isfinite(v) else v)
-        for k, v in dataclasses.asdict(record).items()
-    }
     with db.write() as s:
-        if not finish_training(s, job.session_id, r, str(checkpoint), stats):
+        if not finish_training(s, job.session_id, r, str(checkpoint), record_stats(record)):
             log.warning("session %s moved on while round %d trained", job.session_id, r)
     log.info(
         "session %s: round %d trained on %d pairs (reward acc %.2f, true return %.1f)",
@@ -295,6 +298,14 @@ def train(job: Job, db: Database, data_dir: Path, progress: ProgressReporter) ->
         record.reward_accuracy,
         record.true_return_mean,
     )
+
+
+def record_stats(record: RoundRecord) -> dict[str, object]:
+    """A round's record as the database stores it (`RoundRow.stats`; nan as null)."""
+    return {
+        k: (None if isinstance(v, float) and not math.isfinite(v) else v)
+        for k, v in dataclasses.asdict(record).items()
+    }
 
 
 def _dataset(
@@ -350,4 +361,5 @@ def job_of(db: Database, session_id: str) -> Job | None:
             round=session.round,
             settings=settings_of(session),
             elapsed_s=elapsed(session),
+            frozen_steps=get_round(s, session.id, session.round).frozen_steps,
         )

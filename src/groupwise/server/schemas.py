@@ -7,12 +7,12 @@ UI's types are generated. Requests reject unknown fields; every string and list 
 from datetime import datetime
 from typing import Annotated, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from groupwise.pool import BEHAVIOUR_PREFIX, behaviour_id
-from groupwise.storage.settings import MAX_GROUP, SessionSettings
+from groupwise.storage.settings import MAX_GROUP, MAX_PPO_STEPS, MAX_ROUNDS, SessionSettings
 
-Phase = Literal["preparing", "ready", "training", "finished", "failed"]
+Phase = Literal["preparing", "ready", "training", "finishing", "finished", "failed"]
 Mode = Literal["groupwise", "pairwise"]
 Label = Literal["left", "right", "equal"]
 Source = Literal["suggested", "explored", "pairwise"]
@@ -230,6 +230,64 @@ class PairwiseNext(_Out):
 class PairSkip(_In):
     left: BehaviourId
     right: BehaviourId
+
+
+# ------------------------------------------------------------------ the final agent
+
+
+class ContinueIn(_In):
+    """More training for a finished session: PPO steps on the frozen reward, or rounds."""
+
+    steps: int | None = Field(
+        default=None, ge=1, le=MAX_PPO_STEPS, description="PPO env steps on the frozen reward"
+    )
+    rounds: int | None = Field(
+        default=None, ge=1, le=MAX_ROUNDS, description="more feedback rounds"
+    )
+
+    @model_validator(mode="after")
+    def _one_of(self) -> "ContinueIn":
+        if (self.steps is None) == (self.rounds is None):
+            raise ValueError("give either steps or rounds")
+        return self
+
+
+class AgentRound(_Out):
+    """One round of the session, as the finished page's chart shows it."""
+
+    round: int
+    feedback: bool = Field(description="false: PPO on the frozen learned reward only")
+    judgements: int
+    pairs_total: int
+    env_steps: int
+    true_return_mean: float | None = Field(description="null: not evaluated")
+    true_return_std: float | None
+
+
+class AgentVideo(_Out):
+    """The final agent's video (GET …/agent.mp4): one greedy episode, at real speed."""
+
+    seconds: float
+    fps: float
+    frames: int
+    width: int
+    height: int
+    episode_return: float = Field(description="the filmed episode's true return")
+
+
+class AgentOut(_Out):
+    """The finished session's agent: what the download holds and how it came about."""
+
+    env: str
+    round: int = Field(description="the round whose checkpoint the agent is")
+    env_steps: int
+    measure: str = Field(
+        description='what true_return_mean measures: "true return" or a target env\'s score'
+    )
+    true_return_mean: float | None
+    true_return_std: float | None
+    video: AgentVideo | None
+    rounds: list[AgentRound]
 
 
 # ------------------------------------------------------------------ misc

@@ -1,10 +1,10 @@
 """The training worker: a process of its own that polls the database for jobs.
 
-It looks for sessions whose phase is ``preparing`` or ``training`` (the longest-waiting
-first), runs the job (`jobs.prepare` / `jobs.train`) with progress written to the session
-row, and goes back to polling. It never talks HTTP; the server and it share only the
-database and the data directory. A job that raises marks its session ``failed`` with the
-error, and the worker goes on serving the other sessions.
+It looks for sessions whose phase is ``preparing``, ``training`` or ``finishing`` (the
+longest-waiting first), runs the job (`jobs.prepare` / `jobs.train` / `finishing.finish`)
+with progress written to the session row, and goes back to polling. It never talks HTTP;
+the server and it share only the database and the data directory. A job that raises marks
+its session ``failed`` with the error, and the worker goes on serving the other sessions.
 
 Started by the server's `Supervisor` with the "spawn" context (numba's threading layer kills
 forked children) and with one thread per numeric library: NUMBA_NUM_THREADS and
@@ -114,7 +114,7 @@ class Worker:
 
     def run_job(self, job: "Job") -> None:
         """Run one job; an exception marks the session failed with its message."""
-        from groupwise.server import jobs
+        from groupwise.server import finishing, jobs
 
         log.info("session %s: %s round %d", job.session_id, job.phase, job.round)
         reporter = ProgressReporter(self.db, job.session_id, job.phase, on_tick=_exit_if_orphaned)
@@ -123,6 +123,8 @@ class Worker:
                 if job.phase == "preparing":
                     render = self._render_pool(job.settings.render_workers)
                     jobs.prepare(job, self.db, self.data_dir, render, reporter)
+                elif job.phase == "finishing":
+                    finishing.finish(job, self.db, self.data_dir, reporter)
                 else:
                     jobs.train(job, self.db, self.data_dir, reporter)
         except Exception as error:

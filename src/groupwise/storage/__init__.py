@@ -10,7 +10,8 @@ that block, so a request is one transaction:
     # committed here, before the HTTP answer
 
 Modules: `models` (tables), `database` (engines, pragmas), `settings` (session settings),
-`sessions` (lifecycle, timer, counts), `rounds` (pools, suggestions, pairwise queue),
+`sessions` (lifecycle, timer, counts), `ending` ("Finish now", "Continue training"),
+`rounds` (pools, suggestions, pairwise queue),
 `judgements` (store, retry, undo, list), `export` (JSONL / Parquet, import).
 """
 

@@ -7,7 +7,8 @@ mistaken for the frozen records the repositories hand across module lines.
 Tables (one session owns everything below it; deleting a session cascades):
 
     sessions          one RLHF session: env, mode, settings, phase, progress, timer
-    rounds            round r of a session: its pool directory, open / close times
+    rounds            round r of a session: its pool directory, open / close times (or,
+                      for a round without feedback, its PPO steps on the frozen reward)
     behaviours        the pool of a round: "b<i>", clip and poster ids, true return
     judgements        the record of truth of one comparison (SPEC §6)
     pairs             the preference pairs derived from a judgement (deleted with it)
@@ -126,6 +127,9 @@ class RoundRow(Base):
     """Why the round ended: "user", "comparisons", "time" (or "imported")."""
     stats: Mapped[dict[str, Any] | None] = mapped_column(JSON, default=None)
     """What the training after this round reported (reward fit, PPO, true return)."""
+    frozen_steps: Mapped[int | None] = mapped_column(Integer, default=None)
+    """PPO env steps of a round without feedback, on the frozen learned reward (the final
+    phase, or "Continue training"); null for a feedback round. Such a round has no pool."""
 
     session: Mapped[SessionRow] = relationship(back_populates="rounds")
 

@@ -2,8 +2,11 @@
 
 Phases (docs/app.md): ``preparing`` (the worker builds round r's pool) → ``ready`` (round r
 is open) → ``training`` (round r closed; reward model and PPO train) → ``preparing`` (r + 1)
-… → ``finished``; ``failed`` when a worker step raised or the worker died, with
-`failed_phase` naming the step that `retry` re-queues.
+… → ``finishing`` (the final phase: PPO on the frozen learned reward in a round without
+feedback, then the agent's video and download) → ``finished``; ``failed`` when a worker step
+raised or the worker died, with `failed_phase` naming the step that `retry` re-queues.
+"Finish now" and "Continue training" (`groupwise.storage.ending`) move a session between
+these phases too.
 
 Every function takes an open ORM `Session` and leaves committing to the caller (one
 transaction per request, see `Database.write`). Functions that change a session bump its
@@ -32,10 +35,11 @@ from groupwise.storage.settings import LIBRARY, SessionSettings
 PREPARING = "preparing"
 READY = "ready"
 TRAINING = "training"
+FINISHING = "finishing"
 FINISHED = "finished"
 FAILED = "failed"
-PHASES = (PREPARING, READY, TRAINING, FINISHED, FAILED)
-WORK_PHASES = (PREPARING, TRAINING)
+PHASES = (PREPARING, READY, TRAINING, FINISHING, FINISHED, FAILED)
+WORK_PHASES = (PREPARING, TRAINING, FINISHING)
 """Phases in which the worker has a job to do for the session."""
 MODES = ("groupwise", "pairwise")
 
@@ -356,10 +360,62 @@ def finish_training(
         s.add(_new_round(session.id, session.round))
         _set_progress(session, "queued", 0.0, f"round {session.round}: waiting for the worker")
     else:
-        session.phase = FINISHED
-        _set_progress(session, "finished", 1.0, "all rounds are done")
+        start_final(s, session, settings_of(session).final_ppo_steps, "final", now)
     session.failed_phase = None
     session.error = None
+    touch(session, now)
+    return True
+
+
+def start_final(
+    s: Session, session: SessionRow, steps: int, reason: str, now: datetime | None = None
+) -> None:
+    """Queue the final phase after the session's current round: a round without feedback
+    (the next index) training PPO for `steps` on the frozen learned reward, then the
+    agent's video and download; with `steps` = 0 no such round, the current round's agent
+    is published as it is. Phase ``finishing``; `reason` is the round's close reason."""
+    now = now or utcnow()
+    if steps > 0:
+        session.round += 1
+        s.add(
+            RoundRow(
+                session_id=session.id,
+                index=session.round,
+                phase=ROUND_CLOSED,
+                pool_dir=None,
+                closed_at=now,
+                close_reason=reason,
+                frozen_steps=steps,
+            )
+        )
+    session.phase = FINISHING
+    _set_progress(session, "queued", 0.0, "final training: waiting for the worker")
+    touch(session, now)
+
+
+def finish_final(
+    s: Session,
+    session_id: str,
+    round_index: int,
+    checkpoint: str | None,
+    stats: dict[str, object] | None,
+    now: datetime | None = None,
+) -> bool:
+    """The worker ran the final phase of round `round_index` (its checkpoint, a directory
+    relative to the data directory, and record when it trained one) and published the
+    agent: phase ``finished``. False (nothing written) when the session moved on."""
+    now = now or utcnow()
+    session = get_session(s, session_id, lock=True)
+    if session.phase != FINISHING or session.round != round_index:
+        return False
+    if checkpoint is not None:
+        row = get_round(s, session.id, round_index)
+        row.stats = dict(stats or {})
+        s.add(CheckpointRow(round_id=row.id, path=checkpoint, created_at=now))
+    session.phase = FINISHED
+    session.failed_phase = None
+    session.error = None
+    _set_progress(session, "finished", 1.0, "the final agent is ready")
     touch(session, now)
     return True
 

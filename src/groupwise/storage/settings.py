@@ -32,10 +32,24 @@ from groupwise.config import (
 )
 from groupwise.preferences.judgement import MAX_GROUP
 
-__all__ = ["HUMAN", "LIBRARY", "MAX_GROUP", "MIN_FRAGMENT_LENGTH", "SessionSettings"]
+__all__ = [
+    "HUMAN",
+    "LIBRARY",
+    "MAX_GROUP",
+    "MAX_PPO_STEPS",
+    "MAX_ROUNDS",
+    "MIN_FRAGMENT_LENGTH",
+    "SessionSettings",
+]
 
 MIN_FRAGMENT_LENGTH = 5
 """Fewest steps of a behaviour in the app."""
+MAX_ROUNDS = 100
+"""Most rounds of a session (round indices 0 … 99, rounds without feedback included)."""
+MAX_PPO_STEPS = 10_000_000
+"""Most PPO env steps of one training phase in the app."""
+FINAL_STEPS_FACTOR = 2
+"""The final phase trains this many rounds' worth of PPO steps unless `final_steps` says."""
 
 HUMAN = "human"
 """`LoopConfig.oracle` of a session a person answers (through the page)."""
@@ -73,9 +87,21 @@ class SessionSettings(BaseModel):
         description="round ends after this many judgements (0 = no limit)",
     )
     ppo_steps_per_round: int = Field(
-        default=20_000, ge=0, le=10_000_000, description="PPO env steps after each round"
+        default=20_000, ge=0, le=MAX_PPO_STEPS, description="PPO env steps after each round"
     )
-    rounds: int = Field(default=5, ge=1, le=100, description="rounds in the session")
+    rounds: int = Field(
+        default=5,
+        ge=1,
+        le=MAX_ROUNDS,
+        description="rounds in the session (the final phase's round follows the last)",
+    )
+    final_steps: int | None = Field(
+        default=None,
+        ge=0,
+        le=MAX_PPO_STEPS,
+        description="PPO env steps on the frozen learned reward after the last round (null: "
+        f"{FINAL_STEPS_FACTOR} × ppo_steps_per_round, at most {MAX_PPO_STEPS:,})",
+    )
     suggestions: int = Field(
         default=100, ge=0, le=2000, description="top-k pairwise suggestion edges precomputed"
     )
@@ -121,15 +147,26 @@ class SessionSettings(BaseModel):
         """
         return env_clip_timing(env, self.clip_seconds, steps=self.fragment_length)
 
+    @property
+    def final_ppo_steps(self) -> int:
+        """PPO steps of the final phase: `final_steps`, or `FINAL_STEPS_FACTOR` rounds'
+        worth (sessions stored before the final phase existed have none set)."""
+        if self.final_steps is not None:
+            return self.final_steps
+        return min(MAX_PPO_STEPS, FINAL_STEPS_FACTOR * self.ppo_steps_per_round)
+
     def for_env(self, env: str) -> "SessionSettings":
         """These settings with `fragment_length` fixed for `env` (and `clip_seconds` the
-        duration asked for, when L was not given in steps): what a new session stores, so
-        that its L never changes, whatever later versions choose as the env's default.
+        duration asked for, when L was not given in steps) and `final_steps` resolved: what
+        a new session stores, so that its L never changes, whatever later versions choose
+        as the env's default.
 
         Raises:
             ValueError: unknown env; both set and disagreeing; or a clip under
                 `MIN_FRAGMENT_LENGTH` steps.
         """
+        if self.final_steps is None:
+            return self.model_copy(update={"final_steps": self.final_ppo_steps}).for_env(env)
         timing = self.clip_timing(env)
         if self.fragment_length is None:
             seconds = self.clip_seconds or default_clip_seconds(env)
@@ -162,6 +199,7 @@ class SessionSettings(BaseModel):
             comparisons=max(1, self.comparisons_per_round * self.rounds),
             rounds=self.rounds,
             steps=self.ppo_steps_per_round * self.rounds,
+            final_steps=self.final_ppo_steps,
             fragment_length=self.clip_timing(env).steps,
             exploration_fraction=self.exploration_fraction,
             pool_cap=max(2, self.pool_size),

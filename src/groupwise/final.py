@@ -1,0 +1,255 @@
+"""The end of a run: PPO on the frozen learned reward, the agent's video and its download.
+
+`train_frozen` is a round without feedback: no pool, no judgements, no reward fit; the
+agent trains `steps` more PPO steps on the learned reward as the last fit left it, and is
+evaluated on the true reward. Its `RoundRecord` is a row of ``rounds.csv`` like any other
+(comparisons, pairs and the reward columns 0 or nan). `publish_agent` films the greedy
+policy for one episode (``agent.mp4``, `clips.episode_video`) and packs the checkpoint into
+``agent.zip`` with ``agent.json`` beside it (`groupwise.trained_agent`).
+
+The app's worker runs both after a session's last round, after "Finish now" and for
+"Continue training" (`server/jobs.py`); `continue_run` does the same headless for
+``groupwise train --from-session DIR`` (more PPO steps, or more rounds answered by a
+simulated decision-maker, then the final phase again).
+"""
+
+import json
+import logging
+import math
+import time
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+
+from groupwise.checkpoint import checkpoint_dir, latest_checkpoint
+from groupwise.clips.episode_video import write_episode_video
+from groupwise.clips.replay import FrameSettings
+from groupwise.config import RunConfig
+from groupwise.envs import DEFAULT_FRAME_SIZE
+from groupwise.loop import (
+    CONFIG_FILE,
+    RESULTS_FILE,
+    RoundRecord,
+    Session,
+    eval_rng,
+    round_streams,
+    run_round,
+    write_records,
+)
+from groupwise.oracles import ORACLES
+from groupwise.rl.rollout import evaluate, sample_trajectories
+from groupwise.trained_agent import (
+    AGENT_VIDEO,
+    AGENT_ZIP,
+    SETTINGS_FILE,
+    SUMMARY_FILE,
+    AgentSummary,
+    VideoSummary,
+    read_summary,
+    summarise,
+    write_agent_zip,
+)
+
+log = logging.getLogger(__name__)
+
+Report = Callable[[str, int, int], None]
+"""Hears (phase, done, total): "ppo", "eval", "video", "package"."""
+
+
+def train_frozen(
+    session: Session,
+    round_index: int,
+    steps: int,
+    *,
+    show_progress: bool = False,
+    report: Report | None = None,
+) -> RoundRecord:
+    """Round `round_index` without feedback: `steps` PPO steps on the frozen learned reward,
+    then the true return over `eval_episodes`; appends and returns its record. Its PPO seed
+    comes from the round's PPO stream (`loop.round_streams`), as a feedback round's does."""
+    loop = session.cfg.loop
+
+    def tell(phase: str, done: int, total: int) -> None:
+        if report is not None:
+            report(phase, done, total)
+
+    seed = int(round_streams(loop.seed, round_index).ppo.integers(2**31 - 1))
+    tick = time.perf_counter()
+    session.agent.learn(
+        steps,
+        seed,
+        show_progress=show_progress,
+        report=lambda done, total: tell("ppo", done, total),
+    )
+    ppo_s = time.perf_counter() - tick
+    returns = np.full(1, np.nan)
+    if loop.eval_episodes > 0:
+        tell("eval", 0, loop.eval_episodes)
+        returns = evaluate(
+            session.make_env,
+            session.agent.policy(deterministic=True),
+            loop.eval_episodes,
+            eval_rng(loop.seed),
+        )
+    dataset = session.dataset
+    record = RoundRecord(
+        round=round_index,
+        comparisons=0,
+        judgements=0,
+        pairs=0,
+        pairs_total=len(dataset),
+        label_error_rate=math.nan,
+        label_error_rate_total=dataset.label_error_rate(),
+        reward_loss=math.nan,
+        reward_accuracy=math.nan,
+        reward_val_accuracy=math.nan,
+        env_steps=session.agent.num_timesteps,
+        true_return_mean=float(returns.mean()),
+        true_return_std=float(returns.std()),
+        sample_s=0.0,
+        feedback_s=0.0,
+        reward_s=0.0,
+        ppo_s=ppo_s,
+        eval_s=time.perf_counter() - tick - ppo_s,
+    )
+    session.records.append(record)
+    return record
+
+
+def publish_agent(
+    session: Session,
+    out: Path,
+    frozen: set[int],
+    *,
+    frame_size: int = DEFAULT_FRAME_SIZE[0],
+    report: Report | None = None,
+) -> AgentSummary:
+    """Film the session's greedy policy for one episode (``out/agent.mp4``) and pack its
+    latest checkpoint (saved by `Session.save`) into ``out/agent.zip``, with the summary
+    ``out/agent.json`` written last. `frozen`: the rounds without feedback."""
+    loop = session.cfg.loop
+    if report is not None:
+        report("video", 0, 1)
+    episode = sample_trajectories(
+        session.make_env, session.agent.policy(deterministic=True), 1, eval_rng(loop.seed)
+    )[0]
+    video = write_episode_video(
+        FrameSettings(loop.env, frame_size, frame_size), episode, out / AGENT_VIDEO
+    )
+    if report is not None:
+        report("package", 0, 1)
+    summary = summarise(
+        session.cfg,
+        session.records,
+        frozen,
+        VideoSummary(
+            file=AGENT_VIDEO,
+            seconds=round(video.seconds, 6),
+            fps=round(video.fps, 6),
+            frames=video.frames,
+            width=video.width,
+            height=video.height,
+            episode_return=float(episode.true_rewards.sum()),
+        ),
+    )
+    round_index = session.next_round - 1
+    write_agent_zip(out / AGENT_ZIP, checkpoint_dir(out, round_index), summary, out)
+    partial = out / f".{SUMMARY_FILE}.partial"
+    partial.write_text(summary.to_json() + "\n")
+    partial.replace(out / SUMMARY_FILE)
+    return summary
+
+
+def continue_run(
+    out: Path,
+    *,
+    steps: int | None = None,
+    rounds: int | None = None,
+    oracle: str | None = None,
+    comparisons: int | None = None,
+    frame_size: int | None = None,
+    show_progress: bool = True,
+) -> list[RoundRecord]:
+    """Continue the run (an app session's directory, or a `groupwise train` output) in
+    `out` from its latest checkpoint, headless: `steps` more PPO steps on the frozen learned
+    reward, or `rounds` more feedback rounds answered by the simulated decision-maker
+    `oracle` (`comparisons` per round, default the run's own, or for an app session without
+    a limit per round as many as fill its pool; the run's PPO steps per round)
+    followed by its `final_steps` on the frozen reward. Writes checkpoints, ``rounds.csv``,
+    TensorBoard logs, ``agent.mp4``, ``agent.zip`` and ``agent.json`` into `out`, as the
+    app does; ``config.json`` stays as it was.
+
+    Raises:
+        FileNotFoundError: `out` has no ``config.json`` or no checkpoint.
+        ValueError: not exactly one of `steps` and `rounds`, or `rounds` without a known
+            `oracle`.
+    """
+    if (steps is None) == (rounds is None):
+        raise ValueError("give either steps or rounds")
+    if rounds is not None and oracle not in ORACLES:
+        raise ValueError(
+            f"more rounds need a simulated decision-maker to answer them (--dm); "
+            f"choose from {', '.join(ORACLES)}"
+        )
+    cfg = RunConfig.load(out / CONFIG_FILE)
+    found = latest_checkpoint(out)
+    if found is None:
+        raise FileNotFoundError(f"{out} has no checkpoint to continue from")
+    previous = read_summary(out)
+    frozen = _frozen_rounds(cfg, previous, len(found[1]["records"]))
+    size = frame_size or (previous.video.width if previous and previous.video else None)
+    session = Session.create(cfg, out)
+    try:
+        session.restore(*found)
+        log.info("continuing %s after round %d", out, found[1]["round"])
+
+        def done(record: RoundRecord) -> None:
+            session.save(out)
+            write_records(out / RESULTS_FILE, session.records)
+            log.info("round %d: true return %.2f", record.round, record.true_return_mean)
+
+        if steps is not None:
+            frozen.add(session.next_round)
+            done(train_frozen(session, session.next_round, steps, show_progress=show_progress))
+        else:
+            assert rounds is not None and oracle is not None
+            teacher = ORACLES[oracle](cfg.loop)
+            per_round = comparisons or _comparisons_per_round(cfg, out)
+            for _ in range(rounds):
+                record = run_round(
+                    session, teacher, per_round, cfg.loop.steps // cfg.loop.rounds, show_progress
+                )
+                done(record)
+            if cfg.loop.final_steps > 0:
+                frozen.add(session.next_round)
+                done(
+                    train_frozen(
+                        session,
+                        session.next_round,
+                        cfg.loop.final_steps,
+                        show_progress=show_progress,
+                    )
+                )
+        publish_agent(session, out, frozen, frame_size=size or DEFAULT_FRAME_SIZE[0])
+    finally:
+        session.ppo.close()
+    return session.records
+
+
+def _comparisons_per_round(cfg: RunConfig, out: Path) -> int:
+    """The run's comparisons per round; for an app session without a limit per round
+    (``settings.json``: comparisons_per_round 0) as many as fill its pool."""
+    settings = out / SETTINGS_FILE
+    if settings.is_file() and json.loads(settings.read_text()).get("comparisons_per_round") == 0:
+        return max(1, math.floor(cfg.loop.pool_cap / cfg.loop.pool_factor))
+    return max(1, math.ceil(cfg.loop.comparisons / cfg.loop.rounds))
+
+
+def _frozen_rounds(cfg: RunConfig, previous: AgentSummary | None, records: int) -> set[int]:
+    """Rounds without feedback so far: as the previous summary says, else the run's final
+    round when it had one (`loop.round_plan`)."""
+    if previous is not None:
+        return {r.round for r in previous.rounds if not r.feedback}
+    final = cfg.loop.rounds
+    return {final} if cfg.loop.final_steps > 0 and records > final else set()

@@ -1,0 +1,76 @@
+"""The end of a session as the page sees it: "Finish now", "Continue training", and the
+final agent (its summary, video and download; `groupwise.final` writes them)."""
+
+from dataclasses import asdict
+from pathlib import Path
+
+from groupwise.server import schemas
+from groupwise.server.context import AppContext
+from groupwise.server.state import read_state
+from groupwise.storage import ConflictError, NotFoundError, ending
+from groupwise.storage.sessions import FINISHED, get_session, session_directory
+from groupwise.trained_agent import AGENT_VIDEO, AGENT_ZIP, AgentSummary, read_summary
+
+
+def finish_now(context: AppContext, session_id: str) -> schemas.SessionState:
+    """No more rounds after the current one (`storage.ending.finish_now`). Raises
+    NotFoundError, ConflictError."""
+    with context.db.write() as s:
+        ending.finish_now(s, session_id)
+    context.supervisor.ensure_worker_soon()
+    return read_state(context.db, session_id)
+
+
+def continue_training(
+    context: AppContext, session_id: str, request: schemas.ContinueIn
+) -> schemas.SessionState:
+    """More PPO steps or more rounds for a finished session. Raises NotFoundError,
+    ConflictError, InvalidError."""
+    with context.db.write() as s:
+        ending.continue_training(s, session_id, steps=request.steps, rounds=request.rounds)
+    context.supervisor.ensure_worker_soon()
+    return read_state(context.db, session_id)
+
+
+def _summary(context: AppContext, session_id: str) -> tuple[AgentSummary, Path]:
+    with context.db.read() as s:
+        session = get_session(s, session_id)
+        phase = session.phase
+    if phase != FINISHED:
+        raise ConflictError(
+            f"session {session_id} is {phase}; its final agent is ready once it is finished"
+        )
+    directory = context.data_dir / session_directory(session_id)
+    summary = read_summary(directory)
+    if summary is None:
+        raise NotFoundError(
+            f"session {session_id} has no final agent (it was imported, driven by a program, "
+            "or finished before the app published agents)"
+        )
+    return summary, directory
+
+
+def agent(context: AppContext, session_id: str) -> schemas.AgentOut:
+    """The finished session's agent summary. Raises NotFoundError, ConflictError."""
+    summary, _ = _summary(context, session_id)
+    data = asdict(summary)
+    return schemas.AgentOut(
+        env=summary.env,
+        round=summary.round,
+        env_steps=summary.env_steps,
+        measure=summary.measure,
+        true_return_mean=summary.true_return_mean,
+        true_return_std=summary.true_return_std,
+        video=None if summary.video is None else schemas.AgentVideo(**data["video"]),
+        rounds=[schemas.AgentRound(**r) for r in data["rounds"]],
+    )
+
+
+def agent_file(context: AppContext, session_id: str, name: str) -> tuple[Path, AgentSummary]:
+    """The path of the finished session's ``agent.mp4`` or ``agent.zip``. Raises
+    NotFoundError, ConflictError."""
+    summary, directory = _summary(context, session_id)
+    path = directory / name
+    if name not in (AGENT_VIDEO, AGENT_ZIP) or not path.is_file():
+        raise NotFoundError(f"session {session_id} has no {name}")
+    return path, summary
