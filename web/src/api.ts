@@ -33,6 +33,9 @@ export type JudgementOut = Schemas["JudgementOut"];
 export type Pair = Schemas["PairOut"];
 export type PairQuery = Schemas["PairQuery"];
 export type PairwiseNext = Schemas["PairwiseNext"];
+export type AgentOut = Schemas["AgentOut"];
+/** More training for a finished session: exactly one of the two. */
+export type ContinueIn = { steps: number; rounds?: never } | { rounds: number; steps?: never };
 export type Phase = SessionState["phase"];
 export type Label = JudgementIn["label"];
 
@@ -232,6 +235,23 @@ export function createApi(options: ApiOptions = {}) {
       return state;
     },
 
+    /** No more rounds after the current one; then the final phase. */
+    async finish(sid: string) {
+      const state = await request<SessionState>("POST", `${s(sid)}/finish`);
+      latest.invalidate("session");
+      return state;
+    },
+
+    /** A finished session trains again: more PPO steps, or more rounds. */
+    async continueTraining(sid: string, body: ContinueIn) {
+      const state = await request<SessionState>("POST", `${s(sid)}/continue`, { body });
+      latest.invalidate("session");
+      return state;
+    },
+
+    /** The finished session's agent (409 before it is finished, 404 when it has none). */
+    agent: (sid: string) => read<AgentOut>("agent", "GET", `${s(sid)}/agent`),
+
     /** The page shows the open round `round` (its timer starts the first time). */
     async shown(sid: string, round: number) {
       const state = await request<SessionState>("POST", `${s(sid)}/rounds/${round}/shown`);
@@ -242,6 +262,9 @@ export function createApi(options: ApiOptions = {}) {
     clipUrl: (clip: string) => url(`clips/${encodeURIComponent(clip)}`, {}, true),
     exportUrl: (sid: string, format: "jsonl" | "parquet" = "jsonl") =>
       url(`${s(sid)}/export`, { format }, true),
+    /** The final agent's video; `round` names the agent, so a newer one is fetched anew. */
+    agentVideoUrl: (sid: string, round: number) => url(`${s(sid)}/agent.mp4`, { v: round }, true),
+    agentZipUrl: (sid: string, round: number) => url(`${s(sid)}/agent.zip`, { v: round }, true),
 
     /** Subscribes to the session's event stream; returns a function that closes it. */
     events(sid: string, handlers: EventHandlers): () => void {

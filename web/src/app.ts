@@ -16,6 +16,7 @@ import { type HistoryEdge, renderExploration } from "./views/exploration";
 import { renderGuide } from "./views/guide";
 import { renderPairwise } from "./views/pairwise";
 import { renderProgress } from "./views/progress";
+import { renderResults } from "./views/results";
 import { renderStart } from "./views/start";
 import { renderStatus } from "./views/status";
 import { renderToast } from "./views/toast";
@@ -100,13 +101,15 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
     h("div", { class: "right" }, comparison, progressA),
   );
   const pairWorkspace = h("div", { class: "workspace pairwise-mode", hidden: true }, h("div", { class: "right" }, pairwise, progressB));
+  // The finished session's agent: its video, chart, downloads (in place of the workspace).
+  const results = h("section", { hidden: true, "aria-label": "Session results" });
   // The message bar: the key hint, and the toasts (confirmations, errors) in a strip of
   // their own, so they never cover a control (docs/app.md).
   const toast = h("div", { class: "toast-host" });
   const keysHint = h("p", { class: "keys-hint", "aria-hidden": "true" });
   const messageBar = h("footer", { class: "messagebar" }, keysHint, toast);
   const guide = h("div", {});
-  const main = h("main", { class: "main" }, message, start, groupWorkspace, pairWorkspace);
+  const main = h("main", { class: "main" }, message, start, groupWorkspace, pairWorkspace, results);
   root.replaceChildren(status, main, messageBar, guide);
   const guideStorage = localStore();
   /** Modes whose guide this page already offered (it opens by itself once per mode). */
@@ -136,8 +139,11 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
       st.boot === "error" ? `Cannot load the app: ${st.bootError ?? "unknown error"}` : "Loading…";
     message.classList.toggle("error", st.boot === "error");
     start.hidden = st.boot !== "choose";
-    groupWorkspace.hidden = mode !== "groupwise";
-    pairWorkspace.hidden = mode !== "pairwise";
+    const agent = s?.phase === "finished" && st.agent?.key === `${s.id}:${s.round}` ? st.agent.data : null;
+    results.hidden = !mode || !agent;
+    if (results.hidden) results.querySelector("video")?.pause();
+    groupWorkspace.hidden = mode !== "groupwise" || !results.hidden;
+    pairWorkspace.hidden = mode !== "pairwise" || !results.hidden;
     status.hidden = !s || st.boot !== "ready";
 
     if (st.boot === "choose") {
@@ -151,10 +157,25 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
         pause: () => void controller.control("pause"),
         resume: () => void controller.control("resume"),
         endRound: () => void controller.control("end-round"),
+        finish: () => void controller.finish(),
         sessions: () => void controller.showStart(),
         guide: () => dispatch({ type: "guide", open: true }),
       });
       const progress = { session: s, exportUrl: api.exportUrl(s.id), busy: st.busy };
+      if (agent && mode) {
+        renderResults(
+          results,
+          {
+            session: s,
+            agent,
+            videoUrl: api.agentVideoUrl(s.id, agent.round),
+            downloadUrl: api.agentZipUrl(s.id, agent.round),
+            exportUrl: progress.exportUrl,
+            busy: st.busy,
+          },
+          { continueTraining: (body) => void controller.continueTraining(body) },
+        );
+      }
       const retry = { retry: () => void controller.control("retry") };
       if (mode === "groupwise") {
         renderGroupwise(st);

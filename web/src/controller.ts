@@ -5,6 +5,7 @@
 import {
   type Api,
   ApiError,
+  type ContinueIn,
   type JudgementOut,
   type Label,
   type SessionCreate,
@@ -99,6 +100,7 @@ export function createController(store: Store, api: Api, options: ControllerOpti
     dispatch({ type: "session", session, at: Date.now() });
     dispatch({ type: "boot", boot: "ready" });
     connect(sid);
+    void syncAgent();
     await syncRound();
   }
 
@@ -131,6 +133,7 @@ export function createController(store: Store, api: Api, options: ControllerOpti
         if (session.id !== get().session?.id) return;
         dispatch({ type: "session", session, at: Date.now() });
         void syncRound();
+        void syncAgent();
         void reportShown();
       },
       judgement(j) {
@@ -151,6 +154,30 @@ export function createController(store: Store, api: Api, options: ControllerOpti
       await syncRound();
     } catch (err) {
       fail(err);
+    }
+  }
+
+  /** "sid:round" of the finished session whose agent is loaded or loading. */
+  let agentKey: string | null = null;
+
+  /** Loads the finished session's agent (summary, for its video and chart) once per round. */
+  async function syncAgent(): Promise<void> {
+    const s = get().session;
+    if (!s || s.phase !== "finished") return;
+    const key = `${s.id}:${s.round}`;
+    if (key === agentKey) return;
+    agentKey = key;
+    try {
+      const agent = await api.agent(s.id);
+      if (agent === STALE || agentKey !== key) return;
+      dispatch({ type: "agent", key, agent });
+    } catch (err) {
+      if (agentKey !== key) return;
+      if (err instanceof ApiError && err.status === 404) dispatch({ type: "agent", key, agent: null });
+      else {
+        agentKey = null;
+        fail(err);
+      }
     }
   }
 
@@ -395,6 +422,22 @@ export function createController(store: Store, api: Api, options: ControllerOpti
     }
   }
 
+  /** "Finish now" (no more rounds after this one) and "Continue training". */
+  async function endSession(body: ContinueIn | null): Promise<void> {
+    const s = get().session;
+    if (!s || get().busy) return;
+    dispatch({ type: "busy", value: true });
+    try {
+      const session = body ? await api.continueTraining(s.id, body) : await api.finish(s.id);
+      dispatch({ type: "session", session, at: Date.now() });
+      void syncRound();
+    } catch (err) {
+      fail(err);
+    } finally {
+      dispatch({ type: "busy", value: false });
+    }
+  }
+
   store.subscribe(saveGroups);
 
   return {
@@ -409,6 +452,8 @@ export function createController(store: Store, api: Api, options: ControllerOpti
     answerPair: pairwise.answer,
     skipPair: pairwise.skip,
     control,
+    finish: () => endSession(null),
+    continueTraining: (body: ContinueIn) => endSession(body),
     lastJudgement,
   };
 }

@@ -3,6 +3,7 @@
  * Every view derives from `State`; nothing else holds app state (views keep only DOM).
  */
 import type {
+  AgentOut,
   ClipTiming,
   Edge,
   JudgementOut,
@@ -105,6 +106,11 @@ export interface State {
   pairwise: PairwiseState;
   /** The guide is open over the page (the answer keys rest meanwhile). */
   guide: boolean;
+  /**
+   * The finished session's agent, for the session and round of `key` ("sid:round"); `data`
+   * null when the session has none (imported, or driven by a program).
+   */
+  agent: { key: string; data: AgentOut | null } | null;
 }
 
 export const FRESH_ORIGIN: Origin = { source: "explored", edits: 0, startedAt: null, suggestion: null };
@@ -139,6 +145,7 @@ export const initialState: State = {
     exhausted: false,
   },
   guide: false,
+  agent: null,
 };
 
 export type Action =
@@ -168,7 +175,8 @@ export type Action =
   | { type: "dismiss-toast"; id?: number }
   | { type: "connection"; value: State["connection"] }
   | { type: "pairwise"; patch: Partial<PairwiseState> }
-  | { type: "guide"; open: boolean };
+  | { type: "guide"; open: boolean }
+  | { type: "agent"; key: string; agent: AgentOut | null };
 
 let toastId = 0;
 
@@ -287,6 +295,8 @@ export function reduce(state: State, action: Action): State {
       return { ...state, pairwise: { ...state.pairwise, ...action.patch } };
     case "guide":
       return state.guide === action.open ? state : { ...state, guide: action.open };
+    case "agent":
+      return { ...state, agent: { key: action.key, data: action.agent } };
   }
 }
 

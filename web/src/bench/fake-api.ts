@@ -124,8 +124,38 @@ export function fakeApi(
       }
       return { ...session };
     },
+    finish: async () => {
+      session.phase = "training";
+      session.rounds = session.round + 1;
+      return { ...session };
+    },
+    continueTraining: async () => {
+      session.phase = "finishing";
+      session.round += 1;
+      return { ...session };
+    },
+    agent: async () => ({
+      env: session.env,
+      round: session.round,
+      env_steps: 140_000,
+      measure: "true return",
+      true_return_mean: 41.5,
+      true_return_std: 3.2,
+      video: { seconds: 3.3, fps: 30, frames: 100, width: 240, height: 240, episode_return: 43 },
+      rounds: [12, 18, 25, 31, 36, 41.5].map((value, i) => ({
+        round: i,
+        feedback: i < 5,
+        judgements: i < 5 ? 6 : 0,
+        pairs_total: 20 * Math.min(i + 1, 5),
+        env_steps: 20_000 * (i + 1),
+        true_return_mean: value,
+        true_return_std: 3,
+      })),
+    }),
     clipUrl: (clip) => (clip.endsWith(".jpg") || clip.endsWith(".mp4") ? poster(clip) : clip),
     exportUrl: () => "#",
+    agentVideoUrl: () => "",
+    agentZipUrl: () => "#",
     events: (_sid, handlers) => {
       setTimeout(() => handlers.open?.(), 0);
       return () => undefined;

@@ -39,6 +39,8 @@ const PHASES: Record<string, string> = {
   policy: "Training the agent (PPO)",
   checkpoint: "Saving a checkpoint",
   eval: "Measuring the agent's true return",
+  video: "Filming the final agent",
+  package: "Packing the agent for download",
   evaluate: "Measuring the agent's true return",
 };
 

@@ -43,7 +43,7 @@ export function renderProgress(element: HTMLElement, data: ProgressData, handler
   const p = s.progress;
   const round = Math.min(s.round, s.rounds - 1);
   const fraction = Math.max(0, Math.min(1, p?.fraction ?? 0));
-  const showBar = phase === "preparing" || phase === "training";
+  const showBar = phase === "preparing" || phase === "training" || phase === "finishing";
   view.bar.hidden = !showBar;
   view.step.parentElement!.hidden = !showBar;
   view.message.hidden = !showBar;
@@ -59,6 +59,14 @@ export function renderProgress(element: HTMLElement, data: ProgressData, handler
     case "training":
       text(view.title, `Round ${round} ended: learning from your answers`);
       text(view.note, "The reward model and the agent train now; the next round starts by itself.");
+      break;
+    case "finishing":
+      text(view.title, "Final training on your reward model");
+      text(
+        view.note,
+        "No more questions: the agent trains further on the reward model learned from your " +
+          "answers, now frozen. Its video and the download appear here next.",
+      );
       break;
     case "finished":
       text(view.title, "Session finished");

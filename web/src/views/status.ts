@@ -20,6 +20,8 @@ export interface StatusHandlers {
   pause(): void;
   resume(): void;
   endRound(): void;
+  /** No more rounds after this one: the final phase, then the agent. */
+  finish(): void;
   sessions(): void;
   guide(): void;
 }
@@ -33,19 +35,31 @@ interface View {
   comparisons: HTMLElement;
   pairs: HTMLElement;
   end: HTMLButtonElement;
+  finish: HTMLButtonElement;
   conn: HTMLElement;
   help: HTMLButtonElement;
   data: StatusData | null;
   handlers: StatusHandlers | null;
   confirmUntil: number;
+  finishConfirmUntil: number;
 }
 
 const views = new WeakMap<Element, View>();
 const CONFIRM_MS = 4000;
 
-/** "Round 2 of 0–4": numbered from 0, as in the API and the export (`roundOf`). */
+/**
+ * "Round 2 of 0–4": numbered from 0, as in the API and the export (`roundOf`); the rounds
+ * without feedback after the last one (the final phase) are "Round 5 · final phase".
+ */
 export function roundText(s: Pick<SessionState, "round" | "rounds">): string {
+  if (s.round >= s.rounds) return `Round ${s.round} · final phase`;
   return `Round ${roundOf(s.round, s.rounds)}`;
+}
+
+/** Whether "Finish now" can end the session after its current round. */
+export function canFinish(s: SessionState): boolean {
+  if (s.settings.driver === "library") return false;
+  return s.phase === "ready" || s.phase === "training" || (s.phase === "preparing" && s.round > 0);
 }
 
 const ROUND_TITLE =
@@ -78,6 +92,10 @@ export function renderStatus(element: HTMLElement, data: StatusData, handlers: S
   attr(view.pause, "aria-label", paused ? "Resume the round timer" : "Pause the round timer");
   view.end.disabled = !ready || data.busy;
   if (!ready) resetConfirm(view);
+  const finishable = !!s && canFinish(s);
+  view.finish.hidden = !s || s.phase === "finishing" || s.phase === "finished";
+  view.finish.disabled = !finishable || data.busy;
+  if (!finishable) resetFinishConfirm(view);
   text(view.conn, data.connection === "open" ? "live" : data.connection === "lost" ? "reconnecting…" : "connecting…");
   view.conn.className = `conn conn-${data.connection}`;
   tick(view);
@@ -87,6 +105,12 @@ function resetConfirm(view: View): void {
   view.confirmUntil = 0;
   view.end.classList.remove("confirm");
   text(view.end, "End round");
+}
+
+function resetFinishConfirm(view: View): void {
+  view.finishConfirmUntil = 0;
+  view.finish.classList.remove("confirm");
+  text(view.finish, "Finish now");
 }
 
 function tick(view: View): void {
@@ -102,6 +126,7 @@ function tick(view: View): void {
   view.timer.classList.toggle("paused", s.timer.paused);
   view.timer.classList.toggle("late", budget > 0 && budget - elapsed < 30 && s.phase === "ready");
   if (view.confirmUntil && Date.now() > view.confirmUntil) resetConfirm(view);
+  if (view.finishConfirmUntil && Date.now() > view.finishConfirmUntil) resetFinishConfirm(view);
 }
 
 function build(element: HTMLElement): View {
@@ -113,6 +138,15 @@ function build(element: HTMLElement): View {
   const comparisons = h("span", { class: "num" });
   const pairs = h("span", { class: "num" });
   const end = h("button", { type: "button", class: "end-round" }, "End round");
+  const finish = h(
+    "button",
+    {
+      type: "button",
+      class: "finish-now",
+      title: "No more rounds after this one: the agent trains further on your reward model, then you can watch and download it",
+    },
+    "Finish now",
+  );
   const conn = h("span", { class: "conn", role: "status" });
   const help = h(
     "button",
@@ -137,6 +171,7 @@ function build(element: HTMLElement): View {
     ),
     conn,
     end,
+    finish,
     help,
   );
   const view: View = {
@@ -148,11 +183,13 @@ function build(element: HTMLElement): View {
     comparisons,
     pairs,
     end,
+    finish,
     conn,
     help,
     data: null,
     handlers: null,
     confirmUntil: 0,
+    finishConfirmUntil: 0,
   };
   pause.addEventListener("click", () => {
     if (view.data?.session?.timer.paused) view.handlers?.resume();
@@ -167,6 +204,16 @@ function build(element: HTMLElement): View {
     view.confirmUntil = Date.now() + CONFIRM_MS;
     end.classList.add("confirm");
     text(end, "Click again to end the round");
+  });
+  finish.addEventListener("click", () => {
+    if (view.finishConfirmUntil > Date.now()) {
+      resetFinishConfirm(view);
+      view.handlers?.finish();
+      return;
+    }
+    view.finishConfirmUntil = Date.now() + CONFIRM_MS;
+    finish.classList.add("confirm");
+    text(finish, "Click again to finish the session");
   });
   sessions.addEventListener("click", () => view.handlers?.sessions());
   help.addEventListener("click", () => view.handlers?.guide());

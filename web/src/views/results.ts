@@ -1,0 +1,256 @@
+/**
+ * The finished session: the final agent's video, its true return (or target score) per
+ * round as a small chart, the downloads (the agent as one zip, the judgements), and
+ * "Continue training" (more PPO steps on the frozen reward model, or more rounds).
+ */
+import type { AgentOut, ContinueIn, SessionState } from "../api";
+import { plural } from "../lib/format";
+import { type ChartGeometry, chartGeometry, formatValue } from "../lib/results";
+import { h, memo, s, text } from "./dom";
+
+export interface ResultsData {
+  session: SessionState;
+  agent: AgentOut;
+  videoUrl: string;
+  downloadUrl: string;
+  exportUrl: string;
+  busy: boolean;
+}
+
+export interface ResultsHandlers {
+  continueTraining(body: ContinueIn): void;
+}
+
+interface View {
+  title: HTMLElement;
+  summary: HTMLElement;
+  video: HTMLVideoElement;
+  caption: HTMLElement;
+  chartTitle: HTMLElement;
+  chart: SVGSVGElement;
+  chartNote: HTMLElement;
+  download: HTMLAnchorElement;
+  exportLink: HTMLAnchorElement;
+  kind: HTMLSelectElement;
+  amount: HTMLInputElement;
+  submit: HTMLButtonElement;
+  /** The agent the view shows ("sid:round"); a new one resets the form and the video. */
+  shown: string;
+  handlers: ResultsHandlers | null;
+}
+
+const views = new WeakMap<Element, View>();
+const CHART = { width: 460, height: 190 };
+
+export function renderResults(element: HTMLElement, data: ResultsData, handlers: ResultsHandlers): void {
+  const view = memo(views, element, () => build(element));
+  view.handlers = handlers;
+  const { session: st, agent } = data;
+  const key = `${st.id}:${agent.round}`;
+  if (view.shown !== key) {
+    view.shown = key;
+    view.video.src = data.videoUrl;
+    view.download.href = data.downloadUrl;
+    view.kind.value = "steps";
+    view.amount.value = String(defaultSteps(st));
+    view.amount.dataset.steps = view.amount.value;
+    drawChart(view.chart, agent);
+  }
+  view.exportLink.href = data.exportUrl;
+  const c = st.counts;
+  const frozen = agent.rounds.filter((r) => !r.feedback);
+  const feedback = agent.rounds.filter((r) => r.feedback);
+  text(view.title, "Session finished: your agent");
+  text(
+    view.summary,
+    `${plural(c.comparisons_total, "comparison")} and ${plural(c.pairs_total, "preference pair")} ` +
+      `over ${plural(feedback.length, "round")} of feedback, then ` +
+      `${frozen.length ? plural(frozen.length, "round") : "no round"} of PPO on the frozen reward model: ` +
+      `${agent.env_steps.toLocaleString("en")} PPO steps in all.`,
+  );
+  const v = agent.video;
+  const measured = agent.true_return_mean;
+  text(
+    view.caption,
+    [
+      `Round ${agent.round} · one greedy episode`,
+      v ? `${formatValue(v.seconds)} s at real speed` : null,
+      v ? `${agent.measure} ${formatValue(v.episode_return)}` : null,
+      measured === null
+        ? null
+        : `evaluated: ${formatValue(measured)} ± ${formatValue(agent.true_return_std ?? 0)}`,
+    ]
+      .filter(Boolean)
+      .join(" · "),
+  );
+  text(view.chartTitle, `${capitalise(agent.measure)} per round`);
+  text(
+    view.chartNote,
+    agent.rounds.some((r) => r.true_return_mean === null)
+      ? "Rounds without a point were not evaluated (eval_episodes = 0)."
+      : "Filled: after a round of feedback; hollow: PPO on the frozen reward model only.",
+  );
+  view.submit.disabled = data.busy;
+}
+
+function capitalise(words: string): string {
+  return words.charAt(0).toUpperCase() + words.slice(1);
+}
+
+/** The steps "Continue training" offers first: as many as the session's final phase. */
+function defaultSteps(session: SessionState): number {
+  const settings = session.settings;
+  return Math.max(1, settings.final_steps ?? 2 * settings.ppo_steps_per_round);
+}
+
+function drawChart(svg: SVGSVGElement, agent: AgentOut): void {
+  const g: ChartGeometry = chartGeometry(agent.rounds, CHART.width, CHART.height);
+  const a = g.area;
+  const children: SVGElement[] = [];
+  for (const t of g.yTicks) {
+    children.push(s("line", { class: "grid", x1: a.left, x2: a.right, y1: t.y, y2: t.y }));
+    children.push(s("text", { class: "tick y", x: a.left - 6, y: t.y, dy: "0.32em" }, t.label));
+  }
+  for (const t of g.xTicks) {
+    children.push(s("text", { class: "tick x", x: t.x, y: a.bottom + 16 }, String(t.round)));
+  }
+  children.push(s("line", { class: "axis", x1: a.left, x2: a.right, y1: a.bottom, y2: a.bottom }));
+  if (g.path) children.push(s("path", { class: "line", d: g.path }));
+  for (const p of g.points) {
+    if (p.y === null) continue;
+    const label =
+      `round ${p.round}${p.feedback ? "" : " (PPO only)"}: ${agent.measure} ` +
+      `${formatValue(p.true_return_mean ?? 0)}`;
+    children.push(
+      s(
+        "circle",
+        { class: p.feedback ? "point" : "point frozen", cx: p.x, cy: p.y, r: 4.5, "data-round": p.round },
+        s("title", {}, label),
+      ),
+    );
+  }
+  children.push(s("text", { class: "axis-label", x: (a.left + a.right) / 2, y: CHART.height - 1 }, "round"));
+  svg.replaceChildren(...children);
+  svg.setAttribute(
+    "aria-label",
+    `${agent.measure} per round: ` +
+      agent.rounds
+        .map((r) => `round ${r.round} ${r.true_return_mean === null ? "not evaluated" : formatValue(r.true_return_mean)}`)
+        .join(", "),
+  );
+}
+
+function build(element: HTMLElement): View {
+  const title = h("h2", { class: "results-title" });
+  const summary = h("p", { class: "results-summary" });
+  const video = h("video", {
+    class: "agent-video",
+    controls: true,
+    autoplay: true,
+    muted: true,
+    loop: true,
+    playsinline: true,
+    preload: "auto",
+    "aria-label": "The final agent: one greedy episode",
+  });
+  video.muted = true; // the attribute alone does not allow autoplay everywhere
+  const caption = h("figcaption", { class: "agent-caption num" });
+  const chartTitle = h("h3", { class: "chart-title" });
+  const chart = s("svg", {
+    class: "return-chart",
+    viewBox: `0 0 ${CHART.width} ${CHART.height}`,
+    role: "img",
+  });
+  const chartNote = h("p", { class: "chart-note muted" });
+  const download = h("a", { class: "button primary", download: "" }, "Download agent (.zip)");
+  const exportLink = h("a", { class: "button", download: "" }, "Download judgements (JSONL)");
+  const kind = h(
+    "select",
+    { "aria-label": "What to train more" },
+    h("option", { value: "steps" }, "PPO steps (frozen reward)"),
+    h("option", { value: "rounds" }, "rounds of feedback"),
+  );
+  const amount = h("input", {
+    type: "number",
+    min: 1,
+    step: 1,
+    class: "num",
+    "aria-label": "How many more",
+  });
+  const submit = h("button", { type: "submit", class: "primary" }, "Continue training");
+  const form = h(
+    "form",
+    { class: "continue-form", "aria-labelledby": "continue-title" },
+    h("h3", { class: "continue-title", id: "continue-title" }, "Continue training"),
+    h(
+      "p",
+      { class: "continue-note muted" },
+      "More PPO steps on the frozen reward model, or more rounds of your feedback (the final " +
+        "training follows them). The video, chart and download then show the new agent.",
+    ),
+    h("div", { class: "continue-row" }, amount, kind, submit),
+  );
+  element.classList.add("results");
+  element.replaceChildren(
+    h(
+      "div",
+      { class: "panel results-video" },
+      h("div", { class: "panel-head" }, h("h2", { class: "panel-title" }, "Final agent")),
+      h("figure", { class: "agent-figure" }, video, caption),
+    ),
+    h(
+      "div",
+      { class: "panel results-side" },
+      h(
+        "div",
+        { class: "results-body" },
+        title,
+        summary,
+        h("section", { class: "results-chart" }, chartTitle, chart, chartNote),
+        h("div", { class: "results-actions" }, download, exportLink),
+        h(
+          "p",
+          { class: "results-hint muted" },
+          "Load the download in Python with ",
+          h("code", {}, "groupwise.load_agent(path)"),
+          "; its README says how.",
+        ),
+        form,
+      ),
+    ),
+  );
+  const view: View = {
+    title,
+    summary,
+    video,
+    caption,
+    chartTitle,
+    chart,
+    chartNote,
+    download,
+    exportLink,
+    kind,
+    amount,
+    submit,
+    shown: "",
+    handlers: null,
+  };
+  kind.addEventListener("change", () => {
+    amount.value = kind.value === "rounds" ? "1" : amount.dataset.steps ?? amount.value;
+  });
+  amount.addEventListener("input", () => {
+    if (kind.value === "steps") amount.dataset.steps = amount.value;
+  });
+  form.addEventListener("submit", (e) => {
+    e.preventDefault();
+    const n = Math.floor(Number(amount.value));
+    if (!Number.isFinite(n) || n < 1) {
+      amount.setCustomValidity("Enter a whole number of at least 1.");
+      amount.reportValidity();
+      return;
+    }
+    amount.setCustomValidity("");
+    view.handlers?.continueTraining(kind.value === "rounds" ? { rounds: n } : { steps: n });
+  });
+  return view;
+}
