@@ -25,6 +25,15 @@ when it is mid-step, a worker running it (a server restart dominates: importing 
 
 After the trials it runs the schemathesis fuzz of the live API (`benchmarks.fuzz`) unless
 ``--fuzz-cases 0``.
+
+Measured on 2 cores shared with other work (load average 9), seed 0, 4 clients: 100 kills
+(43 of the server, 57 of the worker) in 25 min; 21,608 judgements sent, 4,855 answered 2xx
+(35 of them on a resend, answered 200 with the judgement the killed server had committed),
+4,855 stored; 0 lost, 0 duplicated, 0 half-stored, 0 altered, 0 5xx, 0 stuck, 0 orphan
+workers. Median recovery 5.2 s after a server kill (a new process importing the app), 0.3 s
+to a new worker after a worker kill; the round was open again after a median 5.3 s / 16.0 s
+(the latter includes the ended round's training and the next round's preparation). Then
+schemathesis: 10,395 requests over 21 operations, 0 5xx, 0 check failures.
 """
 
 import argparse
