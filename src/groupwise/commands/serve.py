@@ -38,6 +38,7 @@ SETTING_FLAGS: dict[str, Callable[[str], Any]] = {
     "round_seconds": _number,
     "comparisons_per_round": int_at_least(0),
     "ppo_steps_per_round": int_at_least(0),
+    "final_steps": int_at_least(0),
     "rounds": int_at_least(0),
     "suggestions": int_at_least(0),
     "seed": int_at_least(0),

@@ -217,6 +217,7 @@ def test_load_agent_predicts_and_evaluates(client, tmp_path):
     returns = agent.evaluate(env, episodes=2, seed=0)
     assert returns.shape == (2,) and np.isfinite(returns).all()
     assert np.array_equal(returns, agent.evaluate("GridWorld", episodes=2, seed=0))
+    assert np.array_equal(returns, agent.evaluate(agent.make_env, episodes=2, seed=0))
     broken = tmp_path / "broken.zip"
     broken.write_text("not a zip")
     with pytest.raises(ValueError, match="not a zip file"):
