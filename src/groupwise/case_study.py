@@ -112,7 +112,8 @@ class CaseRecord:
 
     round: int
     comparisons_total: int
-    """Comparisons asked so far (queries, skipped ones included)."""
+    """The rounds' comparison budgets so far (``rounds.csv``'s ``queries_asked`` says how
+    many of them a strategy found queries for)."""
     judgements_total: int
     pairs_total: int
     """Binary preferences (pairs) so far: what the paper counts (601, 616, 1,032)."""
