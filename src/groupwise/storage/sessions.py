@@ -359,6 +359,9 @@ def finish_training(
         session.phase = PREPARING
         s.add(_new_round(session.id, session.round))
         _set_progress(session, "queued", 0.0, f"round {session.round}: waiting for the worker")
+    elif session.settings.get("driver") == LIBRARY:  # the program trains its agent itself
+        session.phase = FINISHED
+        _set_progress(session, "finished", 1.0, "all rounds are done")
     else:
         start_final(s, session, settings_of(session).final_ppo_steps, "final", now)
     session.failed_phase = None
