@@ -14,7 +14,7 @@ import asyncio
 import contextlib
 import json
 import logging
-from collections.abc import AsyncIterator
+from collections.abc import AsyncIterator, Callable
 from typing import Any
 
 from fastapi import FastAPI, Request
@@ -36,7 +36,12 @@ from groupwise.server.routes import (
 )
 from groupwise.server.routes import transfer as transfer_routes
 from groupwise.server.routes.frontend import mount_frontend
-from groupwise.server.security import JSON_TYPE, GuardMiddleware, trusted_hosts
+from groupwise.server.security import (
+    JSON_TYPE,
+    STATE_CHANGING,
+    GuardMiddleware,
+    trusted_hosts,
+)
 from groupwise.server.transfer import UnsupportedMediaError
 from groupwise.storage import ConflictError, InvalidError, NotFoundError, StorageError
 
@@ -90,6 +95,7 @@ def create_app(config: AppConfig) -> FastAPI:
         agent,
     ):
         app.include_router(module.router)
+    app.openapi = _with_guard_responses(app.openapi)  # type: ignore[method-assign]
     app.add_middleware(
         GuardMiddleware,
         token=config.token,
@@ -121,6 +127,31 @@ def own_body_types(app: FastAPI) -> frozenset[str]:
             if content and JSON_TYPE not in content:
                 paths.add(path)
     return frozenset(paths)
+
+
+GUARD_RESPONSES = {
+    "403": "a state change from another site (Sec-Fetch-Site or Origin)",
+    "415": "a body that is not application/json",
+}
+"""What `GuardMiddleware` may answer to any state change, for the OpenAPI schema."""
+
+
+def _with_guard_responses(openapi: Callable[[], dict[str, Any]]) -> Callable[[], dict[str, Any]]:
+    """FastAPI's `openapi` with `GUARD_RESPONSES` added to every state-changing operation
+    (the middleware answers them, so no route declares them itself)."""
+
+    def schema() -> dict[str, Any]:
+        document = openapi()  # built once and cached by FastAPI; amended in place
+        error = {"application/json": {"schema": {"$ref": "#/components/schemas/ErrorOut"}}}
+        for operations in document["paths"].values():
+            for method, operation in operations.items():
+                if method.upper() in STATE_CHANGING:
+                    for code, text in GUARD_RESPONSES.items():
+                        responses = operation.setdefault("responses", {})
+                        responses.setdefault(code, {"description": text, "content": error})
+        return document
+
+    return schema
 
 
 def _storage_error(request: Request, error: StorageError) -> JSONResponse:

@@ -267,3 +267,10 @@ def test_malformed_json_names_where_it_breaks(client, body, detail):
     )
     assert response.status_code in (400, 422)
     assert response.json() == {"detail": detail}
+
+
+def test_the_schema_documents_the_guards_answers_on_state_changes(client):
+    paths = client.get("/api/openapi.json").json()["paths"]
+    judgements = paths["/api/sessions/{session_id}/judgements"]
+    assert {"403", "415"} <= set(judgements["post"]["responses"])
+    assert not {"403", "415"} & set(judgements["get"]["responses"])
