@@ -2,9 +2,9 @@
 
 Inputs are the concatenated [obs ; encoded action] of each step (one-hot for discrete
 actions, see `groupwise.envs.spaces`), or the observation alone (`RewardConfig.use_actions`
-off; the actions are still taken, checked and ignored). Every prediction runs under `torch.inference_mode`
-and never changes the input normaliser; only `fit` (in `bradley_terry`) and
-`update_normalizer` / `refit_normalizer` do.
+off; the actions are still taken, checked and ignored). Every prediction runs under
+`torch.inference_mode` and never changes the input normaliser; only `fit` (in
+`bradley_terry`) and `update_normalizer` / `refit_normalizer` do.
 
 Pickling: a `RewardEnsemble` (and so its bound `mean_reward`) pickles and cloudpickles like
 any `nn.Module`, e.g. into SB3 subprocess VecEnvs; the copy is a snapshot that later fits in
