@@ -1,6 +1,6 @@
 """The end of a run: PPO on the frozen learned reward, the agent's video and its download.
 
-`train_frozen` is a round without feedback: no pool, no judgements, no reward fit; the
+`loop.train_frozen` is a round without feedback: no pool, no judgements, no reward fit; the
 agent trains `steps` more PPO steps on the learned reward as the last fit left it, and is
 evaluated on the true reward. Its `RoundRecord` is a row of ``rounds.csv`` like any other
 (comparisons, pairs and the reward columns 0 or nan). `publish_agent` films the greedy
@@ -16,11 +16,8 @@ simulated decision-maker, then the final phase again).
 import json
 import logging
 import math
-import time
 from collections.abc import Callable
 from pathlib import Path
-
-import numpy as np
 
 from groupwise.checkpoint import checkpoint_dir, latest_checkpoint
 from groupwise.clips.episode_video import write_episode_video
@@ -33,12 +30,12 @@ from groupwise.loop import (
     RoundRecord,
     Session,
     eval_rng,
-    round_streams,
     run_round,
+    train_frozen,
     write_records,
 )
 from groupwise.oracles import ORACLES
-from groupwise.rl.rollout import evaluate, sample_trajectories
+from groupwise.rl.rollout import sample_trajectories
 from groupwise.trained_agent import (
     AGENT_VIDEO,
     AGENT_ZIP,
@@ -55,66 +52,6 @@ log = logging.getLogger(__name__)
 
 Report = Callable[[str, int, int], None]
 """Hears (phase, done, total): "ppo", "eval", "video", "package"."""
-
-
-def train_frozen(
-    session: Session,
-    round_index: int,
-    steps: int,
-    *,
-    show_progress: bool = False,
-    report: Report | None = None,
-) -> RoundRecord:
-    """Round `round_index` without feedback: `steps` PPO steps on the frozen learned reward,
-    then the true return over `eval_episodes`; appends and returns its record. Its PPO seed
-    comes from the round's PPO stream (`loop.round_streams`), as a feedback round's does."""
-    loop = session.cfg.loop
-
-    def tell(phase: str, done: int, total: int) -> None:
-        if report is not None:
-            report(phase, done, total)
-
-    seed = int(round_streams(loop.seed, round_index).ppo.integers(2**31 - 1))
-    tick = time.perf_counter()
-    session.agent.learn(
-        steps,
-        seed,
-        show_progress=show_progress,
-        report=lambda done, total: tell("ppo", done, total),
-    )
-    ppo_s = time.perf_counter() - tick
-    returns = np.full(1, np.nan)
-    if loop.eval_episodes > 0:
-        tell("eval", 0, loop.eval_episodes)
-        returns = evaluate(
-            session.make_env,
-            session.agent.policy(deterministic=True),
-            loop.eval_episodes,
-            eval_rng(loop.seed),
-        )
-    dataset = session.dataset
-    record = RoundRecord(
-        round=round_index,
-        comparisons=0,
-        judgements=0,
-        pairs=0,
-        pairs_total=len(dataset),
-        label_error_rate=math.nan,
-        label_error_rate_total=dataset.label_error_rate(),
-        reward_loss=math.nan,
-        reward_accuracy=math.nan,
-        reward_val_accuracy=math.nan,
-        env_steps=session.agent.num_timesteps,
-        true_return_mean=float(returns.mean()),
-        true_return_std=float(returns.std()),
-        sample_s=0.0,
-        feedback_s=0.0,
-        reward_s=0.0,
-        ppo_s=ppo_s,
-        eval_s=time.perf_counter() - tick - ppo_s,
-    )
-    session.records.append(record)
-    return record
 
 
 def publish_agent(

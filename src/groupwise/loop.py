@@ -305,6 +305,66 @@ def train_round(
     return record
 
 
+def train_frozen(
+    session: Session,
+    round_index: int,
+    steps: int,
+    *,
+    show_progress: bool = False,
+    report: Callable[[str, int, int], None] | None = None,
+) -> RoundRecord:
+    """Round `round_index` without feedback: `steps` PPO steps on the frozen learned reward,
+    then the true return over `eval_episodes`; appends and returns its record. Its PPO seed
+    comes from the round's PPO stream (`loop.round_streams`), as a feedback round's does."""
+    loop = session.cfg.loop
+
+    def tell(phase: str, done: int, total: int) -> None:
+        if report is not None:
+            report(phase, done, total)
+
+    seed = int(round_streams(loop.seed, round_index).ppo.integers(2**31 - 1))
+    tick = time.perf_counter()
+    session.agent.learn(
+        steps,
+        seed,
+        show_progress=show_progress,
+        report=lambda done, total: tell("ppo", done, total),
+    )
+    ppo_s = time.perf_counter() - tick
+    returns = np.full(1, np.nan)
+    if loop.eval_episodes > 0:
+        tell("eval", 0, loop.eval_episodes)
+        returns = evaluate(
+            session.make_env,
+            session.agent.policy(deterministic=True),
+            loop.eval_episodes,
+            eval_rng(loop.seed),
+        )
+    dataset = session.dataset
+    record = RoundRecord(
+        round=round_index,
+        comparisons=0,
+        judgements=0,
+        pairs=0,
+        pairs_total=len(dataset),
+        label_error_rate=math.nan,
+        label_error_rate_total=dataset.label_error_rate(),
+        reward_loss=math.nan,
+        reward_accuracy=math.nan,
+        reward_val_accuracy=math.nan,
+        env_steps=session.agent.num_timesteps,
+        true_return_mean=float(returns.mean()),
+        true_return_std=float(returns.std()),
+        sample_s=0.0,
+        feedback_s=0.0,
+        reward_s=0.0,
+        ppo_s=ppo_s,
+        eval_s=time.perf_counter() - tick - ppo_s,
+    )
+    session.records.append(record)
+    return record
+
+
 def feedback_diagnostics(
     oracle: Oracle,
     pool: BehaviourPool,
@@ -456,7 +516,12 @@ def run_rounds(
     with bar:
         while session.next_round < len(plan):
             n_comparisons, steps = plan[session.next_round]
-            record = run_round(session, oracle, n_comparisons, steps, show_progress)
+            if n_comparisons == 0:  # the final row: PPO on the frozen reward
+                record = train_frozen(
+                    session, session.next_round, steps, show_progress=show_progress
+                )
+            else:
+                record = run_round(session, oracle, n_comparisons, steps, show_progress)
             bar.update(1)
             bar.set_postfix(true_return=f"{record.true_return_mean:.1f}")
             if on_round is not None:

@@ -5,6 +5,7 @@ import dataclasses
 
 import numpy as np
 import pytest
+import torch
 
 from groupwise.config import LoopConfig, PPOConfig, RewardConfig, RunConfig
 from groupwise.loop import RESULTS_FILE, RoundRecord, run_session
@@ -91,3 +92,19 @@ def test_a_pair_cap_keeps_one_pair_per_comparison(tmp_path):
     records = run_session(capped, tmp_path, show_progress=False)
     assert all(r.pairs <= r.comparisons for r in records)
     assert records[-1].pairs_total > 0
+
+
+def test_the_final_row_trains_ppo_on_the_frozen_reward(tmp_path):
+    cfg = dataclasses.replace(TINY, loop=dataclasses.replace(TINY.loop, final_steps=256))
+    records = run_session(cfg, tmp_path, show_progress=False)
+    last, final = records[-2], records[-1]
+    assert final.round == 3 and final.comparisons == 0 and final.pairs == 0
+    assert final.pairs_total == last.pairs_total
+    assert final.env_steps >= last.env_steps + 256
+    assert np.isnan(final.reward_loss) and final.sample_s == 0.0 and final.reward_s == 0.0
+    weights = [
+        torch.load(tmp_path / "checkpoints" / f"round-{r:04d}" / "reward.pt", weights_only=True)
+        for r in (2, 3)
+    ]
+    for name, tensor in weights[0]["state_dict"].items():
+        assert torch.equal(tensor, weights[1]["state_dict"][name]), name

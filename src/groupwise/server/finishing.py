@@ -2,7 +2,7 @@
 
 finishing round r: when round r is one without feedback (the final phase after the last
     round, or "Continue training" with more steps): the checkpoint of round r − 1 →
-    `final.train_frozen` (PPO for the round's steps on the frozen learned reward, the true
+    `loop.train_frozen` (PPO for the round's steps on the frozen learned reward, the true
     return) → checkpoint ``round-r`` and ``rounds.csv``. Then, and also when the final phase
     has no steps (round r is the last feedback round), `final.publish_agent`: the greedy
     policy's video (``agent.mp4``), ``agent.zip`` and ``agent.json`` in the session's
@@ -15,8 +15,8 @@ import logging
 from pathlib import Path
 
 from groupwise.checkpoint import checkpoint_dir
-from groupwise.final import publish_agent, train_frozen
-from groupwise.loop import RESULTS_FILE, write_records
+from groupwise.final import publish_agent
+from groupwise.loop import RESULTS_FILE, train_frozen, write_records
 from groupwise.server.jobs import Job, load_session, record_stats
 from groupwise.server.progress import ProgressReporter
 from groupwise.storage import Database
