@@ -13,8 +13,8 @@ export interface paths {
         };
         /**
          * List Envs
-         * @description The short env names, the case studies' reward-free target envs last; any registered
-         *     Gymnasium id with a fixed horizon works too.
+         * @description The six groupwise envs, then the case studies' reward-free target envs; any
+         *     registered Gymnasium id with a fixed horizon works too.
          */
         get: operations["list_envs_api_envs_get"];
         put?: never;
@@ -499,6 +499,31 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/settings/resolve": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        /**
+         * Resolve Settings
+         * @description The settings `POST /api/sessions` would store for this body: the env's defaults with
+         *     the given settings (L in steps, `clip_seconds` and `final_steps` resolved); 422 with the
+         *     same sentence when it would refuse the env or the settings. Nothing is created.
+         *
+         *     A POST, not a GET, because checking a ``module:Env-v0`` id imports that module: only the
+         *     app's own page and scripts may make the server do that (docs/app.md, Security).
+         */
+        post: operations["resolve_settings_api_settings_resolve_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/clips/{clip_id}": {
         parameters: {
             query?: never;
@@ -673,6 +698,45 @@ export interface components {
             b: string;
             /** Score */
             score: number;
+        };
+        /**
+         * EnvOut
+         * @description An env a session can use by `name`; any other registered Gymnasium id works too.
+         */
+        EnvOut: {
+            /**
+             * Clip Seconds
+             * @description simulated seconds a behaviour covers by default
+             */
+            clip_seconds: number;
+            /**
+             * Description
+             * @description how it differs from the standard env, in one line
+             */
+            description: string;
+            /**
+             * Gym Id
+             * @example groupwise/Hopper-v0
+             */
+            gym_id: string;
+            /**
+             * Horizon
+             * @description steps per episode
+             */
+            horizon: number;
+            /**
+             * Kind
+             * @description env: one of the six fixed-horizon envs; target: a case study's reward-free env, scored by its target
+             * @enum {string}
+             */
+            kind: "env" | "target";
+            /**
+             * Name
+             * @description what POST /api/sessions takes as env
+             * @example Hopper
+             */
+            name: string;
+            target?: components["schemas"]["TargetOut"] | null;
         };
         /**
          * ErrorOut
@@ -1297,6 +1361,45 @@ export interface components {
              */
             exclude?: string[][] | null;
         };
+        /**
+         * TargetOut
+         * @description A case study's target: the reward-free behaviour a target env scores
+         *     (`groupwise.envs.targets.Target`).
+         */
+        TargetOut: {
+            /**
+             * Base
+             * @description the groupwise env it modifies
+             * @example Hopper
+             */
+            base: string;
+            /**
+             * Description
+             * @description the definition in one paragraph
+             */
+            description: string;
+            /**
+             * Name
+             * @example hopper-backflip
+             */
+            name: string;
+            /**
+             * Stretch
+             * @description the more ambitious level
+             */
+            stretch: number;
+            /**
+             * Threshold
+             * @description an episode succeeds when its score reaches this
+             */
+            threshold: number;
+            /**
+             * Unit
+             * @description what an episode's score counts
+             * @example backward turns
+             */
+            unit: string;
+        };
         /** Timer */
         Timer: {
             /**
@@ -1371,7 +1474,7 @@ export interface operations {
                     [name: string]: unknown;
                 };
                 content: {
-                    "application/json": string[];
+                    "application/json": components["schemas"]["EnvOut"][];
                 };
             };
             /** @description bad request */
@@ -3617,6 +3720,102 @@ export interface operations {
             };
             /** @description body too large */
             413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description invalid input */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+        };
+    };
+    resolve_settings_api_settings_resolve_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["SessionCreate"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["SessionSettings"];
+                };
+            };
+            /** @description bad request */
+            400: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description missing or wrong token */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description a state change from another site (Sec-Fetch-Site or Origin) */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description unknown session, round or judgement */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not possible in the session's current phase */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description body too large */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description a body that is not application/json */
+            415: {
                 headers: {
                     [name: string]: unknown;
                 };

@@ -14,6 +14,7 @@
  */
 import type { components } from "./api-types";
 import { Latest } from "./lib/latest";
+import type { JsonSchema } from "./lib/settings-form";
 
 type Schemas = components["schemas"];
 export type SessionState = Schemas["SessionState"];
@@ -34,6 +35,11 @@ export type Pair = Schemas["PairOut"];
 export type PairQuery = Schemas["PairQuery"];
 export type PairwiseNext = Schemas["PairwiseNext"];
 export type AgentOut = Schemas["AgentOut"];
+export type EnvInfo = Schemas["EnvOut"];
+/** The server's OpenAPI document, as far as the New-session form reads it. */
+export interface OpenApiDocument {
+  components: { schemas: Record<string, JsonSchema> };
+}
 /** More training for a finished session: exactly one of the two. */
 export type ContinueIn = { steps: number; rounds?: never } | { rounds: number; steps?: never };
 export type Phase = SessionState["phase"];
@@ -187,9 +193,15 @@ export function createApi(options: ApiOptions = {}) {
   return {
     invalidate: (resource: string) => latest.invalidate(resource),
 
-    envs: () => request<string[]>("GET", "api/envs"),
+    envs: () => request<EnvInfo[]>("GET", "api/envs"),
     sessions: () => request<SessionState[]>("GET", "api/sessions"),
     createSession: (body: SessionCreate) => request<SessionState>("POST", "api/sessions", { body }),
+    /** The server's schema: the New-session form's fields come from its `SessionSettings`. */
+    openapi: () => request<OpenApiDocument>("GET", "api/openapi.json"),
+    /** The settings creating a session with `body` would store (422: why it would refuse);
+     * STALE when a newer check was issued meanwhile. */
+    resolveSettings: (body: SessionCreate) =>
+      read<Settings>("settings", "POST", "api/settings/resolve", { body }),
 
     session: (sid: string) => read<SessionState>("session", "GET", s(sid)),
     tree: (sid: string, round: number) =>

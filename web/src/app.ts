@@ -79,6 +79,7 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
     annotator: params.get("annotator") ?? "",
     setUrl(sid) {
       const url = new URL(window.location.href);
+      url.searchParams.delete("new"); // a reload shows the session, not the form again
       if (sid) url.searchParams.set("session", sid);
       else url.searchParams.delete("session");
       window.history.replaceState(null, "", url);
@@ -147,8 +148,10 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
     status.hidden = !s || st.boot !== "ready";
 
     if (st.boot === "choose") {
-      renderStart(start, { envs: st.envs, sessions: st.sessions, busy: st.busy }, {
+      const data = { envs: st.envs, schemas: st.schemas, newSession: st.newSession, sessions: st.sessions, busy: st.busy };
+      renderStart(start, data, {
         open: (sid) => void controller.open(sid),
+        check: (body) => void controller.checkNewSession(body),
         create: (body) => void controller.create(body),
       });
     }
@@ -371,6 +374,6 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
   });
 
   render();
-  void controller.boot(params.get("session"));
+  void controller.boot(params.get("session"), params.has("new"));
   return { store, controller };
 }

@@ -16,7 +16,7 @@ import { fromSuggestion } from "./lib/selection";
 import { buildTree } from "./lib/tree";
 import { uuid } from "./lib/uuid";
 import { createPairwiseFlow } from "./pairwise-flow";
-import { FRESH_ORIGIN, type Origin, type State, type Store } from "./state";
+import { FRESH_ORIGIN, type NewSessionState, type Origin, type State, type Store } from "./state";
 
 export interface ControllerOptions {
   annotator?: string;
@@ -53,8 +53,10 @@ export function createController(store: Store, api: Api, options: ControllerOpti
 
   /* ------------------------------------------------------------- session */
 
-  async function boot(sidFromUrl: string | null): Promise<void> {
+  /** Opens the URL's session, else the newest, else (or with `fresh`) the start screen. */
+  async function boot(sidFromUrl: string | null, fresh = false): Promise<void> {
     try {
+      if (fresh) return await showStart();
       if (sidFromUrl) return await open(sidFromUrl);
       const sessions = await api.sessions();
       dispatch({ type: "sessions", sessions });
@@ -71,7 +73,8 @@ export function createController(store: Store, api: Api, options: ControllerOpti
     options.setUrl?.(null);
     dispatch({ type: "boot", boot: "choose" });
     try {
-      const [envs, sessions] = await Promise.all([api.envs(), api.sessions()]);
+      const [envs, sessions, schema] = await Promise.all([api.envs(), api.sessions(), api.openapi()]);
+      dispatch({ type: "schemas", schemas: schema.components.schemas });
       dispatch({ type: "envs", envs });
       dispatch({ type: "sessions", sessions });
     } catch (err) {
@@ -106,13 +109,41 @@ export function createController(store: Store, api: Api, options: ControllerOpti
 
   async function create(body: SessionCreate): Promise<void> {
     dispatch({ type: "busy", value: true });
+    let session: SessionState;
     try {
-      const session = await api.createSession(body);
-      await open(session.id);
+      session = await api.createSession(body);
     } catch (err) {
-      fail(err);
+      const refusal = await whyRefused(body, err);
+      if (refusal !== STALE) dispatch({ type: "new-session", patch: refusal });
+      return;
     } finally {
       dispatch({ type: "busy", value: false });
+    }
+    dispatch({ type: "new-session", patch: { resolved: null, envError: null, error: null } });
+    await open(session.id);
+  }
+
+  /** What the server would store for the New-session form's body, or why it would refuse. */
+  async function checkNewSession(body: SessionCreate): Promise<void> {
+    try {
+      const resolved = await api.resolveSettings(body);
+      if (resolved !== STALE) dispatch({ type: "new-session", patch: { resolved, envError: null, error: null } });
+    } catch (err) {
+      const refusal = await whyRefused(body, err);
+      if (refusal !== STALE) dispatch({ type: "new-session", patch: refusal });
+    }
+  }
+
+  /** A refusal (422) is the env's when the env alone is refused too, else the settings'. */
+  async function whyRefused(body: SessionCreate, err: unknown): Promise<Partial<NewSessionState> | typeof STALE> {
+    const message = err instanceof Error ? err.message : String(err);
+    if (!(err instanceof ApiError) || err.status !== 422) return { error: message };
+    if (Object.keys(body.settings ?? {}).length === 0) return { envError: message, error: null };
+    try {
+      const alone = await api.resolveSettings({ env: body.env, mode: body.mode });
+      return alone === STALE ? STALE : { envError: null, error: message };
+    } catch (again) {
+      return { envError: again instanceof Error ? again.message : String(again), error: null };
     }
   }
 
@@ -444,6 +475,7 @@ export function createController(store: Store, api: Api, options: ControllerOpti
     boot,
     open,
     create,
+    checkNewSession,
     showStart,
     suggest,
     answer,

@@ -6,9 +6,11 @@ import type {
   AgentOut,
   ClipTiming,
   Edge,
+  EnvInfo,
   JudgementOut,
   PairQuery,
   SessionState,
+  Settings,
   Suggestion,
 } from "./api";
 import {
@@ -23,6 +25,7 @@ import {
 } from "./lib/selection";
 import type { Tree } from "./lib/tree";
 import { DEFAULT_BETA } from "./lib/edges";
+import type { Schemas } from "./lib/settings-form";
 
 export type Source = "suggested" | "explored";
 
@@ -78,10 +81,23 @@ export interface PairwiseState {
   clip?: ClipTiming | null;
 }
 
+/** The New-session form's answers from the server (the inputs themselves live in the DOM). */
+export interface NewSessionState {
+  /** The settings a session of the chosen env and settings would store. */
+  resolved: Settings | null;
+  /** Why the server would refuse the chosen env (shown next to it). */
+  envError: string | null;
+  /** Why it would refuse the chosen settings, or why creating failed. */
+  error: string | null;
+}
+
 export interface State {
   boot: "loading" | "choose" | "ready" | "error";
   bootError: string | null;
-  envs: string[];
+  envs: EnvInfo[];
+  /** The server's schemas (`SessionSettings` and what it nests), for the New-session form. */
+  schemas: Schemas | null;
+  newSession: NewSessionState;
   sessions: SessionState[];
   session: SessionState | null;
   /** When `session` arrived (ms), to run the round's timer between updates. */
@@ -119,6 +135,8 @@ export const initialState: State = {
   boot: "loading",
   bootError: null,
   envs: [],
+  schemas: null,
+  newSession: { resolved: null, envError: null, error: null },
   sessions: [],
   session: null,
   sessionAt: 0,
@@ -150,7 +168,9 @@ export const initialState: State = {
 
 export type Action =
   | { type: "boot"; boot: State["boot"]; error?: string }
-  | { type: "envs"; envs: string[] }
+  | { type: "envs"; envs: EnvInfo[] }
+  | { type: "schemas"; schemas: Schemas }
+  | { type: "new-session"; patch: Partial<NewSessionState> }
   | { type: "sessions"; sessions: SessionState[] }
   | { type: "session"; session: SessionState; at: number }
   | { type: "round-data"; round: RoundData }
@@ -206,6 +226,10 @@ export function reduce(state: State, action: Action): State {
       return { ...state, boot: action.boot, bootError: action.error ?? null };
     case "envs":
       return { ...state, envs: action.envs };
+    case "schemas":
+      return { ...state, schemas: action.schemas };
+    case "new-session":
+      return { ...state, newSession: { ...state.newSession, ...action.patch } };
     case "sessions":
       return { ...state, sessions: action.sessions };
     case "session":

@@ -1,5 +1,5 @@
 import { describe, expect, it, vi } from "vitest";
-import type { Api } from "../src/api";
+import { type Api, ApiError, type Settings } from "../src/api";
 import { fakeApi } from "../src/bench/fake-api";
 import { syntheticRound } from "../src/bench/synthetic";
 import { createController } from "../src/controller";
@@ -144,5 +144,38 @@ describe("controller (round timer)", () => {
     store.dispatch({ type: "guide", open: false });
     await controller.reportShown();
     expect(shown).toHaveBeenCalledWith("s-demo", 1);
+  });
+});
+
+describe("controller (new session)", () => {
+  const refuse = (message: string) => Promise.reject(new ApiError(422, message));
+
+  it("shows what the server would store, and the env's refusal beside the env", async () => {
+    const { store, controller } = setup("groupwise", {
+      resolveSettings: async (body) => {
+        if (body.env === "Bogus-v9") return refuse("unknown env 'Bogus-v9'");
+        return { ...(await fakeApi(round, "groupwise").resolveSettings(body)) as Settings, pool_size: 42 };
+      },
+    });
+    await controller.checkNewSession({ env: "Hopper", mode: "groupwise" });
+    expect(store.getState().newSession).toMatchObject({ envError: null, error: null });
+    expect(store.getState().newSession.resolved?.pool_size).toBe(42);
+    await controller.checkNewSession({ env: "Bogus-v9", mode: "groupwise", settings: { rounds: 3 } });
+    expect(store.getState().newSession).toMatchObject({ envError: "unknown env 'Bogus-v9'", error: null });
+  });
+
+  it("puts a refusal of the settings above the form, and creates nothing", async () => {
+    const createSession = vi.fn();
+    const { store, controller } = setup("groupwise", {
+      createSession,
+      resolveSettings: async (body) =>
+        body.settings?.clip_seconds ? refuse("env Hopper needs a fixed horizon") : fakeApi(round, "groupwise").resolveSettings(body),
+    });
+    await controller.checkNewSession({ env: "Hopper", mode: "groupwise", settings: { clip_seconds: 20 } });
+    expect(store.getState().newSession).toMatchObject({ envError: null, error: "env Hopper needs a fixed horizon" });
+    createSession.mockImplementation(() => refuse("env Hopper needs a fixed horizon"));
+    await controller.create({ env: "Hopper", mode: "groupwise", settings: { clip_seconds: 20 } });
+    expect(store.getState().newSession.error).toBe("env Hopper needs a fixed horizon");
+    expect(store.getState().boot).not.toBe("ready");
   });
 });

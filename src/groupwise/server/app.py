@@ -34,6 +34,7 @@ from groupwise.server.routes import (
     rounds,
     sessions,
 )
+from groupwise.server.routes import settings as settings_routes
 from groupwise.server.routes import transfer as transfer_routes
 from groupwise.server.routes.frontend import mount_frontend
 from groupwise.server.security import (
@@ -85,6 +86,7 @@ def create_app(config: AppConfig) -> FastAPI:
     app.state.context = context
     for module in (
         meta,
+        settings_routes,
         sessions,
         transfer_routes,
         rounds,

@@ -42,6 +42,36 @@ class ErrorOut(_Out):
     detail: str
 
 
+# ------------------------------------------------------------------ envs
+
+
+class TargetOut(_Out):
+    """A case study's target: the reward-free behaviour a target env scores
+    (`groupwise.envs.targets.Target`)."""
+
+    name: str = Field(examples=["hopper-backflip"])
+    base: str = Field(description="the groupwise env it modifies", examples=["Hopper"])
+    unit: str = Field(description="what an episode's score counts", examples=["backward turns"])
+    threshold: float = Field(description="an episode succeeds when its score reaches this")
+    stretch: float = Field(description="the more ambitious level")
+    description: str = Field(description="the definition in one paragraph")
+
+
+class EnvOut(_Out):
+    """An env a session can use by `name`; any other registered Gymnasium id works too."""
+
+    name: str = Field(examples=["Hopper"], description="what POST /api/sessions takes as env")
+    gym_id: str = Field(examples=["groupwise/Hopper-v0"])
+    kind: Literal["env", "target"] = Field(
+        description="env: one of the six fixed-horizon envs; target: a case study's "
+        "reward-free env, scored by its target"
+    )
+    horizon: int = Field(description="steps per episode")
+    clip_seconds: float = Field(description="simulated seconds a behaviour covers by default")
+    description: str = Field(description="how it differs from the standard env, in one line")
+    target: TargetOut | None = None
+
+
 # ------------------------------------------------------------------ sessions
 
 

@@ -91,12 +91,17 @@ def list_states(db: Database) -> list[schemas.SessionState]:
 
 def check_env(env: str, settings: SessionSettings) -> SessionSettings:
     """The settings a new session of `env` stores (`SessionSettings.for_env`: its L in
-    steps). Raises InvalidError unless `env` is known and its episodes hold a behaviour."""
+    steps). Raises InvalidError unless `env` is known, can be made here, and its episodes
+    hold a behaviour."""
     try:
         steps = horizon(env)
-        resolved = settings.for_env(env)
+        resolved = settings.for_env(env)  # makes the env once, for its step duration
     except ValueError as error:
         raise InvalidError(str(error)) from None
+    except Exception as error:
+        # A registered id runs its own constructor, which fails its own way (e.g. Gymnasium's
+        # DependencyNotInstalled for CarRacing-v3 without Box2D): the id is the person's error.
+        raise InvalidError(f"env {env!r} cannot be made here: {error}") from None
     length = resolved.fragment_length
     if steps is None or length is None or steps < length:
         raise InvalidError(

@@ -26,7 +26,7 @@ def leaves(node: dict) -> list[dict]:
 
 
 def test_envs_and_health(client):
-    assert "GridWorld" in client.get("/api/envs").json()
+    assert "GridWorld" in [env["name"] for env in client.get("/api/envs").json()]
     assert client.get("/api/health").json() == {"status": "ok", "worker_pid": None}
 
 

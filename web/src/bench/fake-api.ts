@@ -72,9 +72,20 @@ export function fakeApi(
   });
   const api: Api = {
     invalidate: () => undefined,
-    envs: async () => ["GridWorld", "Hopper", "HalfCheetah"],
+    envs: async () =>
+      ["GridWorld", "Hopper", "HalfCheetah"].map((name) => ({
+        name,
+        gym_id: `groupwise/${name}-v0`,
+        kind: "env" as const,
+        horizon: 1000,
+        clip_seconds: 1,
+        description: "",
+        target: null,
+      })),
     sessions: async () => [session],
     createSession: async () => session,
+    openapi: async () => ({ components: { schemas: {} } }),
+    resolveSettings: async () => session.settings,
     session: async () => ({ ...session }),
     tree: async () => ({ round: 1, levels: round.levels, tree: round.tree, medoids: round.medoids, compared: [] }),
     edges: async (_s, _r, k) => round.suggestions.slice(0, k),

@@ -1,23 +1,53 @@
 """Meta: the envs a session can use, and the server's health."""
 
+from typing import Literal
+
 from fastapi import APIRouter
 
-from groupwise.envs import ENVS, TARGET_ENVS
+from groupwise.clips.timing import default_clip_seconds
+from groupwise.envs import ENVS, TARGET_ENVS, TARGETS, EnvEntry
 from groupwise.server.deps import Context
 from groupwise.server.routes import ERRORS
-from groupwise.server.schemas import Health
+from groupwise.server.schemas import EnvOut, Health, TargetOut
 
 router = APIRouter(prefix="/api", tags=["meta"], responses=ERRORS)
 
 
 @router.get("/envs")
-def list_envs() -> list[str]:
-    """The short env names, the case studies' reward-free target envs last; any registered
-    Gymnasium id with a fixed horizon works too."""
-    return [*ENVS, *TARGET_ENVS]
+def list_envs() -> list[EnvOut]:
+    """The six groupwise envs, then the case studies' reward-free target envs; any
+    registered Gymnasium id with a fixed horizon works too."""
+    return [_env_out(entry, "env") for entry in ENVS.values()] + [
+        _env_out(entry, "target") for entry in TARGET_ENVS.values()
+    ]
 
 
 @router.get("/health")
 def health(context: Context) -> Health:
     """The server is up; the training worker's pid while it runs (None otherwise)."""
     return Health(worker_pid=context.supervisor.worker_pid)
+
+
+_TARGETS_BY_ENV = {target.env: target for target in TARGETS.values()}
+
+
+def _env_out(entry: EnvEntry, kind: Literal["env", "target"]) -> EnvOut:
+    target = _TARGETS_BY_ENV.get(entry.name) if kind == "target" else None
+    return EnvOut(
+        name=entry.name,
+        gym_id=entry.gym_id,
+        kind=kind,
+        horizon=entry.horizon,
+        clip_seconds=default_clip_seconds(entry.name),
+        description=entry.changes,
+        target=None
+        if target is None
+        else TargetOut(
+            name=target.name,
+            base=target.base,
+            unit=target.unit,
+            threshold=target.threshold,
+            stretch=target.stretch,
+            description=target.description,
+        ),
+    )

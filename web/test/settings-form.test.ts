@@ -1,0 +1,135 @@
+import { describe, expect, it } from "vitest";
+import openapi from "../openapi.json";
+import {
+  type Schemas,
+  chosenSettings,
+  helpOf,
+  inputText,
+  labelOf,
+  parseInput,
+  settingFields,
+  touch,
+  valueAt,
+} from "../src/lib/settings-form";
+
+const schemas = (openapi as unknown as { components: { schemas: Schemas } }).components.schemas;
+const fields = settingFields(schemas);
+const byKey = new Map(fields.map((f) => [f.key, f]));
+const field = (key: string) => byKey.get(key)!;
+
+describe("settingFields", () => {
+  it("offers every SessionSettings field but the driver, and every PPO and reward field", () => {
+    const top = Object.keys(schemas.SessionSettings!.properties!).filter((k) => !["driver", "ppo", "reward"].includes(k));
+    for (const key of top) expect(byKey.has(key), key).toBe(true);
+    for (const key of Object.keys(schemas.PPOConfig!.properties!)) expect(byKey.has(`ppo.${key}`), key).toBe(true);
+    for (const key of Object.keys(schemas.RewardConfig!.properties!)) expect(byKey.has(`reward.${key}`), key).toBe(true);
+    expect(byKey.has("driver")).toBe(false);
+  });
+
+  it("groups them: Feedback and Training in the page's order, the rest Advanced", () => {
+    const keys = (group: string) => fields.filter((f) => f.group === group).map((f) => f.key);
+    expect(keys("feedback")).toEqual([
+      "comparisons_per_round",
+      "rounds",
+      "round_seconds",
+      "pool_size",
+      "clip_seconds",
+      "fragment_length",
+      "pair_derivation",
+    ]);
+    expect(keys("training")).toEqual(["ppo_steps_per_round", "final_steps", "seed", "eval_episodes"]);
+    expect(new Set(fields.filter((f) => f.group === "advanced").map((f) => f.section))).toEqual(
+      new Set(["Session", "PPO", "Reward model"]),
+    );
+    expect(field("ppo.gamma").section).toBe("PPO");
+    expect(field("frame_size").section).toBe("Session");
+  });
+
+  it("puts a setting the server adds in Advanced, without page changes", () => {
+    const more = structuredClone(schemas);
+    more.SessionSettings!.properties!.colour_blind = { type: "boolean", title: "Colour Blind" };
+    const f = settingFields(more).find((x) => x.key === "colour_blind")!;
+    expect([f.group, f.section, f.kind, f.label]).toEqual(["advanced", "Session", "boolean", "Colour blind"]);
+  });
+
+  it("takes the bounds, kinds and nullability from the schema", () => {
+    expect(field("pool_size")).toMatchObject({ kind: "integer", min: 8, max: 200, step: 1, nullable: false });
+    expect(field("clip_seconds")).toMatchObject({ kind: "number", min: 0, max: 20, step: "any", nullable: true });
+    expect(field("final_steps")).toMatchObject({ kind: "integer", min: 0, max: 10_000_000, nullable: true });
+    expect(field("frame_size").step).toBe(2);
+    expect(field("pair_derivation")).toMatchObject({ kind: "choice", choices: ["cover", "cartesian"] });
+    expect(field("ppo.net_arch")).toMatchObject({ kind: "list", integerItems: true });
+    expect(field("reward.l2_range")).toMatchObject({ kind: "list", integerItems: false });
+    expect(field("ppo.normalize_obs").kind).toBe("boolean");
+  });
+
+  it("labels from the titles, help from the descriptions", () => {
+    expect(field("ppo_steps_per_round").label).toBe("PPO steps per round");
+    expect(field("clip_seconds").label).toBe("Clip seconds");
+    expect(field("ppo.gae_lambda").label).toBe("GAE lambda");
+    expect(field("pool_size").help).toBe("behaviours per round");
+    expect(field("final_steps").help).toContain("(empty: 2 × ppo steps per round");
+  });
+
+  it("says so when the schema has no settings", () => {
+    expect(() => settingFields({})).toThrow("SessionSettings");
+  });
+});
+
+describe("values", () => {
+  it("shows a stored value in its input", () => {
+    const settings = { clip_seconds: null, ppo: { net_arch: [32, 32] }, pool_size: 100 };
+    expect(inputText(valueAt(settings, ["ppo", "net_arch"]))).toBe("32, 32");
+    expect(inputText(valueAt(settings, ["clip_seconds"]))).toBe("");
+    expect(inputText(valueAt(settings, ["pool_size"]))).toBe("100");
+    expect(valueAt(settings, ["reward", "lr"])).toBeUndefined();
+  });
+
+  it("parses what a person types, or says why not", () => {
+    expect(parseInput(field("pool_size"), " 40 ")).toEqual({ ok: true, value: 40 });
+    expect(parseInput(field("pool_size"), "4.5")).toEqual({ ok: false, error: "Pool size: enter a whole number" });
+    expect(parseInput(field("pool_size"), "")).toEqual({ ok: false, error: "Pool size: enter a value" });
+    expect(parseInput(field("clip_seconds"), "")).toEqual({ ok: true, value: null });
+    expect(parseInput(field("clip_seconds"), "2.5")).toEqual({ ok: true, value: 2.5 });
+    expect(parseInput(field("clip_seconds"), "abc").ok).toBe(false);
+    expect(parseInput(field("ppo.net_arch"), "16, 16 8")).toEqual({ ok: true, value: [16, 16, 8] });
+    expect(parseInput(field("ppo.net_arch"), "16, 1.5").ok).toBe(false);
+    expect(parseInput(field("ppo.normalize_obs"), "false")).toEqual({ ok: true, value: false });
+    expect(parseInput(field("pair_derivation"), "cartesian")).toEqual({ ok: true, value: "cartesian" });
+  });
+});
+
+describe("chosenSettings", () => {
+  it("sends only the touched fields, nested as the server takes them", () => {
+    const inputs = { clip_seconds: "2", pool_size: "100", "ppo.learning_rate": "0.0005", "ppo.net_arch": "16" };
+    const touched = new Set(["clip_seconds", "ppo.learning_rate", "ppo.net_arch"]);
+    expect(chosenSettings(fields, inputs, touched)).toEqual({
+      settings: { clip_seconds: 2, ppo: { learning_rate: 0.0005, net_arch: [16] } },
+      errors: [],
+    });
+  });
+
+  it("leaves out what means no value, and says why", () => {
+    const chosen = chosenSettings(fields, { rounds: "two" }, new Set(["rounds"]));
+    expect(chosen).toEqual({ settings: {}, errors: ["Rounds: enter a number"] });
+  });
+
+  it("lets the server derive one of a coupled pair from the other", () => {
+    let touched = touch(new Set(), "fragment_length");
+    touched = touch(touched, "clip_seconds");
+    expect([...touched]).toEqual(["clip_seconds"]);
+    expect([...touch(touched, "fragment_length")]).toEqual(["fragment_length"]);
+    expect([...touch(new Set(["seed"]), "rounds")].sort()).toEqual(["rounds", "seed"]);
+  });
+});
+
+describe("labelOf and helpOf", () => {
+  it("speaks plainly", () => {
+    expect(labelOf("N Envs")).toBe("N envs");
+    expect(labelOf("initial_l2")).toBe("Initial L2");
+    expect(helpOf("L, steps per behaviour (null: clip_seconds of simulated time)")).toBe(
+      "L, steps per behaviour (empty: clip seconds of simulated time)",
+    );
+    expect(helpOf(undefined)).toBe("");
+  });
+});
