@@ -145,8 +145,8 @@ def _playwright() -> Any:
     return playwright.sync_api
 
 
-@pytest.fixture(scope="session")
-def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+def _serve(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+    """`groupwise serve` on a free port and a data directory of its own, until closed."""
     if not (DIST / "index.html").is_file():
         _missing(f"the web UI is not built ({DIST}): cd web && npm ci && npm run build")
     data = tmp_path_factory.mktemp("groupwise-data")
@@ -176,6 +176,19 @@ def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
             proc.wait(timeout=20)
         except subprocess.TimeoutExpired:
             proc.kill()
+
+
+@pytest.fixture(scope="session")
+def server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+    """The server all tests share (each makes its own sessions)."""
+    yield from _serve(tmp_path_factory)
+
+
+@pytest.fixture(scope="module")
+def own_server(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
+    """A server for one test module alone: sessions it makes (e.g. of a MuJoCo env) keep
+    the shared server's worker free, and stopping it stops their work."""
+    yield from _serve(tmp_path_factory)
 
 
 @pytest.fixture(scope="session")
