@@ -81,7 +81,8 @@ def test_backflip_case_study_writes_rounds_video_and_strip(tmp_path, capsys):
     rows = _rows(out)
     assert [int(r["round"]) for r in rows] == [0, 1]
     assert [int(r["comparisons_total"]) for r in rows] == [2, 20]  # 10 % in round 0
-    assert 0 < int(rows[0]["pairs_total"]) <= int(rows[1]["pairs_total"])
+    # round 0's pool holds 4 behaviours, often without two disjoint groups: pairs may be 0
+    assert 0 <= int(rows[0]["pairs_total"]) < int(rows[1]["pairs_total"])
     assert [int(r["env_steps"]) for r in rows] == [2048, 4096]
     for row in rows:
         assert 0.0 <= float(row["success_rate"]) <= 1.0

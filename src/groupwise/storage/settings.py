@@ -29,6 +29,7 @@ from groupwise.config import (
     RewardConfig,
     RunConfig,
     Seed,
+    stored_reward,
 )
 from groupwise.preferences.judgement import MAX_GROUP
 
@@ -136,6 +137,8 @@ class SessionSettings(BaseModel):
             for key in ("ppo", "reward"):
                 if isinstance(data.get(key), dict):
                     data = {**data, key: {k: v for k, v in data[key].items() if v is not None}}
+            if isinstance(data.get("reward"), dict):
+                data = {**data, "reward": stored_reward(data["reward"])}
         return data
 
     def clip_timing(self, env: str) -> ClipTiming:

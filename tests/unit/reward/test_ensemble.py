@@ -141,7 +141,7 @@ def test_reinitialise_draws_fresh_seeded_weights():
 
 
 def test_observation_only_members_ignore_the_actions_but_check_them(tmp_path: Path):
-    ens = _ensemble(3, RewardConfig(use_actions=False, hidden_sizes=(8, 8)))
+    ens = _ensemble(3, RewardConfig(hidden_sizes=(8, 8)))
     assert ens.in_dim == OBS
     obs, acts = _inputs(4, 3)
     other_acts = acts + 5.0
@@ -154,4 +154,18 @@ def test_observation_only_members_ignore_the_actions_but_check_them(tmp_path: Pa
     ens.save(tmp_path / "reward.pt")
     rebuilt = RewardEnsemble.load(tmp_path / "reward.pt")
     assert not rebuilt.cfg.use_actions
+    np.testing.assert_array_equal(rebuilt.returns(obs, acts), ens.returns(obs, acts))
+
+
+def test_files_written_before_observation_only_members_load_with_actions(tmp_path: Path):
+    ens = _ensemble(4, RewardConfig(use_actions=True, hidden_sizes=(8, 8)))
+    assert ens.in_dim == OBS + ACT
+    path = tmp_path / "reward.pt"
+    ens.save(path)
+    payload = torch.load(path, weights_only=True)
+    del payload["config"]["use_actions"]  # as written before the field existed
+    torch.save(payload, path)
+    rebuilt = RewardEnsemble.load(path)
+    assert rebuilt.cfg.use_actions
+    obs, acts = _inputs(4, 3)
     np.testing.assert_array_equal(rebuilt.returns(obs, acts), ens.returns(obs, acts))
