@@ -19,7 +19,8 @@ from pydantic.dataclasses import dataclass
 
 from groupwise.preferences.judgement import MAX_GROUP
 
-_STRICT = ConfigDict(extra="forbid")
+_STRICT = ConfigDict(extra="forbid", use_attribute_docstrings=True)
+"""Unknown fields fail; each field's docstring is its description (OpenAPI, the page's help)."""
 
 PositiveInt = Annotated[int, Field(ge=1)]
 FragmentLength = Annotated[int, Field(ge=1, description="L, steps per behaviour")]

@@ -19,5 +19,7 @@ def test_configs_stored_before_use_actions_existed_keep_their_action_inputs(tmp_
 
     settings = json.loads(SessionSettings().model_dump_json())
     del settings["reward"]["use_actions"]
-    assert SessionSettings.model_validate(settings).reward.use_actions
+    assert SessionSettings.from_stored(settings).reward.use_actions
     assert not SessionSettings().reward.use_actions
+    # a request that overrides other reward fields gets today's default
+    assert not SessionSettings.model_validate({"reward": {"ensemble_size": 2}}).reward.use_actions

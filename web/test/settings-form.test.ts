@@ -131,5 +131,8 @@ describe("labelOf and helpOf", () => {
       "L, steps per behaviour (empty: clip seconds of simulated time)",
     );
     expect(helpOf(undefined)).toBe("");
+    expect(helpOf("Passes over the dataset per fit.\nOn a simulated session 3 beat 1.")).toBe(
+      "Passes over the dataset per fit.",
+    );
   });
 });

@@ -179,8 +179,8 @@ def _check_same_settings(
 ) -> None:
     from groupwise.storage import SessionSettings
 
-    wanted = SessionSettings.model_validate({**stored, **overrides})
-    if wanted != SessionSettings.model_validate(stored):
+    wanted = SessionSettings.from_stored({**stored, **overrides})
+    if wanted != SessionSettings.from_stored(stored):
         raise UsageError(
             f"session {session_id} was started with other settings; pass --new to start a "
             "new session with these, or leave the setting flags out to resume it"

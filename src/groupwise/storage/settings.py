@@ -11,8 +11,8 @@ A behaviour covers `clip_seconds` of simulated time (the env's default when null
 real speed (`groupwise.clips.timing`); a new session stores its L in steps (`for_env`), and
 sessions stored before clips were measured in seconds keep the L = 30 steps they stored.
 
-The fields after `seed` are advanced knobs that the page does not show; tests and the
-latency benchmark use them to make rounds take seconds.
+The fields after `seed` are advanced knobs: the New-session page shows them under
+"Advanced"; tests and the latency benchmark use them to make rounds take seconds.
 """
 
 from typing import Any, Literal
@@ -109,7 +109,7 @@ class SessionSettings(BaseModel):
     seed: Seed = 0
     pair_derivation: PairDerivation = "cover"
     pair_cap: PairCap = None
-    # -- advanced knobs (not shown by the page) -------------------------------------------
+    # -- advanced knobs (the New-session page's "Advanced") ------------------------------
     driver: Literal["app", "library"] = Field(
         default="app",
         description="who prepares and trains the rounds: the app's worker, or a program "
@@ -137,9 +137,16 @@ class SessionSettings(BaseModel):
             for key in ("ppo", "reward"):
                 if isinstance(data.get(key), dict):
                     data = {**data, key: {k: v for k, v in data[key].items() if v is not None}}
-            if isinstance(data.get("reward"), dict):
-                data = {**data, "reward": stored_reward(data["reward"])}
         return data
+
+    @classmethod
+    def from_stored(cls, values: dict[str, Any]) -> "SessionSettings":
+        """Settings as a stored session meant them (a database row, an export): reward
+        configs stored before `use_actions` existed trained on [obs ; act]. Requests use
+        `model_validate`, where a missing field means today's default."""
+        if isinstance(values.get("reward"), dict):
+            values = {**values, "reward": stored_reward(values["reward"])}
+        return cls.model_validate(values)
 
     def clip_timing(self, env: str) -> ClipTiming:
         """L and how a clip of `env` plays it (`clips.timing`): `fragment_length` steps if

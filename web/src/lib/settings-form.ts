@@ -87,9 +87,14 @@ export function labelOf(title: string): string {
   return text.charAt(0).toUpperCase() + text.slice(1);
 }
 
-/** A description as the page says it: "null" is an empty field, names are words. */
+/**
+ * A description as the page says it: its first sentence (the config's docstrings go on with
+ * the reasons, for developers), "null" is an empty field, names are words.
+ */
 export function helpOf(description: string | undefined): string {
-  return (description ?? "").replace(/\bnull\b/g, "empty").replace(/([a-z])_(?=[a-z])/g, "$1 ");
+  const text = (description ?? "").replace(/\s+/g, " ").trim();
+  const first = text.match(/^.*?[.;:](?=\s+[A-Z(]|$)/)?.[0] ?? text;
+  return first.replace(/\bnull\b/g, "empty").replace(/([a-z])_(?=[a-z])/g, "$1 ");
 }
 
 function refName(schema: JsonSchema): string | null {
