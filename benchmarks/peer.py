@@ -175,6 +175,7 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--envs", default=",".join(ENVS))
     parser.add_argument("--seeds", type=int, default=5)
+    parser.add_argument("--first-seed", type=int, default=0, help="seeds first … first+N−1")
     parser.add_argument(
         "--variants", default="default", help="groupwise variants (peer_groupwise.VARIANTS)"
     )
@@ -188,18 +189,19 @@ def main(argv: list[str] | None = None) -> None:
     if unknown:
         raise SystemExit(f"unknown env {unknown[0]!r}; choose from {', '.join(ENVS)}")
     ours = Path(sys.executable)
+    seeds = range(args.first_seed, args.first_seed + args.seeds)
     jobs = [
         ("groupwise", cell_spec(env, seed, variant), ours)
         for env in envs
         for variant in args.variants.split(",")
-        for seed in range(args.seeds)
+        for seed in seeds
     ]
     if not args.no_imitation:
         theirs = imitation_python()
         jobs += [
             ("imitation", {**cell_spec(env, seed, "imitation"), "imitation_label": env}, theirs)
             for env in envs
-            for seed in range(args.seeds)
+            for seed in seeds
         ]
     log = args.out / "peer.jsonl"
     results = []
