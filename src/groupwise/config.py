@@ -175,6 +175,12 @@ class LoopConfig:
     """Keep at most ⌊pair_cap × comparisons⌋ derived pairs per round, drawn at random (SPEC §8's
     capped ablation uses 1.0: the group DMs get no more pairs than the pairwise DM); None keeps
     every pair."""
+    pair_oversample: Annotated[float, Field(ge=1)] = 1.0
+    """Each judgement yields ⌊pair_oversample × k + ½⌋ pairs, k being what `pair_derivation`
+    gives (the extra ones from further draws of it; `preferences.pairs.oversample_pairs`).
+    The paper's reference code drew twice as many pairs per judgement: the study's
+    ``pairs2x`` ablation uses 2.0. The app derives a judgement's pairs when it is stored and
+    does not oversample."""
     max_group_size: Annotated[int, Field(ge=2)] = MAX_GROUP
     """Largest group the group DMs compare (paper §6: 8 keeps comparisons humanly possible)."""
     interactive_gap: Annotated[float, Field(ge=0)] = 1.0

@@ -37,7 +37,7 @@ from groupwise.oracles import ORACLES, Feedback, Oracle
 from groupwise.pool import BehaviourPool
 from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.preferences.judgement import Judgement
-from groupwise.preferences.pairs import PAIR_DERIVATIONS, Pair, cap_pairs
+from groupwise.preferences.pairs import PAIR_DERIVATIONS, Pair, cap_pairs, oversample_pairs
 from groupwise.query.schedule import comparisons_per_round
 from groupwise.reward import RewardEnsemble, fit
 from groupwise.rl.agents import Agent
@@ -219,9 +219,11 @@ def sample_pool(
 def derive_pairs(
     judgements: list[Judgement], loop: LoopConfig, rng: np.random.Generator
 ) -> list[Pair]:
-    """Each judgement's preference pairs by `loop.pair_derivation` (SPEC §6)."""
+    """Each judgement's preference pairs by `loop.pair_derivation` (SPEC §6), times
+    `loop.pair_oversample` (`oversample_pairs`; 1, the default, draws exactly those)."""
     derive = PAIR_DERIVATIONS[loop.pair_derivation]
-    return [pair for j in judgements for pair in derive(j, rng)]
+    factor = loop.pair_oversample
+    return [pair for j in judgements for pair in oversample_pairs(j, derive, factor, rng)]
 
 
 def limit_pairs(

@@ -1,6 +1,8 @@
-"""A smoke study on GridWorld: local process pool, skip and resume on rerun, the report, Ray."""
+"""A smoke study on GridWorld: local process pool, skip and resume on rerun, the report, Ray,
+an ablation."""
 
 import csv
+import json
 import re
 
 import numpy as np
@@ -120,3 +122,24 @@ def test_cells_run_on_a_local_ray(study, tmp_path):
         # a cell gives the same results in a Ray worker as in the local pool
         ours, local = _rows(cell.directory(tmp_path)), _rows(cell.directory(root))
         assert [r["true_return_mean"] for r in ours] == [r["true_return_mean"] for r in local]
+
+
+def test_an_ablation_runs_into_its_own_cells_and_the_report(tmp_path):
+    args = ["--profile", "smoke", "--envs", "GridWorld", "--dms", "groupwise", "--seeds", "1"]
+    out = ["--out", str(tmp_path), "--workers", "2", "-q"]
+    assert main(["study", *args, "--ablation", "pairs2x", *out]) == 0
+    default, doubled = (Cell("GridWorld", "groupwise", 0, c) for c in ("cells", "pairs2x"))
+    assert is_done(default.directory(tmp_path)) and is_done(doubled.directory(tmp_path))
+    assert doubled.directory(tmp_path).relative_to(tmp_path).parts[0] == "pairs2x"
+    plan = json.loads((tmp_path / "study.json").read_text())
+    assert {c["condition"] for c in plan["cells"]} == {"cells", "pairs2x"}
+    config = json.loads((doubled.directory(tmp_path) / "config.json").read_text())
+    assert config["loop"]["pair_oversample"] == 2.0
+    # both cells are the same up to their first preference pairs, which the ablation doubles
+    first = next(i for i, r in enumerate(_rows(default.directory(tmp_path))) if int(r["pairs"]))
+    pairs = [int(_rows(c.directory(tmp_path))[first]["pairs"]) for c in (default, doubled)]
+    assert pairs[1] == 2 * pairs[0] > 0
+    assert main(["report", str(tmp_path)]) == 0
+    section = (tmp_path / "report.md").read_text().split("## Ablations")[1]
+    assert "| env | DM | default | pairs2x |" in section
+    assert "| GridWorld | groupwise |" in section

@@ -8,6 +8,7 @@ from groupwise.commands.arguments import UsageError, positive_int, writable_dir
 
 
 def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    from groupwise.study.ablations import ABLATIONS
     from groupwise.study.profiles import PROFILES
 
     visible = [name for name, p in PROFILES.items() if not p.hidden]
@@ -48,9 +49,19 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
         help="cells at a time on this machine (default: one per core)",
     )
     study.add_argument(
+        "--ablation",
+        dest="ablations",
+        nargs="+",
+        default=[],
+        choices=list(ABLATIONS),
+        metavar="NAME",
+        help="also run every cell under these ablations, each into OUT/NAME/ENV/DM/seed-K: "
+        + "; ".join(f"{name}: {a.summary}" for name, a in ABLATIONS.items()),
+    )
+    study.add_argument(
         "--cap-pairs",
         action="store_true",
-        help="also run the ablation that keeps at most one preference pair per comparison",
+        help="the same as --ablation capped (SPEC §8's capped preference pairs)",
     )
     study.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
     study.set_defaults(handler=run)
@@ -83,8 +94,9 @@ def run(args: argparse.Namespace) -> int:
     if unknown:
         raise UsageError(f"unknown DM {unknown[0]!r}; choose from {', '.join(ORACLES)}")
     if any(name in CONDITIONS for name in (*envs, *dms)):
-        raise UsageError(f"env and DM names cannot be {' or '.join(CONDITIONS)}")
-    spec = StudySpec(profile, envs, dms, args.seeds or profile.seeds, args.cap_pairs)
+        raise UsageError(f"env and DM names cannot be {', '.join(CONDITIONS)}")
+    ablations = tuple(dict.fromkeys([*args.ablations, *(["capped"] if args.cap_pairs else [])]))
+    spec = StudySpec(profile, envs, dms, args.seeds or profile.seeds, ablations)
     out = writable_dir(args.out)
     try:
         plan_jobs(spec, out)  # reject bad values before anything starts

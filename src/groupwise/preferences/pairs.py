@@ -1,5 +1,6 @@
 """From one group judgement to preference pairs (SPEC §6)."""
 
+import math
 from collections.abc import Callable
 from typing import NamedTuple
 
@@ -46,7 +47,33 @@ def cap_pairs(pairs: list[Pair], limit: int, rng: np.random.Generator) -> list[P
     return [pairs[i] for i in keep]
 
 
-PAIR_DERIVATIONS: dict[str, Callable[[Judgement, np.random.Generator], list[Pair]]] = {
+Derivation = Callable[[Judgement, np.random.Generator], list[Pair]]
+"""A judgement and a generator → its preference pairs."""
+
+
+def oversample_pairs(
+    judgement: Judgement, derive: Derivation, factor: float, rng: np.random.Generator
+) -> list[Pair]:
+    """⌊factor × k + ½⌋ pairs of `judgement`, where k is the number `derive` gives.
+
+    The first k are `derive`'s; the rest come from further calls of `derive` (each shuffled
+    afresh by `rng`: another covering draw, or the same m × n pairs again), cut at the count.
+    A judgement of two single behaviours gives its one pair `factor` times over. With
+    factor 1 this is exactly `derive(judgement, rng)`, drawing the same numbers from `rng`.
+
+    Raises:
+        ValueError: `factor` below 1.
+    """
+    if factor < 1:
+        raise ValueError(f"pair oversampling factor must be >= 1, got {factor}")
+    pairs = derive(judgement, rng)
+    want = math.floor(factor * len(pairs) + 0.5)
+    while len(pairs) < want:
+        pairs += derive(judgement, rng)
+    return pairs[:want]
+
+
+PAIR_DERIVATIONS: dict[str, Derivation] = {
     "cover": covering_pairs,
     "cartesian": cartesian_pairs,
 }

@@ -4,7 +4,8 @@ Layout of a study directory::
 
     OUT/study.json                            the profile and every cell ever planned here
     OUT/cells/{env}/{dm}/seed-{k}/            one `run_session` directory per cell
-    OUT/capped/{env}/{dm}/seed-{k}/           the capped-pairs ablation (SPEC §8)
+    OUT/{ablation}/{env}/{dm}/seed-{k}/       an ablation's cells (`ablations.ABLATIONS`:
+                                              capped, pairs2x, no-reward-norm)
     OUT/.../seed-{k}/done.json                written once the cell has finished
 
 A cell directory without ``done.json`` is unfinished: rerunning the study resumes it from its
@@ -17,16 +18,19 @@ import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 
+from groupwise.study.ablations import ABLATIONS
 from groupwise.types import FloatArray, IntArray
 
-Condition = Literal["cells", "capped"]
-"""The main study (``cells``) or the capped-pairs ablation (``capped``)."""
+Condition = str
+"""The main study (`MAIN`) or the name of an ablation (a key of `ABLATIONS`)."""
 
-CONDITIONS: tuple[Condition, ...] = ("cells", "capped")
+MAIN: Condition = "cells"
+CONDITIONS: tuple[Condition, ...] = (MAIN, *ABLATIONS)
+"""Every condition, each one directory of a study; the main study first."""
 DONE_FILE = "done.json"
 STUDY_FILE = "study.json"
 ROUNDS_FILE = "rounds.csv"
@@ -40,16 +44,24 @@ class Cell:
     env: str
     dm: str
     seed: int
-    condition: Condition = "cells"
+    condition: Condition = MAIN
+    """`MAIN`, or the ablation the cell runs (its directory and its key in ``study.json``)."""
+
+    def __post_init__(self) -> None:
+        if self.condition not in CONDITIONS:
+            raise ValueError(
+                f"unknown study condition {self.condition!r}; choose from {', '.join(CONDITIONS)}"
+            )
 
     @property
-    def capped(self) -> bool:
-        return self.condition == "capped"
+    def ablation(self) -> str | None:
+        """The ablation's name, None for a cell of the main study."""
+        return None if self.condition == MAIN else self.condition
 
     @property
     def label(self) -> str:
-        """Human-readable name for log lines, e.g. ``GridWorld/pairwise/seed-0``."""
-        suffix = " (capped)" if self.capped else ""
+        """Human-readable name for log lines, e.g. ``GridWorld/pairwise/seed-0 (capped)``."""
+        suffix = f" ({self.ablation})" if self.ablation else ""
         return f"{self.env}/{self.dm}/seed-{self.seed}{suffix}"
 
     def directory(self, root: Path) -> Path:
@@ -60,7 +72,7 @@ class Cell:
 
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> "Cell":
-        return cls(data["env"], data["dm"], int(data["seed"]), data.get("condition", "cells"))
+        return cls(data["env"], data["dm"], int(data["seed"]), data.get("condition", MAIN))
 
 
 def is_done(directory: Path) -> bool:

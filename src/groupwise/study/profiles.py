@@ -23,7 +23,7 @@ the rounds, the PPO step budgets per env and the evaluation. Six ship:
 - ``smoke`` (hidden): the tiniest cell that still runs every phase, for the tests.
 
 Every profile only sets `RunConfig` fields; whatever it leaves alone keeps the defaults of
-`groupwise.config` (SPEC §3).
+`groupwise.config` (SPEC §3). An ablation (`ablations.ABLATIONS`) changes one of them after.
 """
 
 import dataclasses
@@ -31,6 +31,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from groupwise.config import LoopConfig, PPOConfig, RewardConfig, RunConfig
+from groupwise.study.ablations import ablate
 
 
 @dataclass(frozen=True)
@@ -81,14 +82,12 @@ class StudyProfile:
     def budget(self, env: str) -> EnvBudget:
         return self.budgets.get(env, self.default_budget)
 
-    def run_config(self, env: str, dm: str, seed: int, capped: bool = False) -> RunConfig:
-        """The full configuration of cell (env, dm, seed).
-
-        With `capped`, each round keeps at most as many preference pairs as it asked
-        comparisons, the pairwise DM's count (SPEC §8's capped ablation).
+    def run_config(self, env: str, dm: str, seed: int, ablation: str | None = None) -> RunConfig:
+        """The full configuration of cell (env, dm, seed), changed by `ablation` if given
+        (a key of `ablations.ABLATIONS`, e.g. ``capped``: SPEC §8's capped pairs).
 
         Raises:
-            ValueError: a value `LoopConfig` rejects.
+            ValueError: a value `LoopConfig` rejects, or an unknown ablation.
         """
         budget = self.budget(env)
         values: dict[str, object] = {
@@ -101,13 +100,12 @@ class StudyProfile:
             "eval_episodes": self.eval_episodes,
             "seed": seed,
         }
-        if capped:
-            values["pair_cap"] = 1.0
-        return RunConfig(
+        config = RunConfig(
             loop=dataclasses.replace(LoopConfig(), **values),  # type: ignore[arg-type]  # mixed value types
             reward=self.reward,
             ppo=self.ppo,
         )
+        return ablate(config, ablation)
 
 
 PAPER_DMS = ("pairwise", "groupwise", "interactive")

@@ -3,7 +3,8 @@
 Sections: coverage; final true return per env and DM (mean ± SD over seeds, the paper's
 table 1 beside it); preference pairs and label error rate per DM; training curves;
 normalised final returns (per env, IQR ↦ [0, 1]) pooled over envs with Welch t-tests and
-IQMs with stratified-bootstrap 95 % CIs; the capped-pairs ablation when its cells exist; and
+IQMs with stratified-bootstrap 95 % CIs; the capped-pairs ablation when its cells exist; every
+ablation's final returns and pairs beside the default cells' (`ablations.ABLATIONS`); and
 what is missing. Final results use finished cells only; curves also show unfinished ones.
 """
 
@@ -15,6 +16,8 @@ from pathlib import Path
 import numpy as np
 
 from groupwise.study import figures, paper
+from groupwise.study.ablations import ABLATIONS
+from groupwise.study.cells import MAIN
 from groupwise.study.figures import Band
 from groupwise.study.results import Grid, StudyResults, load_results
 from groupwise.study.statistics import (
@@ -56,7 +59,7 @@ def write_report(root: Path, seed: int = 0, bootstrap_reps: int = 2000) -> Path:
     if not results.records:
         raise NoResultsError(f"{root} holds no study cells (expected {root}/cells/ENV/DM/seed-K)")
     main_rng, capped_rng = np.random.default_rng(seed).spawn(2)
-    grid = results.grid("cells")
+    grid = results.grid(MAIN)
     sections = [
         _header(results),
         _returns_table(grid),
@@ -73,6 +76,7 @@ def write_report(root: Path, seed: int = 0, bootstrap_reps: int = 2000) -> Path:
             root / NORMALISED_PNG,
         ),
         _capped_section(results, capped_rng, bootstrap_reps, root),
+        _ablations_section(results),
         _missing_section(results),
     ]
     path = root / REPORT_FILE
@@ -117,7 +121,7 @@ def _returns_table(grid: Grid) -> str:
 
 
 def _pairs_section(results: StudyResults, root: Path) -> str:
-    pairs, errors = results.grid("cells", "final_pairs"), results.grid("cells", "final_error_rate")
+    pairs, errors = results.grid(MAIN, "final_pairs"), results.grid(MAIN, "final_error_rate")
     title = "## Preference pairs and label error rate\n\nPer finished cell at its end, pooled "
     title += "over envs and seeds (mean ± SD); the error rate is the share of pairs whose label "
     title += "disagrees with the true returns."
@@ -160,8 +164,8 @@ def _pairs_section(results: StudyResults, root: Path) -> str:
 
 def _diagnostics_section(results: StudyResults) -> str:
     fields = ("mean_asked", "mean_unused", "mean_skipped", "mean_judged", "mean_candidates")
-    grids = {f: results.grid("cells", f) for f in fields}
-    signal = results.grid("cells", "mean_signal")
+    grids = {f: results.grid(MAIN, f) for f in fields}
+    signal = results.grid(MAIN, "mean_signal")
     title = (
         "## How the queries went\n\nPer feedback round, mean over finished seeds: queries "
         "asked / left unused (the strategy had nothing to propose) / skipped (asked, no "
@@ -199,15 +203,15 @@ def _diagnostics_section(results: StudyResults) -> str:
 
 def _curves_section(results: StudyResults, root: Path) -> str:
     panels: dict[str, dict[str, Band]] = {}
-    for env in results.envs("cells"):
-        for dm in results.dms("cells"):
-            curves = results.curves("cells", env, dm)
+    for env in results.envs(MAIN):
+        for dm in results.dms(MAIN):
+            curves = results.curves(MAIN, env, dm)
             if curves is not None:
                 mean, low, high = confidence_band(curves.returns)
                 panels.setdefault(env, {})[dm] = Band(curves.steps, mean, low, high)
     if not panels:
         return ""
-    figures.training_curves(panels, results.dms("cells"), root / CURVES_PNG)
+    figures.training_curves(panels, results.dms(MAIN), root / CURVES_PNG)
     return (
         "## Training curves\n\nTrue return (evaluation after every round) against PPO env "
         "steps; mean over seeds with a 95 % Student-t band. Unfinished cells count as far as "
@@ -266,8 +270,8 @@ def _capped_section(results: StudyResults, rng: np.random.Generator, reps: int, 
     if not grid.dms:
         text = (
             "## Capped preference pairs\n\nNo finished capped cells: run the study again with "
-            "`--cap-pairs` for SPEC §8's ablation (each round keeps at most as many preference "
-            "pairs as it asked comparisons, the pairwise DM's count)."
+            "`--ablation capped` (or `--cap-pairs`) for SPEC §8's ablation (each round keeps at "
+            "most as many preference pairs as it asked comparisons, the pairwise DM's count)."
         )
         return text
     note = "Each round kept at most one preference pair per comparison. "
@@ -283,6 +287,66 @@ def _capped_section(results: StudyResults, rng: np.random.Generator, reps: int, 
         root / CAPPED_PNG,
         note,
     )
+
+
+def _ablations_section(results: StudyResults) -> str:
+    names = results.ablations()
+    described = "; ".join(f"`{name}`: {ABLATIONS[name].summary}" for name in ABLATIONS)
+    title = "## Ablations"
+    if not names:
+        return (
+            f"{title}\n\nNo finished ablation cells: `groupwise study --ablation NAME …` runs "
+            f"every cell once more with one change ({described})."
+        )
+    described = "; ".join(f"`{name}`: {ABLATIONS[name].summary}" for name in names)
+    returns = {c: results.grid(c) for c in (MAIN, *names)}
+    pairs = {c: results.grid(c, "final_pairs") for c in (MAIN, *names)}
+    envs = _merge_order([returns[c].envs for c in names], returns[MAIN].envs)
+    dms = _merge_order([returns[c].dms for c in names], returns[MAIN].dms)
+    header = ["env", "DM", "default", *names]
+    lines = [_row(header), _row(["---"] * len(header))]
+    for env in envs:
+        for dm in dms:
+            if not any(_column(returns[c], env, dm).size for c in names):
+                continue
+            lines.append(_row([env, dm, *(_mean_sd_n(returns[c], env, dm) for c in returns)]))
+    pair_header = ["DM", "default", *names]
+    pair_lines = [_row(pair_header), _row(["---"] * len(pair_header))]
+    for dm in dms:
+        pair_lines.append(_row([dm, *(_pooled_mean(pairs[c], dm, envs) for c in pairs)]))
+    return (
+        f"{title}\n\nEach ablation runs the cells once more with one change ({described}). "
+        "Final true return per env and DM, mean ± SD over finished seeds (n), beside the "
+        "default cells:\n\n" + "\n".join(lines) + "\n\nPreference pairs per finished cell, "
+        "mean over the envs above and seeds:\n\n" + "\n".join(pair_lines)
+    )
+
+
+def _merge_order(groups: list[tuple[str, ...]], order: tuple[str, ...]) -> tuple[str, ...]:
+    """The names in `groups`, those in `order` first and in its order, the rest as found."""
+    found = dict.fromkeys(name for group in groups for name in group)
+    return (*(n for n in order if n in found), *(n for n in found if n not in order))
+
+
+def _column(grid: Grid, env: str, dm: str) -> np.ndarray:
+    """The finite values of (env, dm) in `grid` (empty when it has none)."""
+    if env not in grid.envs or dm not in grid.dms:
+        return np.empty(0)
+    column = grid.values[dm][:, grid.envs.index(env)]
+    return column[np.isfinite(column)]
+
+
+def _mean_sd_n(grid: Grid, env: str, dm: str) -> str:
+    values = _column(grid, env, dm)
+    if not values.size:
+        return DASH
+    mean, sd = mean_sd(values)
+    return f"{_num(mean, 1)} ± {_num(sd, 1)} (n={values.size})"
+
+
+def _pooled_mean(grid: Grid, dm: str, envs: tuple[str, ...]) -> str:
+    values = np.concatenate([_column(grid, env, dm) for env in envs])
+    return _num(float(values.mean()), 1) if values.size else DASH
 
 
 def _missing_section(results: StudyResults) -> str:

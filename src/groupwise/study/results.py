@@ -9,7 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
+from groupwise.study.ablations import ABLATIONS
 from groupwise.study.cells import (
+    MAIN,
     Cell,
     CellRecord,
     Condition,
@@ -65,6 +67,11 @@ class StudyResults:
     def not_started(self) -> list[Cell]:
         return [c for c in self.planned if c not in self.records]
 
+    def ablations(self) -> tuple[str, ...]:
+        """The ablations with at least one finished cell, in `ABLATIONS` order."""
+        done = {c.condition for c, r in self.records.items() if r.complete}
+        return tuple(name for name in ABLATIONS if name in done)
+
     def envs(self, condition: Condition) -> tuple[str, ...]:
         return _env_order({c.env for c in self.records if c.condition == condition})
 
@@ -96,8 +103,8 @@ class StudyResults:
         have = {r.cell.dm for r in capped}
         stand_ins = []
         records = list(capped)
-        for dm in self.dms("cells"):
-            main = [r for r in self.finished("cells") if r.cell.dm == dm]
+        for dm in self.dms(MAIN):
+            main = [r for r in self.finished(MAIN) if r.cell.dm == dm]
             if dm not in have and main and all(_within_cap(r) for r in main):
                 stand_ins.append(dm)
                 records += main

@@ -1,9 +1,10 @@
 """Run a simulated study: every (env, DM, seed) cell as an independent process (SPEC §8).
 
-A cell is one `run_session` into ``OUT/cells/{env}/{dm}/seed-{k}/`` (``OUT/capped/...`` for the
-capped-pairs ablation). Cells run on this machine in a process pool, one worker per core by
-default, or on a Ray cluster. Pools use the "spawn" start method: numba (the DTW of the group
-decision-makers) leaves forked children unable to run it again.
+A cell is one `run_session` into ``OUT/cells/{env}/{dm}/seed-{k}/`` (``OUT/{ablation}/...``
+for a cell of an ablation, `ablations.ABLATIONS`). Cells run on this machine in a process
+pool, one worker per core by default, or on a Ray cluster. Pools use the "spawn" start
+method: numba (the DTW of the group decision-makers) leaves forked children unable to run it
+again.
 
 Rerunning a study is how it resumes: a cell whose ``done.json`` exists is skipped, and an
 unfinished one continues from its last round checkpoint (`run_session(..., resume=True)`), so
@@ -28,7 +29,8 @@ from typing import Literal
 from tqdm.auto import tqdm
 
 from groupwise.config import RunConfig
-from groupwise.study.cells import Cell, is_done, mark_done, read_plan, write_plan
+from groupwise.study.ablations import ABLATIONS
+from groupwise.study.cells import MAIN, Cell, is_done, mark_done, read_plan, write_plan
 from groupwise.study.profiles import StudyProfile
 
 log = logging.getLogger(__name__)
@@ -56,13 +58,17 @@ class StudySpec:
     envs: tuple[str, ...]
     dms: tuple[str, ...]
     seeds: int
-    cap_pairs: bool = False
-    """Also run the capped-pairs ablation of every cell (SPEC §8)."""
+    ablations: tuple[str, ...] = ()
+    """Also run every cell under each of these ablations (keys of `ABLATIONS`; ``capped`` is
+    SPEC §8's capped pairs)."""
+
+    def __post_init__(self) -> None:
+        unknown = [name for name in self.ablations if name not in ABLATIONS]
+        if unknown:
+            raise ValueError(f"unknown ablation {unknown[0]!r}; choose from {', '.join(ABLATIONS)}")
 
     def cells(self) -> list[Cell]:
-        conditions: tuple[Literal["cells", "capped"], ...] = (
-            ("cells", "capped") if self.cap_pairs else ("cells",)
-        )
+        conditions = (MAIN, *dict.fromkeys(self.ablations))
         return [
             Cell(env, dm, seed, condition)
             for condition in conditions
@@ -122,7 +128,7 @@ def plan_jobs(spec: StudySpec, out: Path) -> list[CellJob]:
     jobs = [
         CellJob(
             cell,
-            spec.profile.run_config(cell.env, cell.dm, cell.seed, capped=cell.capped),
+            spec.profile.run_config(cell.env, cell.dm, cell.seed, cell.ablation),
             cell.directory(root),
         )
         for cell in spec.cells()

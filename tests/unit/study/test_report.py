@@ -128,6 +128,34 @@ def test_report_without_capped_cells_says_how_to_get_them(study):
     report = write_report(study, bootstrap_reps=50).read_text()
     assert "No finished capped cells" in report
     assert "--cap-pairs" in report
+    assert "No finished ablation cells: `groupwise study --ablation NAME …`" in report
+
+
+def _ablation_rows(report: str) -> dict[tuple[str, str], list[str]]:
+    """The returns table of the Ablations section: (env, DM) → default, ablations …"""
+    section = report.split("## Ablations")[1].split("\n## ")[0]
+    table = next(block for block in section.split("\n\n") if block.startswith("| env |"))
+    rows = [[c.strip() for c in line.strip("|").split("|")] for line in table.splitlines()[2:]]
+    return {(r[0], r[1]): r[2:] for r in rows}
+
+
+def test_report_sets_each_ablation_beside_the_default_cells(study):
+    for seed in (0, 1):
+        _write_cell(study, Cell("GridWorld", "pairwise", seed, "pairs2x"), 710.0 + seed)
+    _write_cell(study, Cell("GridWorld", "pairwise", 2, "pairs2x"), 0.0, rows=1, done=False)
+    report = write_report(study, bootstrap_reps=50).read_text()
+    section = report.split("## Ablations")[1].split("\n## ")[0]
+    assert "| env | DM | default | capped | pairs2x |" in section
+    assert "`pairs2x`: twice the preference pairs per judgement" in section
+    assert "no-reward-norm" not in section  # no cell of it
+    rows = _ablation_rows(report)
+    # columns: default, capped, pairs2x; the unfinished pairs2x seed 2 does not count
+    assert rows[("GridWorld", "pairwise")] == ["710.0 ± 14.1 (n=2)", "–", "710.5 ± 0.7 (n=2)"]
+    assert rows[("GridWorld", "groupwise")] == ["670.0 ± 28.3 (n=2)", "400.5 ± 0.7 (n=2)", "–"]
+    assert rows[("Hopper", "groupwise")] == ["500.0 ± – (n=1)", "400.5 ± 0.7 (n=2)", "–"]
+    assert ("Hopper", "pairwise") not in rows  # no ablation ran it
+    assert "| groupwise | 48.0 | 48.0 | – |" in section  # preference pairs per cell
+    assert "GridWorld/pairwise/seed-2 (pairs2x): unfinished, 1 of 3 rows" in report
 
 
 def test_an_empty_directory_has_no_report(tmp_path):

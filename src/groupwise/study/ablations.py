@@ -1,0 +1,75 @@
+"""Named ablations of a study cell: one change to its `RunConfig` each (SPEC §8, issue 12).
+
+An ablation's cells live beside the main study's, in ``OUT/{name}/{env}/{dm}/seed-{k}/``
+(`cells.Cell.condition`), and the report sets their final returns beside the default cells'.
+Each one reproduces a choice of the comparison the paper made that our defaults do not:
+
+- ``capped``: each round keeps at most as many preference pairs as it asked comparisons, the
+  pairwise DM's count (SPEC §8's capped ablation; ``--cap-pairs``).
+- ``pairs2x``: every judgement yields twice the pairs its derivation gives (the paper's
+  reference code draws twice as many pairs per judgement; `LoopConfig.pair_oversample`).
+- ``no-reward-norm``: PPO sees the learned reward unscaled (no running return std,
+  `PPOConfig.normalize_reward`), as a PPO without `VecNormalize` reward scaling would.
+"""
+
+import dataclasses
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from groupwise.config import RunConfig
+
+
+@dataclass(frozen=True)
+class Ablation:
+    """One change to a cell's configuration; call it on the config of the default cell."""
+
+    summary: str
+    """One line for ``--help`` and the report."""
+    change: Callable[[RunConfig], RunConfig]
+    """The config of the default cell → the config of the ablated cell."""
+
+    def __call__(self, config: RunConfig) -> RunConfig:
+        return self.change(config)
+
+
+def _capped(config: RunConfig) -> RunConfig:
+    return dataclasses.replace(config, loop=dataclasses.replace(config.loop, pair_cap=1.0))
+
+
+def _pairs2x(config: RunConfig) -> RunConfig:
+    return dataclasses.replace(config, loop=dataclasses.replace(config.loop, pair_oversample=2.0))
+
+
+def _no_reward_norm(config: RunConfig) -> RunConfig:
+    return dataclasses.replace(config, ppo=dataclasses.replace(config.ppo, normalize_reward=False))
+
+
+ABLATIONS: dict[str, Ablation] = {
+    "capped": Ablation(
+        "at most one preference pair per comparison and round (pair_cap 1.0)",
+        _capped,
+    ),
+    "pairs2x": Ablation(
+        "twice the preference pairs per judgement, as the paper's reference code draws "
+        "(pair_oversample 2.0)",
+        _pairs2x,
+    ),
+    "no-reward-norm": Ablation(
+        "PPO on the unscaled learned reward (normalize_reward off)",
+        _no_reward_norm,
+    ),
+}
+"""Every ablation by name; the name is also its directory in a study (`cells.Cell`)."""
+
+
+def ablate(config: RunConfig, name: str | None) -> RunConfig:
+    """`config` changed by ablation `name`; None leaves it as it is.
+
+    Raises:
+        ValueError: no ablation `name`.
+    """
+    if name is None:
+        return config
+    if name not in ABLATIONS:
+        raise ValueError(f"unknown ablation {name!r}; choose from {', '.join(ABLATIONS)}")
+    return ABLATIONS[name](config)
