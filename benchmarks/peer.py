@@ -180,6 +180,7 @@ def main(argv: list[str] | None = None) -> None:
         "--variants", default="default", help="groupwise variants (peer_groupwise.VARIANTS)"
     )
     parser.add_argument("--no-imitation", action="store_true")
+    parser.add_argument("--no-groupwise", action="store_true", help="imitation's cells only")
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--out", type=Path, default=REPO / "runs" / "peer")
     args = parser.parse_args(argv)
@@ -190,10 +191,11 @@ def main(argv: list[str] | None = None) -> None:
         raise SystemExit(f"unknown env {unknown[0]!r}; choose from {', '.join(ENVS)}")
     ours = Path(sys.executable)
     seeds = range(args.first_seed, args.first_seed + args.seeds)
+    variants = [] if args.no_groupwise else args.variants.split(",")
     jobs = [
         ("groupwise", cell_spec(env, seed, variant), ours)
         for env in envs
-        for variant in args.variants.split(",")
+        for variant in variants
         for seed in seeds
     ]
     if not args.no_imitation:

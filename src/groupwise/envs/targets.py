@@ -10,16 +10,14 @@ score so far is ``info["target_total"]``; a `Target` states it, with its success
 up front. Definitions and reasons: docs/case-studies.md.
 """
 
+import importlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol, SupportsFloat
 
 import gymnasium as gym
 import numpy as np
-from gymnasium.envs.mujoco.half_cheetah_v5 import HalfCheetahEnv
-from gymnasium.envs.mujoco.hopper_v5 import HopperEnv
 from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
-from gymnasium.envs.mujoco.walker2d_v5 import Walker2dEnv
 
 from groupwise.envs.body_state import BodyState, StateReader
 from groupwise.envs.rendering import DEFAULT_FRAME_SIZE, FastMujocoRendering
@@ -177,13 +175,17 @@ class TargetScoreInfo(gym.Wrapper[Any, Any, Any, Any]):
 
 def _make(
     target: str,
-    env_class: type[MujocoEnv],
+    env_class: str,
     render_mode: str | None,
     width: int,
     height: int,
     **kwargs: Any,
 ) -> gym.Env[Any, Any]:
-    env = env_class(render_mode=render_mode, width=width, height=height, **kwargs)
+    """`env_class` is "module:Class", imported only here: importing `groupwise.envs` must
+    not need Gymnasium's v5 MuJoCo envs (the peer benchmark's imitation venv has v4 only)."""
+    module, _, name = env_class.partition(":")
+    base_class: type[MujocoEnv] = getattr(importlib.import_module(module), name)
+    env = base_class(render_mode=render_mode, width=width, height=height, **kwargs)
     return TargetScoreInfo(FastMujocoRendering(env, tracked_body="torso"), TARGETS[target])
 
 
@@ -196,7 +198,7 @@ def make_hopper_backflip(
     """Hopper-v5 that keeps going when unhealthy (a flip is), reward 0, backflip score."""
     return _make(
         "hopper-backflip",
-        HopperEnv,
+        "gymnasium.envs.mujoco.hopper_v5:HopperEnv",
         render_mode,
         width,
         height,
@@ -212,7 +214,14 @@ def make_half_cheetah_standup(
     **kwargs: Any,
 ) -> gym.Env[Any, Any]:
     """HalfCheetah-v5, reward 0, stand-up-and-sit score."""
-    return _make("halfcheetah-standup", HalfCheetahEnv, render_mode, width, height, **kwargs)
+    return _make(
+        "halfcheetah-standup",
+        "gymnasium.envs.mujoco.half_cheetah_v5:HalfCheetahEnv",
+        render_mode,
+        width,
+        height,
+        **kwargs,
+    )
 
 
 def make_walker2d_splits(
@@ -224,7 +233,7 @@ def make_walker2d_splits(
     """Walker2d-v5 that keeps going when unhealthy, reward 0, splits score."""
     return _make(
         "walker-splits",
-        Walker2dEnv,
+        "gymnasium.envs.mujoco.walker2d_v5:Walker2dEnv",
         render_mode,
         width,
         height,
