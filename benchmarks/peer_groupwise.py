@@ -38,7 +38,7 @@ VARIANTS: dict[str, dict[str, dict[str, Any]]] = {
     "batch32": {"reward": {"batch_size": 32, "epochs": 10}},
     "random-windows": {"loop": {"pool_selection": "random"}},
     "oversample4": {"loop": {"pool_oversample": 4.0}},
-    "obs-act": {"reward": {"use_actions": True}},
+    "obs-only": {"reward": {"use_actions": False}},
 }
 """Variant name → {"loop" | "reward" | "ppo": field overrides} on top of the spec."""
 

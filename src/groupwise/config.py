@@ -81,15 +81,12 @@ class RewardConfig:
     standardise_output: bool = False
     """After each fit, centre and scale every member's reward to mean 0, sd 1 over the
     dataset's steps in the reward PPO sees (`RewardEnsemble.standardise_output`)."""
-    use_actions: bool = False
-    """The members see [obs ; act] (SPEC §3) when on; by default the observation alone. A
-    person judges what a clip shows, the states; with actions as inputs the reward also
-    credits actions that merely coincide with good fragments, and PPO, which controls the
-    action directly, exploits that: on Pendulum-v1 two of five seeds learned to spin
-    (-584, -1,491) under an [obs ; act] reward that ranked balancing higher. Peer benchmark,
-    5 seeds (ARCHITECTURE.md, "Reward inputs"): observation only -127 ± 12 vs -233 ± 198
-    on Pendulum-v1, GridWorld 480 vs 416, MountainCarContinuous 16,557 ± 1,122 vs
-    16,836 ± 2,315, Reacher-v4 -39.6 vs -31.6 (its reward has a control cost)."""
+    use_actions: bool = True
+    """The members see [obs ; act] (SPEC §3); off, the observation alone. Neither wins on
+    every env (ARCHITECTURE.md, "Reward inputs"): observation-only members stopped Pendulum-v1
+    seeds from learning to spin (-127 ± 12 vs -233 ± 198) and did better on GridWorld, but
+    cannot see a control cost: on the study's Reacher (1,000 steps) the groupwise DM's agents
+    collapsed to -865 ± 546 against -199 ± 70 with [obs ; act]."""
 
 
 @dataclass(frozen=True, config=_STRICT)
@@ -217,8 +214,6 @@ class RunConfig:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "RunConfig":
         """Validate a config read from JSON (lists become tuples; unknown fields fail)."""
-        if isinstance(data.get("reward"), dict):
-            data = {**data, "reward": stored_reward(data["reward"])}
         return _RUN_CONFIG.validate_python(data)
 
     @classmethod
@@ -227,9 +222,3 @@ class RunConfig:
 
 
 _RUN_CONFIG = TypeAdapter(RunConfig)
-
-
-def stored_reward(values: dict[str, Any]) -> dict[str, Any]:
-    """A stored `RewardConfig`'s fields as they were meant: configs written before
-    `use_actions` existed trained members on [obs ; act]."""
-    return values if "use_actions" in values else {**values, "use_actions": True}

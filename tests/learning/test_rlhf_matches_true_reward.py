@@ -9,15 +9,14 @@ worse than the best round by more than the seeds' spread (plus 5 % of the random
 for seeds that all end alike): no collapse after the peak, the failure the peer benchmark
 against imitation showed (benchmarks/peer.py).
 
-The 80 % goal (the peer issue's) is not met yet. Measured in CI, random −1,204, true-reward
-PPO −188 / −127 / −163: with [obs ; act] reward inputs (2026-11-30) RLHF −260 / −1,491 /
-−445 (45 % of the gap; seed 1 learned to spin, below random, under a reward that ranked a
-balancing policy higher: ARCHITECTURE.md, "Reward inputs"); with the observation-only inputs
-that are now the default, −325 / −146 / −763 (76 %; seed 2 peaked at −209 and fell to −763
-in the last round). Until the goal is met the test asserts what the loop does reach — at
-least 25 % of the gap, and no collapse beyond the seeds' spread — and reports the 80 % goal
-as an expected failure (xfail), so the goal stays visible in every CI run and the test says
-when it is met.
+The 80 % goal (the peer issue's) is not met yet. Measured 2026-11-30, random −1,204,
+true-reward PPO −188 / −127 / −163: RLHF −260 / −1,491 / −445 (45 % of the gap; seed 1
+learned to spin, below random, under a reward that ranked a balancing policy higher:
+ARCHITECTURE.md, "Reward inputs"). With observation-only reward inputs (not the default,
+they cannot see a control cost) −325 / −146 / −763 (76 %). Until the goal is met the test
+asserts what the loop does reach — at least 25 % of the gap, and no collapse beyond the
+seeds' spread — and reports the 80 % goal as an expected failure (xfail), so the goal stays
+visible in every CI run and the test says when it is met.
 """
 
 import numpy as np
@@ -37,7 +36,7 @@ EPISODES = 10
 GOAL = 0.8
 """Share of the random-to-true-reward-PPO gap the loop should close (not met yet)."""
 GUARD = 0.25
-"""Share it must close today (measured: 45 % with [obs ; act] inputs, 76 % with obs)."""
+"""Share it must close today (measured: 45 %; 76 % with observation-only inputs)."""
 
 
 def _loop(seed: int) -> LoopConfig:

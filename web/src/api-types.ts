@@ -1091,15 +1091,12 @@ export interface components {
             standardise_output: boolean;
             /**
              * Use Actions
-             * @description The members see [obs ; act] (SPEC §3) when on; by default the observation alone. A
-             *     person judges what a clip shows, the states; with actions as inputs the reward also
-             *     credits actions that merely coincide with good fragments, and PPO, which controls the
-             *     action directly, exploits that: on Pendulum-v1 two of five seeds learned to spin
-             *     (-584, -1,491) under an [obs ; act] reward that ranked balancing higher. Peer benchmark,
-             *     5 seeds (ARCHITECTURE.md, "Reward inputs"): observation only -127 ± 12 vs -233 ± 198
-             *     on Pendulum-v1, GridWorld 480 vs 416, MountainCarContinuous 16,557 ± 1,122 vs
-             *     16,836 ± 2,315, Reacher-v4 -39.6 vs -31.6 (its reward has a control cost).
-             * @default false
+             * @description The members see [obs ; act] (SPEC §3); off, the observation alone. Neither wins on
+             *     every env (ARCHITECTURE.md, "Reward inputs"): observation-only members stopped Pendulum-v1
+             *     seeds from learning to spin (-127 ± 12 vs -233 ± 198) and did better on GridWorld, but
+             *     cannot see a control cost: on the study's Reacher (1,000 steps) the groupwise DM's agents
+             *     collapsed to -865 ± 546 against -199 ± 70 with [obs ; act].
+             * @default true
              */
             use_actions: boolean;
             /**
@@ -1210,7 +1207,7 @@ export interface components {
              *         "lr": 0.001,
              *         "min_pairs_for_validation": 10,
              *         "standardise_output": false,
-             *         "use_actions": false,
+             *         "use_actions": true,
              *         "validation_fraction": 0.2,
              *         "warm_start": true
              *       },

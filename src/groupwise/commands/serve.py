@@ -179,10 +179,8 @@ def _check_same_settings(
 ) -> None:
     from groupwise.storage import SessionSettings
 
-    # the stored session as it was meant, the flags as a request means them
-    before = SessionSettings.from_stored(stored)
-    wanted = SessionSettings.model_validate({**before.model_dump(), **overrides})
-    if wanted != before:
+    wanted = SessionSettings.model_validate({**stored, **overrides})
+    if wanted != SessionSettings.model_validate(stored):
         raise UsageError(
             f"session {session_id} was started with other settings; pass --new to start a "
             "new session with these, or leave the setting flags out to resume it"

@@ -1,8 +1,8 @@
 """The reward-model ensemble as the rest of the system sees it: numpy in, numpy out (SPEC §3).
 
-Inputs are each step's observation (the default: what a person judges in a clip), or with
-`RewardConfig.use_actions` the concatenated [obs ; encoded action] (one-hot for discrete
-actions, see `groupwise.envs.spaces`); the actions are always taken and shape-checked.
+Inputs are the concatenated [obs ; encoded action] of each step (one-hot for discrete
+actions, see `groupwise.envs.spaces`), or with `RewardConfig.use_actions` off the
+observation alone (the actions are still taken and shape-checked).
 Every prediction runs under `torch.inference_mode` and never changes the input normaliser;
 only `fit` (in `bradley_terry`) and `update_normalizer` / `refit_normalizer` do.
 
@@ -23,7 +23,7 @@ import numpy as np
 import torch
 from torch import Tensor
 
-from groupwise.config import RewardConfig, stored_reward
+from groupwise.config import RewardConfig
 from groupwise.envs.spaces import action_dim, observation_dim
 from groupwise.reward.network import RewardNet, StackedMLP
 from groupwise.types import FloatArray
@@ -37,7 +37,7 @@ _CHUNK_ROWS = 1 << 16
 
 
 class RewardEnsemble:
-    """K reward MLPs over obs (or [obs ; act]) sharing one running input normaliser.
+    """K reward MLPs over [obs ; act] (or obs alone) sharing one running input normaliser.
 
     `net` is the underlying `torch.nn.Module` (used by training); everything else takes and
     returns numpy arrays. `l2_weight` is the current adaptive L2 coefficient; it belongs to
@@ -241,7 +241,7 @@ class RewardEnsemble:
         known = {f.name for f in dataclasses.fields(RewardConfig)}
         values: dict[str, Any] = {
             k: tuple(v) if isinstance(v, list) else v
-            for k, v in stored_reward(payload["config"]).items()
+            for k, v in payload["config"].items()
             if k in known
         }
         ensemble = cls(

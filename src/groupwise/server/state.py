@@ -23,7 +23,7 @@ def state_of(
     session: SessionRow, counts: repo.Counts, now: datetime, shown_at: datetime | None = None
 ) -> schemas.SessionState:
     """The `SessionState` of a session row (`shown_at`: its current round's)."""
-    settings = SessionSettings.from_stored(session.settings)
+    settings = SessionSettings.model_validate(session.settings)
     return schemas.SessionState(
         id=session.id,
         env=session.env,

@@ -123,7 +123,7 @@ def export_session(s: Session, session_id: str) -> SessionExport:
             id=session.id,
             env=session.env,
             mode=session.mode,  # type: ignore[arg-type]  # checked on creation (MODES)
-            settings=SessionSettings.from_stored(session.settings),
+            settings=SessionSettings.model_validate(session.settings),
             annotator=session.annotator,
             phase=session.phase,
             round=session.round,

@@ -75,7 +75,7 @@ def session_directory(session_id: str) -> str:
 
 def settings_of(session: SessionRow) -> SessionSettings:
     """The session's stored settings, parsed."""
-    return SessionSettings.from_stored(session.settings)
+    return SessionSettings.model_validate(session.settings)
 
 
 def create_session(

@@ -29,7 +29,6 @@ from groupwise.config import (
     RewardConfig,
     RunConfig,
     Seed,
-    stored_reward,
 )
 from groupwise.preferences.judgement import MAX_GROUP
 
@@ -138,15 +137,6 @@ class SessionSettings(BaseModel):
                 if isinstance(data.get(key), dict):
                     data = {**data, key: {k: v for k, v in data[key].items() if v is not None}}
         return data
-
-    @classmethod
-    def from_stored(cls, values: dict[str, Any]) -> "SessionSettings":
-        """Settings as a stored session meant them (a database row, an export): reward
-        configs stored before `use_actions` existed trained on [obs ; act]. Requests use
-        `model_validate`, where a missing field means today's default."""
-        if isinstance(values.get("reward"), dict):
-            values = {**values, "reward": stored_reward(values["reward"])}
-        return cls.model_validate(values)
 
     def clip_timing(self, env: str) -> ClipTiming:
         """L and how a clip of `env` plays it (`clips.timing`): `fragment_length` steps if

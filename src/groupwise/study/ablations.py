@@ -10,8 +10,8 @@ Each one reproduces a choice of the comparison the paper made that our defaults 
   reference code draws twice as many pairs per judgement; `LoopConfig.pair_oversample`).
 - ``no-reward-norm``: PPO sees the learned reward unscaled (no running return std,
   `PPOConfig.normalize_reward`), as a PPO without `VecNormalize` reward scaling would.
-- ``obs-act``: the reward members see [obs ; act], as SPEC §3 and the paper
-  (`RewardConfig.use_actions`; ours see the observation alone).
+- ``obs-only``: the reward members see the observation alone, not [obs ; act]
+  (`RewardConfig.use_actions` off; ARCHITECTURE.md, "Reward inputs").
 """
 
 import dataclasses
@@ -46,8 +46,8 @@ def _no_reward_norm(config: RunConfig) -> RunConfig:
     return dataclasses.replace(config, ppo=dataclasses.replace(config.ppo, normalize_reward=False))
 
 
-def _obs_act(config: RunConfig) -> RunConfig:
-    return dataclasses.replace(config, reward=dataclasses.replace(config.reward, use_actions=True))
+def _obs_only(config: RunConfig) -> RunConfig:
+    return dataclasses.replace(config, reward=dataclasses.replace(config.reward, use_actions=False))
 
 
 ABLATIONS: dict[str, Ablation] = {
@@ -64,9 +64,9 @@ ABLATIONS: dict[str, Ablation] = {
         "PPO on the unscaled learned reward (normalize_reward off)",
         _no_reward_norm,
     ),
-    "obs-act": Ablation(
-        "reward members over [obs ; act], as SPEC §3 (use_actions on)",
-        _obs_act,
+    "obs-only": Ablation(
+        "reward members over the observation alone (use_actions off)",
+        _obs_only,
     ),
 }
 """Every ablation by name; the name is also its directory in a study (`cells.Cell`)."""

@@ -129,7 +129,7 @@ def test_normaliser_is_set_from_the_dataset():
     data = make_dataset(5)
     ens = _ensemble()
     fit(ens, data, CFG, np.random.default_rng(0), epochs=0)
-    steps = data.obs.reshape(-1, OBS_DIM)  # the members see the observations alone
+    steps = np.concatenate([data.obs, data.acts], axis=-1).reshape(-1, OBS_DIM + ACT_DIM)
     np.testing.assert_allclose(ens.net.norm.mean.numpy(), steps.mean(axis=0), rtol=1e-5)
     fit(ens, data, CFG, np.random.default_rng(0), epochs=0)  # refit, not counted twice
     assert float(ens.net.norm.count) == steps.shape[0]

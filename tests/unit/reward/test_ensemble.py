@@ -141,7 +141,7 @@ def test_reinitialise_draws_fresh_seeded_weights():
 
 
 def test_observation_only_members_ignore_the_actions_but_check_them(tmp_path: Path):
-    ens = _ensemble(3, RewardConfig(hidden_sizes=(8, 8)))
+    ens = _ensemble(3, RewardConfig(use_actions=False, hidden_sizes=(8, 8)))
     assert ens.in_dim == OBS
     obs, acts = _inputs(4, 3)
     other_acts = acts + 5.0

@@ -19,7 +19,7 @@ INTENDED = {
     "capped": {("loop", "pair_cap"): 1.0},
     "pairs2x": {("loop", "pair_oversample"): 2.0},
     "no-reward-norm": {("ppo", "normalize_reward"): False},
-    "obs-act": {("reward", "use_actions"): True},
+    "obs-only": {("reward", "use_actions"): False},
 }
 
 
@@ -48,7 +48,7 @@ def test_an_ablation_changes_exactly_its_field(name, profile):
 
 
 def test_an_unknown_ablation_names_the_known_ones():
-    with pytest.raises(ValueError, match="capped, pairs2x, no-reward-norm, obs-act"):
+    with pytest.raises(ValueError, match="capped, pairs2x, no-reward-norm, obs-only"):
         SMOKE.run_config("GridWorld", "pairwise", 0, "triple")
     with pytest.raises(ValueError, match="triple"):
         StudySpec(SMOKE, ("GridWorld",), ("pairwise",), 1, ("triple",))
