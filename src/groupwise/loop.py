@@ -266,24 +266,7 @@ def train_round(
         multiplier = cfg.reward.initial_epoch_multiplier if round_index == 0 else 1.0
         epochs = max(1, round(cfg.reward.epochs * multiplier))
         fit_report = fit(session.ensemble, session.dataset, cfg.reward, streams.fit, epochs)
-    with timer("ppo"):
-        seed = int(streams.ppo.integers(2**31 - 1))
-        session.agent.learn(
-            steps,
-            seed,
-            show_progress=show_progress,
-            report=None if report is None else lambda done, total: tell("ppo", done, total),
-        )
-    with timer("eval"):
-        returns = np.full(1, np.nan)
-        if cfg.loop.eval_episodes > 0:
-            tell("eval", 0, cfg.loop.eval_episodes)
-            returns = evaluate(
-                session.make_env,
-                session.agent.policy(deterministic=True),
-                cfg.loop.eval_episodes,
-                eval_rng(cfg.loop.seed),
-            )
+    returns = _learn_and_evaluate(session, steps, streams.ppo, timer, report, show_progress)
     dataset = session.dataset
     this_round = dataset.rounds == round_index
     record = RoundRecord(
@@ -307,6 +290,37 @@ def train_round(
     return record
 
 
+def _learn_and_evaluate(
+    session: Session,
+    steps: int,
+    ppo_rng: np.random.Generator,
+    timer: "_PhaseTimer",
+    report: Callable[[str, int, int], None] | None,
+    show_progress: bool,
+) -> np.ndarray:
+    """Train the agent `steps` PPO steps (seeded from the round's PPO stream), then its
+    greedy policy's true returns over `eval_episodes` (nan when 0): every round's end."""
+    loop = session.cfg.loop
+    with timer("ppo"):
+        session.agent.learn(
+            steps,
+            int(ppo_rng.integers(2**31 - 1)),
+            show_progress=show_progress,
+            report=None if report is None else lambda done, total: report("ppo", done, total),
+        )
+    with timer("eval"):
+        if loop.eval_episodes == 0:
+            return np.full(1, np.nan)
+        if report is not None:
+            report("eval", 0, loop.eval_episodes)
+        return evaluate(
+            session.make_env,
+            session.agent.policy(deterministic=True),
+            loop.eval_episodes,
+            eval_rng(loop.seed),
+        )
+
+
 def train_frozen(
     session: Session,
     round_index: int,
@@ -318,30 +332,9 @@ def train_frozen(
     """Round `round_index` without feedback: `steps` PPO steps on the frozen learned reward,
     then the true return over `eval_episodes`; appends and returns its record. Its PPO seed
     comes from the round's PPO stream (`loop.round_streams`), as a feedback round's does."""
-    loop = session.cfg.loop
-
-    def tell(phase: str, done: int, total: int) -> None:
-        if report is not None:
-            report(phase, done, total)
-
-    seed = int(round_streams(loop.seed, round_index).ppo.integers(2**31 - 1))
-    tick = time.perf_counter()
-    session.agent.learn(
-        steps,
-        seed,
-        show_progress=show_progress,
-        report=lambda done, total: tell("ppo", done, total),
-    )
-    ppo_s = time.perf_counter() - tick
-    returns = np.full(1, np.nan)
-    if loop.eval_episodes > 0:
-        tell("eval", 0, loop.eval_episodes)
-        returns = evaluate(
-            session.make_env,
-            session.agent.policy(deterministic=True),
-            loop.eval_episodes,
-            eval_rng(loop.seed),
-        )
+    timer = _PhaseTimer({"sample_s": 0.0, "feedback_s": 0.0, "reward_s": 0.0})
+    ppo_rng = round_streams(session.cfg.loop.seed, round_index).ppo
+    returns = _learn_and_evaluate(session, steps, ppo_rng, timer, report, show_progress)
     dataset = session.dataset
     record = RoundRecord(
         round=round_index,
@@ -357,11 +350,7 @@ def train_frozen(
         env_steps=session.agent.num_timesteps,
         true_return_mean=float(returns.mean()),
         true_return_std=float(returns.std()),
-        sample_s=0.0,
-        feedback_s=0.0,
-        reward_s=0.0,
-        ppo_s=ppo_s,
-        eval_s=time.perf_counter() - tick - ppo_s,
+        **timer.seconds,
     )
     session.records.append(record)
     return record
