@@ -93,6 +93,8 @@ def test_backflip_case_study_writes_rounds_video_and_strip(tmp_path, capsys):
     config = json.loads((out / CONFIG_FILE).read_text())["loop"]
     assert config["env"] == "Hopper-backflip" and config["oracle"] == "groupwise"
     assert config["fragment_length"] == 30 and config["steps"] == 4096
+    saved = json.loads((out / CONFIG_FILE).read_text())
+    assert saved["reward"]["use_actions"] is False  # a target has no action cost
     summary = json.loads((out / SUMMARY_FILE).read_text())
     assert summary["target"]["threshold"] == TARGETS["hopper-backflip"].threshold
     assert summary["final"]["score_mean"] == pytest.approx(float(rows[1]["target_score_mean"]))
@@ -114,7 +116,8 @@ def test_backflip_case_study_writes_rounds_video_and_strip(tmp_path, capsys):
 )
 def test_other_targets_and_decision_makers_run(tmp_path, target, dm, seconds):
     out = tmp_path / target
-    assert _case_study(out, target, dm, seconds, "--no-video") == 0
+    assert _case_study(out, target, dm, seconds, "--no-video", "--reward-inputs", "obs-act") == 0
+    assert json.loads((out / CONFIG_FILE).read_text())["reward"]["use_actions"] is True
     rows = _rows(out)
     assert len(rows) == 2 and int(rows[1]["comparisons_total"]) == 20
     assert int(rows[1]["judgements_total"]) > 0

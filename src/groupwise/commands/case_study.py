@@ -47,6 +47,13 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
         help="simulated seconds per behaviour (default: the env's clip duration)",
     )
     case.add_argument(
+        "--reward-inputs",
+        choices=("obs", "obs-act"),
+        default="obs",
+        help="what the reward members see: the observation alone (default: a target has no "
+        "action cost, and a clip shows states) or [obs ; act] as in the study",
+    )
+    case.add_argument(
         "--eval-episodes", type=positive_int, default=5, help="episodes scored after each round"
     )
     case.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
@@ -82,7 +89,8 @@ def run(args: argparse.Namespace) -> int:
                 "seed": args.seed,
             }
         )
-        cfg = dataclasses.replace(base, loop=loop)
+        reward = dataclasses.replace(base.reward, use_actions=args.reward_inputs == "obs-act")
+        cfg = dataclasses.replace(base, loop=loop, reward=reward)
     except ValueError as error:
         raise UsageError(str(error)) from None
     out = writable_dir(args.out)
