@@ -14,6 +14,7 @@ highest target score is filmed (``final.mp4``, ``strip.png``, `groupwise.film`) 
 import csv
 import dataclasses
 import json
+import math
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -35,6 +36,7 @@ from groupwise.loop import (
     write_records,
 )
 from groupwise.oracles import ORACLES, Oracle
+from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.rl.policy import Policy
 from groupwise.rl.rollout import EnvFactory
 from groupwise.types import FloatArray
@@ -119,6 +121,12 @@ class CaseRecord:
     """Binary preferences (pairs) so far: what the paper counts (601, 616, 1,032)."""
     label_error_rate: float
     label_error_rate_total: float
+    tied_share_total: float
+    """Share of the pairs so far whose two behaviours have exactly equal target scores (a
+    target scores 0 until the behaviour appears, so early pools are full of ties)."""
+    label_error_untied_total: float
+    """Label error over the pairs so far whose target scores differ: how often the labels
+    rank two different behaviours wrongly (a label on a tie is arbitrary, not wrong)."""
     env_steps: int
     target_score_mean: float
     target_score_std: float
@@ -141,6 +149,7 @@ class CaseRecord:
         cls,
         record: RoundRecord,
         previous: "CaseRecord | None",
+        dataset: PreferenceDataset,
         evaluation: TargetEvaluation,
         target: Target,
         eval_s: float,
@@ -153,6 +162,8 @@ class CaseRecord:
             pairs_total=record.pairs_total,
             label_error_rate=record.label_error_rate,
             label_error_rate_total=record.label_error_rate_total,
+            tied_share_total=float(dataset.tied().mean()) if len(dataset) else math.nan,
+            label_error_untied_total=dataset.label_error_rate(untied=True),
             env_steps=record.env_steps,
             target_score_mean=float(evaluation.scores.mean()),
             target_score_std=float(evaluation.scores.std()),
@@ -223,7 +234,11 @@ def run_case_study(
         )
         now = time.perf_counter()
         previous = rows[-1] if rows else None
-        rows.append(CaseRecord.of(record, previous, evaluation, target, now - begin, now - started))
+        rows.append(
+            CaseRecord.of(
+                record, previous, session.dataset, evaluation, target, now - begin, now - started
+            )
+        )
         evaluations.append(evaluation)
         _write_rows(out / CASE_FILE, rows)
 

@@ -22,6 +22,8 @@ COLUMNS = [
     "pairs_total",
     "label_error_rate",
     "label_error_rate_total",
+    "tied_share_total",
+    "label_error_untied_total",
     "env_steps",
     "target_score_mean",
     "target_score_std",
@@ -86,6 +88,11 @@ def test_backflip_case_study_writes_rounds_video_and_strip(tmp_path, capsys):
     assert [int(r["env_steps"]) for r in rows] == [2048, 4096]
     for row in rows:
         assert 0.0 <= float(row["success_rate"]) <= 1.0
+        tied, untied = float(row["tied_share_total"]), float(row["label_error_untied_total"])
+        if int(row["pairs_total"]) == 0:
+            assert math.isnan(tied) and math.isnan(untied)
+        else:
+            assert 0.0 <= tied <= 1.0 and (math.isnan(untied) or 0.0 <= untied <= 1.0)
         assert math.isfinite(float(row["target_score_mean"]))
         assert all(float(row[f"{phase}_s"]) > 0 for phase in ("sample", "reward", "ppo", "eval"))
     assert float(rows[1]["wall_s"]) > float(rows[0]["wall_s"])

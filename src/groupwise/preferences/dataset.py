@@ -59,16 +59,27 @@ class PreferenceDataset:
         self.labels = np.concatenate([self.labels, [p.label for p in pairs]]).astype(np.float32)
         self.rounds = np.concatenate([self.rounds, np.full(len(pairs), round_index)])
 
-    def label_error_rate(self, mask: np.ndarray | None = None) -> float:
+    def label_error_rate(self, mask: np.ndarray | None = None, *, untied: bool = False) -> float:
         """Share of labels (of the pairs in `mask`, default all) that disagree with the true
-        returns; nan when there are none."""
-        pairs, labels = self.pairs, self.labels
-        if mask is not None:
-            pairs, labels = pairs[mask], labels[mask]
+        returns; nan when there are none.
+
+        With `untied`, only pairs whose true returns differ count: a label other than 0.5 on
+        exactly equal returns (common where a target score is 0 for most behaviours) is
+        arbitrary rather than wrong about which is better.
+        """
+        keep = np.ones(len(self), dtype=bool) if mask is None else np.asarray(mask, dtype=bool)
+        if untied:
+            keep = keep & ~self.tied()
+        pairs, labels = self.pairs[keep], self.labels[keep]
         if len(pairs) == 0:
             return float("nan")
         returns = self.true_returns
         return float(wrong_labels(returns[pairs[:, 0]], returns[pairs[:, 1]], labels).mean())
+
+    def tied(self) -> np.ndarray:
+        """(P,) bool: which pairs join two behaviours of exactly equal true return."""
+        returns = self.true_returns
+        return np.asarray(returns[self.pairs[:, 0]] == returns[self.pairs[:, 1]])
 
     def save(self, path: Path) -> None:
         np.savez_compressed(

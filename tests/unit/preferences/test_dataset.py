@@ -36,6 +36,19 @@ def test_add_stores_each_used_fragment_once_and_round_trips(tmp_path):
 
 def test_empty_dataset_has_nan_error_rate():
     assert np.isnan(PreferenceDataset.empty(2, 3, 1).label_error_rate())
+    assert np.isnan(PreferenceDataset.empty(2, 3, 1).label_error_rate(untied=True))
+
+
+def test_untied_error_rate_leaves_out_pairs_of_equal_return():
+    pool = [_fragment(r, i) for i, r in enumerate([0.0, 0.0, 1.0])]
+    data = PreferenceDataset.empty(length=2, obs_dim=3, act_dim=1)
+    # a tie labelled 1.0 (arbitrary), a right label, a wrong label
+    data.add(pool, [Pair(0, 1, 1.0), Pair(2, 0, 1.0), Pair(1, 2, 1.0)], round_index=0)
+    np.testing.assert_array_equal(data.tied(), [True, False, False])
+    assert data.label_error_rate() == 2 / 3
+    assert data.label_error_rate(untied=True) == 1 / 2
+    only_tie = np.array([True, False, False])
+    assert np.isnan(data.label_error_rate(only_tie, untied=True))
 
 
 def test_wrong_labels_by_hand():
