@@ -39,6 +39,12 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
         default="linear",
         help="level bands of the HC tree (SPEC §4; the paper's study used linear)",
     )
+    study.add_argument(
+        "--hc-level",
+        type=positive_int,
+        default=2,
+        help="tree level whose nodes are HC's clusters (1 = the finest groups; default 2)",
+    )
     study.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
     study.add_argument("--out", type=Path, required=True, help="output directory")
     study.add_argument("-q", "--quiet", action="store_true", help="no progress bar")
@@ -64,6 +70,7 @@ def run(args: argparse.Namespace) -> int:
             target_clusters=args.clusters,
             checkpoints=tuple(args.policies),
             tree=TreeConfig(bands=args.bands),
+            hc_level=args.hc_level,
         )
         rng = np.random.default_rng(args.seed)
         policies = mixed_policies(

@@ -151,3 +151,16 @@ def test_a_tiny_study_writes_the_table_and_the_figure(tmp_path: Path) -> None:
     png = (tmp_path / "clustering.png").read_bytes()
     assert png.startswith(b"\x89PNG") and len(png) > 5000
     assert (tmp_path / "clustering.json").is_file()
+
+
+def test_the_hc_level_is_an_option(tmp_path: Path) -> None:
+    from groupwise.cli import main
+
+    code = main(
+        ["clustering-study", "--env", "GridWorld", "--reps", "2", "--n", "10", "--bands",
+         "counts", "--hc-level", "1", "--out", str(tmp_path), "-q"]
+    )  # fmt: skip
+    assert code == 0
+    assert "HC (tree level 1 of 4, counts bands" in (tmp_path / "clustering.md").read_text()
+    assert main(["clustering-study", "--env", "GridWorld", "--hc-level", "4",
+                 "--out", str(tmp_path), "-q"]) == 2  # fmt: skip
