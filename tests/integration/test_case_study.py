@@ -10,6 +10,7 @@ import pytest
 from PIL import Image
 
 from groupwise.case_study import CASE_FILE, STRIP_FILE, SUMMARY_FILE, VIDEO_FILE, CaseRecord
+from groupwise.case_study_table import markdown_row
 from groupwise.cli import main
 from groupwise.clips.video import probe
 from groupwise.envs import TARGETS, horizon
@@ -107,6 +108,10 @@ def test_backflip_case_study_writes_rounds_video_and_strip(tmp_path, capsys):
     assert summary["final"]["score_mean"] == pytest.approx(float(rows[1]["target_score_mean"]))
     filmed = summary["filmed"]
     assert filmed["score"] == max(summary["final"]["scores"])
+
+    row = markdown_row(out).split(" | ")
+    assert row[:3] == ["| hopper-backflip", "groupwise", "0"] and row[3] == "20"
+    assert row[-3] == f"{round(summary['final']['success_rate'] * 2)}/2"
 
     video = probe(out / VIDEO_FILE)
     assert video.fps == pytest.approx(31.25)  # every 4th step of 0.008 s: real speed
