@@ -164,3 +164,28 @@ def test_pairwise_clips_at_their_own_size(server: Server, page: Page, shot: Any)
     # never scaled up (it used to fill ~660 px); the 1366 × 768 page has room for 240 px
     assert sizes == [[240, 240, 240], [240, 240, 240]], sizes
     shot(page, "pairwise-clips")
+
+
+SHOWN_SIZE = """vs => vs.map((v) => {
+    // the size the picture is drawn at inside the element, by its object-fit
+    const fit = Math.min(v.clientWidth / v.videoWidth, v.clientHeight / v.videoHeight);
+    const scale = {contain: fit, "scale-down": Math.min(1, fit), none: 1}[
+        getComputedStyle(v).objectFit];
+    return [v.videoWidth, Math.round(v.videoWidth * scale), v.clientWidth];
+})"""
+
+
+def test_group_clips_never_scaled_up(server: Server, page: Page) -> None:
+    sid = server.new_session("groupwise", frame_size=96)
+    page.goto(f"{server.url}/?session={sid}")
+    expect(page.locator(".comparison .origin")).to_contain_text(
+        re.compile("Suggested comparison"), timeout=15_000
+    )
+    page.wait_for_function(
+        "() => [...document.querySelectorAll('.clip video')].every((v) => v.videoWidth > 0)"
+    )
+    sizes = page.eval_on_selector_all(".clip video", SHOWN_SIZE)
+    assert sizes and all(native == 96 for native, _, _ in sizes), sizes
+    # the cells of a small group are larger than the clips; the clips keep their own size
+    assert max(cell for _, _, cell in sizes) > 96, sizes
+    assert all(shown <= native for native, shown, _ in sizes), sizes
