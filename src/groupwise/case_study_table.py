@@ -6,13 +6,19 @@ prints a Markdown table (target, DM, seed, comparisons, preference pairs, share 
 between behaviours of equal target score, label error on the others, the greedy policy's
 target score after each round, success and stretch rates at the end, wall time), read
 from each run's ``case-study.csv`` and ``summary.json`` and, for the ties, its last
-checkpoint's preference dataset. It is how ``docs/results/case-studies/README.md`` was made.
+checkpoint's preference dataset. With ``--figure PNG`` it also draws each run's target score against
+its preference pairs, one panel per target, the success threshold dashed. It is how
+``docs/results/case-studies/README.md`` and its ``curves.png`` were made.
 """
 
 import argparse
 import csv
 import json
+from collections.abc import Sequence
 from pathlib import Path
+
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
 
 from groupwise.preferences.dataset import PreferenceDataset
 
@@ -46,10 +52,50 @@ def markdown_row(run: Path) -> str:
     )
 
 
+def _curve(run: Path) -> tuple[str, str, float, list[float], list[float]]:
+    summary = json.loads((run / "summary.json").read_text())
+    with (run / "case-study.csv").open() as handle:
+        rows = list(csv.DictReader(handle))
+    pairs = [float(r["pairs_total"]) for r in rows]
+    scores = [float(r["target_score_mean"]) for r in rows]
+    target = summary["target"]
+    return target["name"], summary["decision_maker"], target["threshold"], pairs, scores
+
+
+def curves_figure(runs: Sequence[Path], path: Path) -> Path:
+    """Target score (mean over the evaluation episodes) against preference pairs so far,
+    one line per run, one panel per target; the success threshold dashed."""
+    curves = [_curve(run) for run in runs]
+    targets = list(dict.fromkeys(c[0] for c in curves))
+    dms = list(dict.fromkeys(c[1] for c in curves))
+    figure = Figure(figsize=(4.2 * len(targets), 3.4), dpi=120, layout="constrained")
+    FigureCanvasAgg(figure)
+    axes = figure.subplots(1, len(targets), squeeze=False)[0]
+    colours = {dm: f"C{k}" for k, dm in enumerate(dms)}
+    for ax, target in zip(axes, targets, strict=True):
+        shown: set[str] = set()
+        for name, dm, threshold, pairs, scores in curves:
+            if name != target:
+                continue
+            ax.plot(pairs, scores, marker="o", ms=3, color=colours[dm],
+                    label=None if dm in shown else dm)  # fmt: skip
+            shown.add(dm)
+            ax.axhline(threshold, color="0.4", ls="--", lw=0.8)
+        ax.set_title(target)
+        ax.set_xlabel("preference pairs")
+        ax.set_ylabel("target score (greedy policy)")
+        ax.legend(frameon=False, fontsize=8)
+    figure.savefig(path)
+    return path
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("runs", nargs="+", type=Path, help="case-study output directories")
+    parser.add_argument("--figure", type=Path, help="also draw the curves into this PNG")
     args = parser.parse_args(argv)
+    if args.figure:
+        curves_figure(args.runs, args.figure)
     print(HEADER)
     for run in args.runs:
         print(markdown_row(run))

@@ -10,7 +10,7 @@ import pytest
 from PIL import Image
 
 from groupwise.case_study import CASE_FILE, STRIP_FILE, SUMMARY_FILE, VIDEO_FILE, CaseRecord
-from groupwise.case_study_table import markdown_row
+from groupwise.case_study_table import curves_figure, markdown_row
 from groupwise.cli import main
 from groupwise.clips.video import probe
 from groupwise.envs import TARGETS, horizon
@@ -109,6 +109,8 @@ def test_backflip_case_study_writes_rounds_video_and_strip(tmp_path, capsys):
     filmed = summary["filmed"]
     assert filmed["score"] == max(summary["final"]["scores"])
 
+    png = curves_figure([out, out], tmp_path / "curves.png").read_bytes()
+    assert png.startswith(b"\x89PNG") and len(png) > 5000
     row = markdown_row(out).split(" | ")
     assert row[:3] == ["| hopper-backflip", "groupwise", "0"] and row[3] == "20"
     assert row[-3] == f"{round(summary['final']['success_rate'] * 2)}/2"
