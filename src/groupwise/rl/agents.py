@@ -78,6 +78,7 @@ class SB3Agent:
         if hasattr(self.model, "set_random_seed"):
             self.model.set_random_seed(seed)
         if hasattr(self.model, "get_env"):  # SB3: callbacks and a continued step count
+            _quiet_default_logger(self.model)
             self.model.learn(
                 total_timesteps=steps,
                 callback=ProgressCallback(steps, show_progress, report),
@@ -89,6 +90,21 @@ class SB3Agent:
 
     def policy(self, deterministic: bool = False) -> Policy:
         return PredictPolicy(self.model, deterministic)
+
+
+def _quiet_default_logger(model: Any) -> None:
+    """Give an SB3 model that logs nowhere a logger that writes nothing.
+
+    Without TensorBoard and without a logger of the user's own, SB3 makes an empty
+    ``/tmp/SB3-<time>`` folder on every `learn` call, i.e. one per round. A user's own
+    logger (``set_logger``) or TensorBoard folder is left alone.
+    """
+    if getattr(model, "tensorboard_log", None) is None and not getattr(
+        model, "_custom_logger", True
+    ):
+        from stable_baselines3.common.logger import Logger
+
+        model.set_logger(Logger(folder=None, output_formats=[]))
 
 
 def as_agent(agent: Any) -> Agent:
