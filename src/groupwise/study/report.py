@@ -19,15 +19,22 @@ from groupwise.study import figures, paper
 from groupwise.study.ablations import ABLATIONS
 from groupwise.study.cells import MAIN
 from groupwise.study.figures import Band
+from groupwise.study.report_tables import (
+    DASH,
+    finite_column,
+    fmt_num,
+    md_row,
+    mean_sd_n,
+    pooled_mean,
+    tests_table,
+)
 from groupwise.study.results import Grid, StudyResults, load_results
 from groupwise.study.statistics import (
     confidence_band,
     iqm,
     iqr_normalise,
     mean_sd,
-    relative_difference,
     stratified_bootstrap_ci,
-    welch_t_test,
 )
 
 log = logging.getLogger(__name__)
@@ -37,9 +44,6 @@ CURVES_PNG = "curves.png"
 PAIRS_PNG = "pairs_errors.png"
 NORMALISED_PNG = "normalised.png"
 CAPPED_PNG = "normalised_capped.png"
-DASH = "–"
-ALL_PAIRS_UP_TO = 4
-"""With more DMs than this, each is tested against the first only (the table stays short)."""
 
 
 class NoResultsError(ValueError):
@@ -105,18 +109,18 @@ def _returns_table(grid: Grid) -> str:
     header = ["env"]
     for dm in grid.dms:
         header += [dm, f"{dm} (paper)"] if _in_paper(dm) else [dm]
-    lines = [_row(header), _row(["---"] * len(header))]
+    lines = [md_row(header), md_row(["---"] * len(header))]
     for j, env in enumerate(grid.envs):
         row = [env]
         for dm in grid.dms:
             column = grid.values[dm][:, j]
             n = int(np.isfinite(column).sum())
             mean, sd = mean_sd(column)
-            row.append(f"{_num(mean, 1)} ± {_num(sd, 1)} (n={n})" if n else DASH)
+            row.append(f"{fmt_num(mean, 1)} ± {fmt_num(sd, 1)} (n={n})" if n else DASH)
             if _in_paper(dm):
                 cited = paper.TABLE1.get(env, {}).get(dm)
                 row.append(f"{cited[0]:g} ± {cited[1]:g}" if cited else DASH)
-        lines.append(_row(row))
+        lines.append(md_row(row))
     return title + "\n\n" + "\n".join(lines)
 
 
@@ -128,8 +132,8 @@ def _pairs_section(results: StudyResults, root: Path) -> str:
     if not pairs.dms:
         return title + "\n\nNo finished cell yet."
     lines = [
-        _row(["DM", "runs", "preference pairs", "paper", "label error rate"]),
-        _row(["---"] * 5),
+        md_row(["DM", "runs", "preference pairs", "paper", "label error rate"]),
+        md_row(["---"] * 5),
     ]
     for dm in pairs.dms:
         n = int(np.isfinite(pairs.values[dm]).sum())
@@ -137,17 +141,17 @@ def _pairs_section(results: StudyResults, root: Path) -> str:
         e_mean, e_sd = mean_sd(errors.values[dm])
         cited = paper.PREFERENCE_PAIRS.get(dm)
         lines.append(
-            _row(
+            md_row(
                 [
                     dm,
                     str(n),
-                    f"{_num(p_mean, 1)} ± {_num(p_sd, 1)}",
+                    f"{fmt_num(p_mean, 1)} ± {fmt_num(p_sd, 1)}",
                     f"{cited:g}" if cited is not None else DASH,
-                    f"{_num(e_mean, 3)} ± {_num(e_sd, 3)}",
+                    f"{fmt_num(e_mean, 3)} ± {fmt_num(e_sd, 3)}",
                 ]
             )
         )
-    tests = _tests_table(
+    tests = tests_table(
         {dm: pairs.values[dm] for dm in pairs.dms}, pairs.dms, paper.PAIR_TESTS, digits=1
     )
     figures.pairs_and_errors(
@@ -177,8 +181,8 @@ def _diagnostics_section(results: StudyResults) -> str:
     if not asked.dms or not any(np.isfinite(v).any() for v in asked.values.values()):
         return title + "\n\nNo finished cell recorded these yet."
     lines = [
-        _row(["env", "DM", "asked / unused / skipped / judged", "candidates", "sd ÷ noise"]),
-        _row(["---"] * 5),
+        md_row(["env", "DM", "asked / unused / skipped / judged", "candidates", "sd ÷ noise"]),
+        md_row(["---"] * 5),
     ]
     limited = set()
     for j, env in enumerate(asked.envs):
@@ -188,10 +192,12 @@ def _diagnostics_section(results: StudyResults) -> str:
             if ratio < 1:
                 limited.add(env)
             counts = " / ".join(
-                _num(means[f], 1)
+                fmt_num(means[f], 1)
                 for f in ("mean_asked", "mean_unused", "mean_skipped", "mean_judged")
             )
-            lines.append(_row([env, dm, counts, _num(means["mean_candidates"], 1), _num(ratio, 2)]))
+            lines.append(
+                md_row([env, dm, counts, fmt_num(means["mean_candidates"], 1), fmt_num(ratio, 2)])
+            )
     note = ""
     if limited:
         note = (
@@ -239,7 +245,7 @@ def _normalised_section(
         return intro + "\n\nNo finished cell yet."
     normalised = iqr_normalise(grid.values)
     header = ["DM", "runs", "mean", "SD", "IQM [95 % CI]"] + (["paper"] if paper_means else [])
-    lines = [_row(header), _row(["---"] * len(header))]
+    lines = [md_row(header), md_row(["---"] * len(header))]
     iqms = {}
     for dm, rng_dm in zip(grid.dms, rng.spawn(len(grid.dms)), strict=True):
         values = normalised[dm]
@@ -249,16 +255,16 @@ def _normalised_section(
         row = [
             dm,
             str(int(np.isfinite(values).sum())),
-            _num(mean, 3),
-            _num(sd, 3),
-            f"{_num(centre, 3)} [{_num(interval.low, 3)}, {_num(interval.high, 3)}]",
+            fmt_num(mean, 3),
+            fmt_num(sd, 3),
+            f"{fmt_num(centre, 3)} [{fmt_num(interval.low, 3)}, {fmt_num(interval.high, 3)}]",
         ]
         if paper_means:
             cited = paper_means.get(dm)
             row.append(f"{cited[0]:g} ± {cited[1]:g}" if cited else DASH)
-        lines.append(_row(row))
+        lines.append(md_row(row))
     figures.normalised_returns({dm: normalised[dm].ravel() for dm in grid.dms}, iqms, title, png)
-    tests = _tests_table(normalised, grid.dms, paper_tests, digits=3)
+    tests = tests_table(normalised, grid.dms, paper_tests, digits=3)
     return (
         f"{intro}\n\n" + "\n".join(lines) + "\n\nWelch t-tests between DMs, pooled over "
         f"envs:\n\n{tests}\n\n![{title.lower()}]({png.name})"
@@ -304,16 +310,16 @@ def _ablations_section(results: StudyResults) -> str:
     envs = _merge_order([returns[c].envs for c in names], returns[MAIN].envs)
     dms = _merge_order([returns[c].dms for c in names], returns[MAIN].dms)
     header = ["env", "DM", "default", *names]
-    lines = [_row(header), _row(["---"] * len(header))]
+    lines = [md_row(header), md_row(["---"] * len(header))]
     for env in envs:
         for dm in dms:
-            if not any(_column(returns[c], env, dm).size for c in names):
+            if not any(finite_column(returns[c], env, dm).size for c in names):
                 continue
-            lines.append(_row([env, dm, *(_mean_sd_n(returns[c], env, dm) for c in returns)]))
+            lines.append(md_row([env, dm, *(mean_sd_n(returns[c], env, dm) for c in returns)]))
     pair_header = ["DM", "default", *names]
-    pair_lines = [_row(pair_header), _row(["---"] * len(pair_header))]
+    pair_lines = [md_row(pair_header), md_row(["---"] * len(pair_header))]
     for dm in dms:
-        pair_lines.append(_row([dm, *(_pooled_mean(pairs[c], dm, envs) for c in pairs)]))
+        pair_lines.append(md_row([dm, *(pooled_mean(pairs[c], dm, envs) for c in pairs)]))
     return (
         f"{title}\n\nEach ablation runs the cells once more with one change ({described}). "
         "Final true return per env and DM, mean ± SD over finished seeds (n), beside the "
@@ -326,27 +332,6 @@ def _merge_order(groups: list[tuple[str, ...]], order: tuple[str, ...]) -> tuple
     """The names in `groups`, those in `order` first and in its order, the rest as found."""
     found = dict.fromkeys(name for group in groups for name in group)
     return (*(n for n in order if n in found), *(n for n in found if n not in order))
-
-
-def _column(grid: Grid, env: str, dm: str) -> np.ndarray:
-    """The finite values of (env, dm) in `grid` (empty when it has none)."""
-    if env not in grid.envs or dm not in grid.dms:
-        return np.empty(0)
-    column = grid.values[dm][:, grid.envs.index(env)]
-    return column[np.isfinite(column)]
-
-
-def _mean_sd_n(grid: Grid, env: str, dm: str) -> str:
-    values = _column(grid, env, dm)
-    if not values.size:
-        return DASH
-    mean, sd = mean_sd(values)
-    return f"{_num(mean, 1)} ± {_num(sd, 1)} (n={values.size})"
-
-
-def _pooled_mean(grid: Grid, dm: str, envs: tuple[str, ...]) -> str:
-    values = np.concatenate([_column(grid, env, dm) for env in envs])
-    return _num(float(values.mean()), 1) if values.size else DASH
 
 
 def _missing_section(results: StudyResults) -> str:
@@ -362,51 +347,6 @@ def _missing_section(results: StudyResults) -> str:
     return "\n".join(lines)
 
 
-def _tests_table(
-    values: Mapping[str, np.ndarray],
-    dms: tuple[str, ...],
-    cited: Mapping[tuple[str, str], paper.PaperTest],
-    digits: int,
-) -> str:
-    lines = [_row(["a vs b", "mean a − b", "a vs b (%)", "t", "df", "p", "paper"])]
-    lines.append(_row(["---"] * 7))
-    for a, b in _comparisons(dms):
-        test = welch_t_test(values[a], values[b])
-        mean_a, mean_b = mean_sd(values[a])[0], mean_sd(values[b])[0]
-        relative = relative_difference(mean_a, mean_b)
-        found = paper.paper_test(dict(cited), a, b)
-        reference = _paper_reference(found[0], found[1]) if found else DASH
-        lines.append(
-            _row(
-                [
-                    f"{a} vs {b}",
-                    _num(mean_a - mean_b, digits),
-                    _num(100 * relative, 1),
-                    _num(test.t, 3),
-                    _num(test.df, 1),
-                    _num(test.p, 3, general=True),
-                    reference,
-                ]
-            )
-        )
-    return "\n".join(lines) if len(lines) > 2 else "Only one DM: nothing to test."
-
-
-def _comparisons(dms: tuple[str, ...]) -> list[tuple[str, str]]:
-    """(a, b) pairs to test: every pair of up to `ALL_PAIRS_UP_TO` DMs (later vs earlier, so
-    the baseline, first in the registry, is b), else each DM against the first."""
-    if len(dms) <= ALL_PAIRS_UP_TO:
-        return [(a, b) for i, b in enumerate(dms) for a in dms[i + 1 :]]
-    return [(a, dms[0]) for a in dms[1:]]
-
-
-def _paper_reference(test: paper.PaperTest, sign: float) -> str:
-    text = f"t = {sign * test.t:.3f}, p = {test.p:.3g}"
-    if test.relative is not None and sign > 0:
-        text += f", {100 * test.relative:+.1f} %"
-    return text
-
-
 def _in_paper(dm: str) -> bool:
     return any(dm in row for row in paper.TABLE1.values())
 
@@ -419,13 +359,3 @@ def _finite_mean(values: np.ndarray) -> float:
 def _nan_safe(values: np.ndarray) -> np.ndarray:
     """Columns with no finite value become 0 instead of warning in `nanmean`."""
     return np.where(np.isfinite(values).any(axis=0), values, 0.0)
-
-
-def _num(value: float, digits: int, general: bool = False) -> str:
-    if value is None or not math.isfinite(value):
-        return DASH
-    return f"{value:.{digits}g}" if general else f"{value:.{digits}f}"
-
-
-def _row(cells: list[str]) -> str:
-    return "| " + " | ".join(cells) + " |"
