@@ -20,6 +20,7 @@ from typing import Any
 import gymnasium as gym
 from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
 
+from groupwise.envs.mujoco_log import log_mujoco_warnings
 from groupwise.envs.rendering import OFFSCREEN_MODES, FastMujocoRendering, use_headless_sdl
 from groupwise.envs.targets import TARGETS
 
@@ -195,6 +196,7 @@ def make_env(name: str, render_mode: str | None = None, **kwargs: Any) -> gym.En
             cannot be imported or does not register the id.
     """
     gym_id = resolve_id(name)
+    log_mujoco_warnings()
     if render_mode in OFFSCREEN_MODES:
         use_headless_sdl()  # pygame-drawn envs (classic control) draw offscreen, quietly
     env = gym.make(gym_id, render_mode=render_mode, **kwargs)
