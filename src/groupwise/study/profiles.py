@@ -17,7 +17,7 @@ the rounds, the PPO step budgets per env and the evaluation. Six ship:
 - ``session``: the paper's protocol on GridWorld, MountainCarContinuous and Reacher with a
   fifth of ``local``'s PPO budgets: about an hour on two cores (the study in ``docs/results``).
 - ``mujoco``: Hopper, HalfCheetah and Walker2d at 120 k + 120 k PPO steps per cell, beside
-  ``session`` (about 2 h on two cores, minutes on a 16-core machine).
+  ``session`` (about 50 min on two cores, minutes on a 16-core machine).
 - ``quick``: GridWorld and MountainCarContinuous, 2 seeds, tiny budgets: a few minutes on two
   cores, for CI and for trying the pipeline.
 - ``smoke`` (hidden): the tiniest cell that still runs every phase, for the tests.
@@ -203,8 +203,8 @@ MUJOCO = StudyProfile(
     ppo=PPOConfig(tensorboard=False),
 )
 """The paper's protocol on its three MuJoCo locomotion envs at a budget beside `SESSION`'s:
-45 cells × 240 k steps = 10.8 M steps, about 2 h on 2 cores at ~1,500 steps/s per worker
-(15 Hopper cells of 240 k steps took about 250 s on 16 cores)."""
+45 cells × 240 k steps = 10.8 M steps. Measured: 36 cells (4 DMs × 3 seeds) took 38 min on
+2 workers of a 2-core machine (120–140 s a cell), so the 45 of five seeds take about 50."""
 
 QUICK = StudyProfile(
     name="quick",
