@@ -104,7 +104,11 @@ def normalised_returns(
     data = [np.asarray(pooled[dm])[np.isfinite(pooled[dm])] for dm in dms]
     if any(d.size for d in data):
         plot = boxes.boxplot(data, patch_artist=True, medianprops={"color": "black"})
-        boxes.set_xticks(range(1, len(dms) + 1), dms)
+        boxes.set_xticks(range(1, len(dms) + 1), dms, fontsize="small")
+        if len(dms) > 4:  # more DM names than that side by side overlap: slant them
+            boxes.tick_params(axis="x", labelrotation=25)
+            for label in boxes.get_xticklabels():
+                label.set_horizontalalignment("right")
         for patch, dm in zip(plot["boxes"], dms, strict=True):
             patch.set_facecolor(colours[dm])
             patch.set_alpha(0.6)
