@@ -11,7 +11,7 @@ from groupwise.study.results import Grid
 from groupwise.study.statistics import mean_sd, relative_difference, welch_t_test
 
 DASH = "–"
-ALL_PAIRS_UP_TO = 4
+ALL_PAIRS_UP_TO = 6
 """With more DMs than this, each is tested against the first only (the table stays short)."""
 
 
