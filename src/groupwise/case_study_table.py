@@ -17,9 +17,6 @@ import json
 from collections.abc import Sequence
 from pathlib import Path
 
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
-
 from groupwise.preferences.dataset import PreferenceDataset
 
 HEADER = (
@@ -64,7 +61,11 @@ def _curve(run: Path) -> tuple[str, str, float, list[float], list[float]]:
 
 def curves_figure(runs: Sequence[Path], path: Path) -> Path:
     """Target score (mean over the evaluation episodes) against preference pairs so far,
-    one line per run, one panel per target; the success threshold dashed."""
+    one line per run, one panel per target; the success threshold dashed. Needs
+    Matplotlib (the ``study`` extra), imported here so the table alone does not."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
     curves = [_curve(run) for run in runs]
     targets = list(dict.fromkeys(c[0] for c in curves))
     dms = list(dict.fromkeys(c[1] for c in curves))
