@@ -18,6 +18,16 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
     )
     report.add_argument("dir", type=Path, help="study directory (as given to `groupwise study`)")
     report.add_argument(
+        "--from",
+        dest="sources",
+        nargs="+",
+        type=Path,
+        default=[],
+        metavar="STUDY_DIR",
+        help="read these study directories as one study (e.g. the session and mujoco "
+        "profiles, for the paper's table on all six envs) and write the report into DIR",
+    )
+    report.add_argument(
         "--seed", type=non_negative_int, default=0, help="seed of the bootstrap intervals"
     )
     report.set_defaults(handler=run)
@@ -26,10 +36,11 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
 def run(args: argparse.Namespace) -> int:
     from groupwise.study.report import write_report
 
-    if not args.dir.is_dir():
-        raise UsageError(f"no study directory {args.dir}")
+    for directory in args.sources or [args.dir]:
+        if not directory.is_dir():
+            raise UsageError(f"no study directory {directory}")
     try:
-        path = write_report(args.dir, seed=args.seed)
+        path = write_report(args.dir, seed=args.seed, sources=args.sources)
     except (ValueError, OSError) as error:
         raise UsageError(str(error)) from None
     print(f"report: {path}")

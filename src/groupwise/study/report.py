@@ -10,7 +10,7 @@ what is missing. Final results use finished cells only; curves also show unfinis
 
 import logging
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 
 import numpy as np
@@ -28,7 +28,7 @@ from groupwise.study.report_tables import (
     pooled_mean,
     tests_table,
 )
-from groupwise.study.results import Grid, StudyResults, load_results
+from groupwise.study.results import Grid, StudyResults, load_results, merge_results
 from groupwise.study.statistics import (
     confidence_band,
     iqm,
@@ -50,16 +50,27 @@ class NoResultsError(ValueError):
     """The directory holds no started study cell."""
 
 
-def write_report(root: Path, seed: int = 0, bootstrap_reps: int = 2000) -> Path:
+def write_report(
+    root: Path,
+    seed: int = 0,
+    bootstrap_reps: int = 2000,
+    sources: Sequence[Path] = (),
+) -> Path:
     """Write ``root/report.md`` and its figures; return the report's path.
 
     Args:
         seed: seeds the bootstrap, so the same cells give the same report.
+        sources: study directories to read as one study (`merge_results`) instead of
+            `root`'s own cells; `root` then only receives the report.
     Raises:
-        NoResultsError: no cell under `root` has started.
-        ValueError: a cell's files cannot be parsed.
+        NoResultsError: no cell under `root` (or `sources`) has started.
+        ValueError: a cell's files cannot be parsed, or a cell is in two sources.
     """
-    results = load_results(root)
+    if sources:
+        root.mkdir(parents=True, exist_ok=True)
+        results = merge_results([load_results(s) for s in sources], root)
+    else:
+        results = load_results(root)
     if not results.records:
         raise NoResultsError(f"{root} holds no study cells (expected {root}/cells/ENV/DM/seed-K)")
     main_rng, capped_rng = np.random.default_rng(seed).spawn(2)
@@ -93,9 +104,12 @@ def _header(results: StudyResults) -> str:
     total = len(set(results.planned) | set(results.records))
     done = sum(r.complete for r in results.records.values())
     profile = results.profile or "unknown (no study.json)"
+    where = f"Study directory `{results.root}`"
+    if results.sources:
+        where = "Study directories " + ", ".join(f"`{s}`" for s in results.sources) + " as one"
     return (
         "# Simulated study report\n\n"
-        f"Study directory `{results.root}`, profile `{profile}`: {done} of {total} cells "
+        f"{where}, profile `{profile}`: {done} of {total} cells "
         f"finished, {len(results.unfinished())} unfinished, "
         f"{len(results.not_started())} not started. Final results use finished cells only."
     )

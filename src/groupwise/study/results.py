@@ -4,6 +4,7 @@ Only finished cells (``done.json``) count as final results; unfinished ones stil
 training curves as far as they got, and are listed as such.
 """
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -55,6 +56,8 @@ class StudyResults:
     """Cells ``study.json`` names (empty for a directory without one)."""
     records: dict[Cell, CellRecord]
     """Every cell that has started."""
+    sources: tuple[Path, ...] = ()
+    """The study directories merged into this one (`merge_results`); empty for one study."""
 
     def finished(self, condition: Condition) -> list[CellRecord]:
         return [
@@ -100,22 +103,24 @@ class StudyResults:
         capped = self.finished("capped")
         if not capped:
             return Grid((), (), (), {}), ()
-        have = {r.cell.dm for r in capped}
-        stand_ins = []
-        records = list(capped)
-        for dm in self.dms(MAIN):
-            main = [r for r in self.finished(MAIN) if r.cell.dm == dm]
-            if dm not in have and main and all(_within_cap(r) for r in main):
-                stand_ins.append(dm)
-                records += main
-        dms = dm_order({r.cell.dm for r in records})
         envs = _env_order({r.cell.env for r in capped})
+        have = {(r.cell.env, r.cell.dm) for r in capped}
+        stand_ins: set[str] = set()
+        records = list(capped)
+        for env in envs:  # per env: a merged study may have capped cells of a DM elsewhere
+            for dm in self.dms(MAIN):
+                if (env, dm) in have:
+                    continue
+                main = [r for r in self.finished(MAIN) if r.cell.dm == dm and r.cell.env == env]
+                if main and all(_within_cap(r) for r in main):
+                    stand_ins.add(dm)
+                    records += main
+        dms = dm_order({r.cell.dm for r in records})
         seeds = tuple(sorted({r.cell.seed for r in records}))
         values = {dm: np.full((len(seeds), len(envs)), np.nan) for dm in dms}
         for r in records:
-            if r.cell.env in envs:
-                values[r.cell.dm][seeds.index(r.cell.seed), envs.index(r.cell.env)] = r.final_return
-        return Grid(dms, envs, seeds, values), tuple(stand_ins)
+            values[r.cell.dm][seeds.index(r.cell.seed), envs.index(r.cell.env)] = r.final_return
+        return Grid(dms, envs, seeds, values), tuple(dm_order(stand_ins))
 
     def curves(self, condition: Condition, env: str, dm: str) -> Curves | None:
         """Training curve data of (env, dm): every started run that wrote a row."""
@@ -133,6 +138,27 @@ class StudyResults:
             returns[i, : r.rows] = r.true_return
             steps[i, : r.rows] = r.env_steps
         return Curves(np.nanmean(steps, axis=0), returns)
+
+
+def merge_results(parts: Sequence[StudyResults], root: Path) -> StudyResults:
+    """Several study directories read as one study at `root` (e.g. ``session`` and
+    ``mujoco``, for the paper's table on all six envs).
+
+    Raises:
+        ValueError: no parts, or one cell (env, DM, seed, condition) in two of them.
+    """
+    if not parts:
+        raise ValueError("nothing to merge")
+    records: dict[Cell, CellRecord] = {}
+    where: dict[Cell, Path] = {}
+    for part in parts:
+        for cell, record in part.records.items():
+            if cell in records:
+                raise ValueError(f"{cell.label} is in both {where[cell]} and {part.root}")
+            records[cell], where[cell] = record, part.root
+    planned = tuple(sorted({c for part in parts for c in part.planned}))
+    profiles = " + ".join(dict.fromkeys(p.profile or "unknown" for p in parts))
+    return StudyResults(root, profiles, planned, records, tuple(p.root for p in parts))
 
 
 def load_results(root: Path) -> StudyResults:

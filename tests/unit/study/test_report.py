@@ -7,11 +7,12 @@ import math
 import numpy as np
 import pytest
 
+from groupwise.cli import main
 from groupwise.loop import RoundRecord, write_records
 from groupwise.study.cells import Cell, mark_done, write_plan
 from groupwise.study.profiles import SMOKE
 from groupwise.study.report import NoResultsError, write_report
-from groupwise.study.results import load_results
+from groupwise.study.results import load_results, merge_results
 
 # (env, dm, seed) → final true return; rounds: 0 and 1 ask 2 and 14 comparisons, row 2 is
 # the frozen-reward PPO row.
@@ -169,3 +170,31 @@ def test_cell_directories_and_labels(tmp_path):
     assert cell.label == "GridWorld/pairwise/seed-3 (capped)"
     assert Cell.from_json(cell.to_json()) == cell
     assert dataclasses.replace(cell, condition="cells").label == "GridWorld/pairwise/seed-3"
+
+
+def test_two_studies_read_as_one(tmp_path):
+    first, second = tmp_path / "session", tmp_path / "mujoco"
+    for env, root in (("GridWorld", first), ("Hopper", second)):
+        for seed in (0, 1):
+            _write_cell(root, Cell(env, "pairwise", seed), 100.0 + seed)
+            _write_cell(root, Cell(env, "groupwise", seed), 200.0 + seed)
+    # capped groupwise cells in one study only; pairwise stands in per env, in both
+    _write_cell(second, Cell("Hopper", "groupwise", 0, "capped"), 150.0)
+    write_plan(first, "session", [Cell("GridWorld", "pairwise", 0)])
+    write_plan(second, "mujoco", [Cell("Hopper", "pairwise", 0)])
+
+    merged = merge_results([load_results(first), load_results(second)], tmp_path / "six")
+    grid = merged.grid("cells")
+    assert grid.envs == ("Hopper", "GridWorld") and merged.profile == "session + mujoco"
+    capped, stand_ins = merged.capped_grid()
+    assert capped.envs == ("Hopper",) and stand_ins == ("pairwise",)
+
+    assert main(["report", str(tmp_path / "six"), "--from", str(first), str(second)]) == 0
+    report = (tmp_path / "six" / "report.md").read_text()
+    assert f"Study directories `{first}`, `{second}` as one, profile `session + mujoco`" in report
+    assert _table_row(report, "Hopper")[0] == "Hopper" and _table_row(report, "GridWorld")
+    assert not (tmp_path / "six" / "cells").exists()  # the report only
+
+    with pytest.raises(ValueError, match="GridWorld/[a-z]+/seed-0 is in both"):
+        merge_results([load_results(first), load_results(first)], tmp_path / "twice")
+    assert main(["report", str(tmp_path / "x"), "--from", str(tmp_path / "nowhere")]) == 2
