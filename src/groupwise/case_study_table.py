@@ -16,21 +16,27 @@ import csv
 import json
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from groupwise.preferences.dataset import PreferenceDataset
 
 HEADER = (
     "| target | DM | seed | comparisons | preference pairs | tied pairs | label error "
-    "(untied) | target score after rounds 0 … 4 | success | stretch | wall |\n"
+    "(untied) | target score after each round | success | stretch | wall |\n"
     "|---|---|---:|---:|---:|---:|---:|---|---:|---:|---:|"
 )
 
 
-def markdown_row(run: Path) -> str:
-    """The table row of one case-study run directory."""
+def _read(run: Path) -> tuple[dict[str, Any], list[dict[str, str]]]:
+    """A run's ``summary.json`` and the rows of its ``case-study.csv``."""
     summary = json.loads((run / "summary.json").read_text())
     with (run / "case-study.csv").open() as handle:
-        rows = list(csv.DictReader(handle))
+        return summary, list(csv.DictReader(handle))
+
+
+def markdown_row(run: Path) -> str:
+    """The table row of one case-study run directory."""
+    summary, rows = _read(run)
     last = rows[-1]
     checkpoints = sorted((run / "checkpoints").glob("round-*"))
     dataset = PreferenceDataset.load(checkpoints[-1] / "dataset.npz")
@@ -49,16 +55,6 @@ def markdown_row(run: Path) -> str:
     )
 
 
-def _curve(run: Path) -> tuple[str, str, float, list[float], list[float]]:
-    summary = json.loads((run / "summary.json").read_text())
-    with (run / "case-study.csv").open() as handle:
-        rows = list(csv.DictReader(handle))
-    pairs = [float(r["pairs_total"]) for r in rows]
-    scores = [float(r["target_score_mean"]) for r in rows]
-    target = summary["target"]
-    return target["name"], summary["decision_maker"], target["threshold"], pairs, scores
-
-
 def curves_figure(runs: Sequence[Path], path: Path) -> Path:
     """Target score (mean over the evaluation episodes) against preference pairs so far,
     one line per run, one panel per target; the success threshold dashed. Needs
@@ -66,22 +62,25 @@ def curves_figure(runs: Sequence[Path], path: Path) -> Path:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    curves = [_curve(run) for run in runs]
-    targets = list(dict.fromkeys(c[0] for c in curves))
-    dms = list(dict.fromkeys(c[1] for c in curves))
+    read = [_read(run) for run in runs]
+    targets = {s["target"]["name"]: s["target"]["threshold"] for s, _ in read}
+    dms = list(dict.fromkeys(s["decision_maker"] for s, _ in read))
     figure = Figure(figsize=(4.2 * len(targets), 3.4), dpi=120, layout="constrained")
     FigureCanvasAgg(figure)
     axes = figure.subplots(1, len(targets), squeeze=False)[0]
     colours = {dm: f"C{k}" for k, dm in enumerate(dms)}
-    for ax, target in zip(axes, targets, strict=True):
+    for ax, (target, threshold) in zip(axes, targets.items(), strict=True):
         shown: set[str] = set()
-        for name, dm, threshold, pairs, scores in curves:
-            if name != target:
+        for summary, rows in read:
+            dm = summary["decision_maker"]
+            if summary["target"]["name"] != target:
                 continue
+            pairs = [float(r["pairs_total"]) for r in rows]
+            scores = [float(r["target_score_mean"]) for r in rows]
             ax.plot(pairs, scores, marker="o", ms=3, color=colours[dm],
                     label=None if dm in shown else dm)  # fmt: skip
             shown.add(dm)
-            ax.axhline(threshold, color="0.4", ls="--", lw=0.8)
+        ax.axhline(threshold, color="0.4", ls="--", lw=0.8)
         ax.set_title(target)
         ax.set_xlabel("preference pairs")
         ax.set_ylabel("target score (greedy policy)")

@@ -204,7 +204,7 @@ MUJOCO = StudyProfile(
 )
 """The paper's protocol on its three MuJoCo locomotion envs at a budget beside `SESSION`'s:
 45 cells × 240 k steps = 10.8 M steps. Measured: 36 cells (4 DMs × 3 seeds) took 38 min on
-2 workers of a 2-core machine (120–140 s a cell), so the 45 of five seeds take about 50."""
+2 workers of a 2-core machine (106–152 s a cell), so the 45 of five seeds take about 50."""
 
 QUICK = StudyProfile(
     name="quick",

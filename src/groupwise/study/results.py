@@ -107,11 +107,12 @@ class StudyResults:
         have = {(r.cell.env, r.cell.dm) for r in capped}
         stand_ins: set[str] = set()
         records = list(capped)
+        uncapped = self.finished(MAIN)
         for env in envs:  # per env: a merged study may have capped cells of a DM elsewhere
             for dm in self.dms(MAIN):
                 if (env, dm) in have:
                     continue
-                main = [r for r in self.finished(MAIN) if r.cell.dm == dm and r.cell.env == env]
+                main = [r for r in uncapped if r.cell.dm == dm and r.cell.env == env]
                 if main and all(_within_cap(r) for r in main):
                     stand_ins.add(dm)
                     records += main
