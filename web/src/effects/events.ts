@@ -1,0 +1,65 @@
+/**
+ * The open session's event stream (SSE): state changes, judgements stored or undone
+ * elsewhere, and new rounds reach the store; after a drop the state is read again, since
+ * events were missed meanwhile.
+ */
+import { STALE } from "../api";
+import type { EffectContext } from "./context";
+import type { RoundSync } from "./round";
+
+export function createEventStream({ store, api, fail }: EffectContext, round: RoundSync) {
+  const dispatch = store.dispatch;
+  const get = store.getState;
+  let closeEvents: (() => void) | null = null;
+
+  /** Listens to session `sid` (the caller closed any earlier stream). */
+  function connect(sid: string): void {
+    dispatch({ type: "connection", value: "connecting" });
+    let dropped = false;
+    closeEvents = api.events(sid, {
+      open() {
+        dispatch({ type: "connection", value: "open" });
+        // Events missed while the stream was down: read the state again.
+        if (dropped) void resync(sid);
+      },
+      error() {
+        dropped = true;
+        dispatch({ type: "connection", value: "lost" });
+      },
+      state(session) {
+        if (session.id !== get().session?.id) return;
+        dispatch({ type: "session", session, at: Date.now() });
+        void round.sync();
+        void round.syncAgent();
+        void round.reportShown();
+      },
+      judgement(j) {
+        if (j.undone) dispatch({ type: "judgement-undone", id: j.id });
+        else dispatch({ type: "judgement-stored", judgement: j });
+      },
+      round() {
+        void resync(sid);
+      },
+    });
+  }
+
+  async function resync(sid: string): Promise<void> {
+    try {
+      const session = await api.session(sid);
+      if (session === STALE || get().session?.id !== sid) return;
+      dispatch({ type: "session", session, at: Date.now() });
+      await round.sync();
+    } catch (err) {
+      fail(err);
+    }
+  }
+
+  function close(): void {
+    closeEvents?.();
+    closeEvents = null;
+  }
+
+  return { connect, close };
+}
+
+export type EventStream = ReturnType<typeof createEventStream>;
