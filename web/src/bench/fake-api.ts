@@ -1,10 +1,82 @@
 /**
  * An in-memory stand-in for the server, for the demo page (web/bench.html?demo=groupwise or
- * ?demo=pairwise): lets the whole UI be looked at and screenshot without a session. Clips
- * are SVG posters (there are no videos).
+ * ?demo=pairwise) and the controller tests: lets the whole UI be looked at and screenshot
+ * without a session. Clips are SVG posters (there are no videos).
+ *
+ * It cannot drift from the server unnoticed: every reply goes through `answer(route, reply)`,
+ * whose reply type is the generated one of that route (`api-types.ts`, from `openapi.json`),
+ * so a changed schema fails the type check; and test/fake-api.test.ts checks every route in
+ * `FAKE_ROUTES` against `openapi.json` itself, replies included.
  */
-import type { Api, JudgementOut, SessionState } from "../api";
+import openapiDocument from "../../openapi.json";
+import type { Api, EnvInfo, JudgementOut, OpenApiDocument, PairQuery, SessionState } from "../api";
+import type { paths } from "../api-types";
 import type { SyntheticRound } from "./synthetic";
+
+type Method = "get" | "post" | "delete";
+
+/** Every operation of the server's schema, as "method path": "get /api/envs", … */
+export type Route = {
+  [P in keyof paths]: {
+    [M in Method]: paths[P][M] extends { responses: unknown } ? `${M} ${P}` : never;
+  }[Method];
+}[keyof paths];
+
+type Operation<R extends Route> = R extends `${infer M extends Method} ${infer P extends keyof paths}`
+  ? NonNullable<paths[P][M]>
+  : never;
+type JsonBody<T> = T extends { content: { "application/json": infer B } } ? B : never;
+
+/** The JSON body the server answers `route` with (its 200, else its 201 response). */
+export type Reply<R extends Route> =
+  Operation<R> extends { responses: infer S }
+    ? S extends { 200: infer Ok }
+      ? JsonBody<Ok>
+      : S extends { 201: infer Created }
+        ? JsonBody<Created>
+        : never
+    : never;
+
+/** The JSON routes the fake answers; `answer` takes no other. */
+export const FAKE_ROUTES = [
+  "get /api/envs",
+  "get /api/sessions",
+  "post /api/sessions",
+  "post /api/settings/resolve",
+  "get /api/sessions/{session_id}",
+  "get /api/sessions/{session_id}/rounds/{round_index}/tree",
+  "get /api/sessions/{session_id}/rounds/{round_index}/edges",
+  "get /api/sessions/{session_id}/judgements",
+  "post /api/sessions/{session_id}/rounds/{round_index}/next-suggestion",
+  "get /api/sessions/{session_id}/pairwise/next",
+  "post /api/sessions/{session_id}/pairwise/skip",
+  "post /api/sessions/{session_id}/judgements",
+  "delete /api/sessions/{session_id}/judgements/{judgement_id}",
+  "post /api/sessions/{session_id}/rounds/{round_index}/shown",
+  "post /api/sessions/{session_id}/pause",
+  "post /api/sessions/{session_id}/resume",
+  "post /api/sessions/{session_id}/end-round",
+  "post /api/sessions/{session_id}/retry",
+  "post /api/sessions/{session_id}/finish",
+  "post /api/sessions/{session_id}/continue",
+  "get /api/sessions/{session_id}/agent",
+] as const satisfies readonly Route[];
+export type FakeRoute = (typeof FAKE_ROUTES)[number];
+
+/** The routes the fake's URLs and event stream stand in for (files, video, SSE). */
+export const FAKE_URL_ROUTES = {
+  clipUrl: "get /clips/{clip_id}",
+  exportUrl: "get /api/sessions/{session_id}/export",
+  agentVideoUrl: "get /api/sessions/{session_id}/agent.mp4",
+  agentZipUrl: "get /api/sessions/{session_id}/agent.zip",
+  events: "get /api/sessions/{session_id}/events",
+} as const satisfies Partial<Record<keyof Api, Route>>;
+
+/** One reply of the fake, as the drift test reads it. */
+export interface Served {
+  route: FakeRoute;
+  reply: unknown;
+}
 
 const HUES = [28, 200, 140, 280, 350, 60, 170, 230];
 
@@ -23,10 +95,31 @@ function poster(id: string): string {
   return `data:image/svg+xml,${encodeURIComponent(svg)}`;
 }
 
+const pq = (a: string, b: string): PairQuery => ({
+  left: a,
+  right: b,
+  left_clip: `${a}.mp4`,
+  right_clip: `${b}.mp4`,
+  left_poster: `${a}.jpg`,
+  right_poster: `${b}.jpg`,
+});
+
+const ENVS: EnvInfo[] = ["GridWorld", "Hopper", "HalfCheetah"].map((name) => ({
+  name,
+  gym_id: `groupwise/${name}-v0`,
+  kind: "env",
+  horizon: 1000,
+  clip_seconds: 1,
+  description: "",
+  target: null,
+}));
+
 export function fakeApi(
   round: SyntheticRound,
   mode: "groupwise" | "pairwise",
   state: Partial<SessionState> = {},
+  /** Hears every reply (test/fake-api.test.ts checks them against the schema). */
+  onServe?: (served: Served) => void,
 ): Api {
   let judgements = round.judgements.slice();
   let nextId = Math.max(0, ...judgements.map((j) => j.id)) + 1;
@@ -49,9 +142,9 @@ export function fakeApi(
       exploration_fraction: 0.25,
       frame_size: 240,
       render_workers: 1,
-      ppo: {},
-      reward: {},
-    } as SessionState["settings"],
+      driver: "app",
+      pair_derivation: "cover",
+    },
     round: 1,
     rounds: 5,
     phase: "ready",
@@ -62,42 +155,46 @@ export function fakeApi(
     created_at: new Date().toISOString(),
     ...state,
   };
-  const pq = (a: string, b: string) => ({
-    left: a,
-    right: b,
-    left_clip: `${a}.mp4`,
-    right_clip: `${b}.mp4`,
-    left_poster: `${a}.jpg`,
-    right_poster: `${b}.jpg`,
-  });
+
+  function answer<R extends FakeRoute>(route: R, reply: Reply<R>): Reply<R> {
+    onServe?.({ route, reply });
+    return reply;
+  }
+
   const api: Api = {
     invalidate: () => undefined,
-    envs: async () =>
-      ["GridWorld", "Hopper", "HalfCheetah"].map((name) => ({
-        name,
-        gym_id: `groupwise/${name}-v0`,
-        kind: "env" as const,
-        horizon: 1000,
-        clip_seconds: 1,
-        description: "",
-        target: null,
-      })),
-    sessions: async () => [session],
-    createSession: async () => session,
-    openapi: async () => ({ components: { schemas: {} } }),
-    resolveSettings: async () => session.settings,
-    session: async () => ({ ...session }),
-    tree: async () => ({ round: 1, levels: round.levels, tree: round.tree, medoids: round.medoids, compared: [] }),
-    edges: async (_s, _r, k) => round.suggestions.slice(0, k),
-    judgements: async () => judgements.map((j) => ({ ...j, round: 1 })),
+    envs: async () => answer("get /api/envs", ENVS),
+    sessions: async () => answer("get /api/sessions", [{ ...session }]),
+    createSession: async () => answer("post /api/sessions", { ...session }),
+    // Not a route of the schema: FastAPI serves the schema itself beside it. JSON imports
+    // are typed loosely; the drift test checks this is the document.
+    openapi: async () => openapiDocument as unknown as OpenApiDocument,
+    resolveSettings: async () => answer("post /api/settings/resolve", { ...session.settings }),
+    session: async () => answer("get /api/sessions/{session_id}", { ...session }),
+    tree: async () =>
+      answer("get /api/sessions/{session_id}/rounds/{round_index}/tree", {
+        round: 1,
+        levels: round.levels,
+        tree: round.tree,
+        medoids: round.medoids,
+        compared: [],
+      }),
+    edges: async (_s, _r, k) =>
+      answer("get /api/sessions/{session_id}/rounds/{round_index}/edges", round.suggestions.slice(0, k)),
+    judgements: async () =>
+      answer("get /api/sessions/{session_id}/judgements", judgements.map((j) => ({ ...j, round: 1 }))),
     nextSuggestion: async () => {
       const a = round.candidates[(used * 2) % round.candidates.length]!;
       const b = round.candidates[(used * 2 + 1) % round.candidates.length]!;
       used++;
-      return { suggestion: { left: a.leaves, right: b.leaves, left_node: a.id, right_node: b.id, score: 0.8 } };
+      return answer("post /api/sessions/{session_id}/rounds/{round_index}/next-suggestion", {
+        suggestion: { left: a.leaves, right: b.leaves, left_node: a.id, right_node: b.id, score: 0.8 },
+      });
     },
-    pairwiseNext: async () => ({ pair: pq("b4", "b90"), following: pq("b17", "b33") }),
-    skipPair: async () => ({ pair: pq("b17", "b33"), following: pq("b5", "b61") }),
+    pairwiseNext: async () =>
+      answer("get /api/sessions/{session_id}/pairwise/next", { pair: pq("b4", "b90"), following: pq("b17", "b33") }),
+    skipPair: async () =>
+      answer("post /api/sessions/{session_id}/pairwise/skip", { pair: pq("b17", "b33"), following: pq("b5", "b61") }),
     submitJudgement: async (_sid, body) => {
       const n = Math.max(body.left.length, body.right.length);
       const value = body.label === "left" ? 1 : body.label === "right" ? 0 : 0.5;
@@ -113,17 +210,17 @@ export function fakeApi(
         })),
       };
       judgements = [...judgements, j];
-      return j;
+      return answer("post /api/sessions/{session_id}/judgements", j);
     },
     undoJudgement: async (_sid, id) => {
       const j = judgements.find((x) => x.id === id)!;
       judgements = judgements.filter((x) => x.id !== id);
-      return { ...j, undone: true };
+      return answer("delete /api/sessions/{session_id}/judgements/{judgement_id}", { ...j, undone: true });
     },
     shown: async () => {
       session.timer.shown_at ??= new Date().toISOString();
       session.timer.running = !session.timer.paused;
-      return { ...session };
+      return answer("post /api/sessions/{session_id}/rounds/{round_index}/shown", { ...session });
     },
     control: async (_sid, action) => {
       if (action === "pause") session.timer.paused = true;
@@ -133,36 +230,37 @@ export function fakeApi(
         session.phase = "training";
         session.progress = { phase: "ppo", fraction: 0.42, message: "PPO 8,400 / 20,000 steps" };
       }
-      return { ...session };
+      return answer(`post /api/sessions/{session_id}/${action}`, { ...session });
     },
     finish: async () => {
       session.phase = "training";
       session.rounds = session.round + 1;
-      return { ...session };
+      return answer("post /api/sessions/{session_id}/finish", { ...session });
     },
     continueTraining: async () => {
       session.phase = "finishing";
       session.round += 1;
-      return { ...session };
+      return answer("post /api/sessions/{session_id}/continue", { ...session });
     },
-    agent: async () => ({
-      env: session.env,
-      round: session.round,
-      env_steps: 140_000,
-      measure: "true return",
-      true_return_mean: 41.5,
-      true_return_std: 3.2,
-      video: { seconds: 3.3, fps: 30, frames: 100, width: 240, height: 240, episode_return: 43 },
-      rounds: [12, 18, 25, 31, 36, 41.5].map((value, i) => ({
-        round: i,
-        feedback: i < 5,
-        judgements: i < 5 ? 6 : 0,
-        pairs_total: 20 * Math.min(i + 1, 5),
-        env_steps: 20_000 * (i + 1),
-        true_return_mean: value,
-        true_return_std: 3,
-      })),
-    }),
+    agent: async () =>
+      answer("get /api/sessions/{session_id}/agent", {
+        env: session.env,
+        round: session.round,
+        env_steps: 140_000,
+        measure: "true return",
+        true_return_mean: 41.5,
+        true_return_std: 3.2,
+        video: { seconds: 3.3, fps: 30, frames: 100, width: 240, height: 240, episode_return: 43 },
+        rounds: [12, 18, 25, 31, 36, 41.5].map((value, i) => ({
+          round: i,
+          feedback: i < 5,
+          judgements: i < 5 ? 6 : 0,
+          pairs_total: 20 * Math.min(i + 1, 5),
+          env_steps: 20_000 * (i + 1),
+          true_return_mean: value,
+          true_return_std: 3,
+        })),
+      }),
     clipUrl: (clip) => (clip.endsWith(".jpg") || clip.endsWith(".mp4") ? poster(clip) : clip),
     exportUrl: () => "#",
     agentVideoUrl: () => "",
