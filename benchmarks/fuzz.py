@@ -55,9 +55,9 @@ def serve(data: Path) -> None:
     import uvicorn
 
     from groupwise.server import AppConfig, create_app
-    from groupwise.server.worker import Worker
     from groupwise.storage import sessions as repo
     from groupwise.storage.settings import SessionSettings
+    from groupwise.worker.process import Worker
 
     app = create_app(AppConfig(data_dir=data, start_worker=False, static_dir=data / "no-web"))
     context = app.state.context

@@ -17,13 +17,13 @@ from typing import Any
 import numpy as np
 import torch
 
-from groupwise.comparisons import PreferenceComparisons
 from groupwise.config import LoopConfig, PPOConfig, RewardConfig
 from groupwise.envs import make_env
 from groupwise.oracles import Feedback, PairwiseTeacher
 from groupwise.query.strategies import PairwiseQueries
 from groupwise.reward import RewardEnsemble
 from groupwise.rl.ppo import PPOAgent
+from groupwise.run.preference_comparisons import PreferenceComparisons
 from peer_eval import episode_returns
 
 VARIANTS: dict[str, dict[str, dict[str, Any]]] = {

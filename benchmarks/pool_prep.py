@@ -2,7 +2,7 @@
 
 Prepares a pool of 200 Hopper behaviours (the env's clip duration, 1.5 s = 188 steps shown
 as 47 frames at real speed; `--length 30` for the study's L; random policy, 240×240 clips, 2
-render workers) into a temporary directory with `groupwise.prepare.prepare_pool` and prints a
+render workers) into a temporary directory with `groupwise.pool.publish.prepare_pool` and prints a
 Markdown table. Render and encode run inside the workers, overlapping each other (a job's
 ffmpeg encodes while its worker renders the next window) and the parent's features, DTW and
 tree: their rows give worker-seconds (ffmpeg: CPU seconds) and the clip phase's wall time split
@@ -27,7 +27,7 @@ import numpy as np
 
 from groupwise.clips.timing import env_clip_timing
 from groupwise.envs.rendering import ensure_gl_backend
-from groupwise.prepare import PoolConfig, PoolTimings, load_policy, prepare_pool
+from groupwise.pool.publish import PoolConfig, PoolTimings, load_policy, prepare_pool
 
 
 def _cpu_seconds() -> float:

@@ -61,7 +61,7 @@ import pkgutil
 
 import groupwise
 
-extras = ("groupwise.server", "groupwise.storage", "groupwise.study")
+extras = ("groupwise.server", "groupwise.storage", "groupwise.worker", "groupwise.study")
 names = [m.name for m in pkgutil.walk_packages(groupwise.__path__, "groupwise.")]
 core = [n for n in names if not n.startswith(extras)]
 for name in core:

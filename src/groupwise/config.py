@@ -32,6 +32,9 @@ PairDerivation = Annotated[
     Literal["cover", "cartesian"],
     Field(description="how a group judgement becomes pairs: max(m, n) (cover) or m × n"),
 ]
+PairOversample = Annotated[
+    float, Field(ge=1, description="pairs per judgement: this many times what the derivation gives")
+]
 PairCap = Annotated[
     float | None, Field(gt=0, description="keep at most pair_cap × comparisons pairs a round")
 ]
@@ -150,8 +153,10 @@ class LoopConfig:
     """L, steps per behaviour (and frames per clip)."""
     exploration_fraction: ExplorationFraction = 0.05
     """Share of sampled steps that take random actions (0.25 in the interactive app)."""
+    pool_size: Annotated[int, Field(ge=2)] | None = None
+    """Pool size N of every round (the app's); None: pool_factor × the round's comparisons."""
     pool_factor: Annotated[float, Field(gt=0)] = 2.0
-    """Pool size N = pool_factor × comparisons this round ..."""
+    """Pool size N = pool_factor × comparisons this round (when pool_size is None) ..."""
     pool_cap: Annotated[int, Field(ge=2)] = 200
     """... capped at this many behaviours."""
     pool_oversample: Annotated[float, Field(ge=1)] = 2.0
@@ -172,12 +177,11 @@ class LoopConfig:
     """Keep at most ⌊pair_cap × comparisons⌋ derived pairs per round, drawn at random (SPEC §8's
     capped ablation uses 1.0: the group DMs get no more pairs than the pairwise DM); None keeps
     every pair."""
-    pair_oversample: Annotated[float, Field(ge=1)] = 1.0
+    pair_oversample: PairOversample = 1.0
     """Each judgement yields ⌊pair_oversample × k + ½⌋ pairs, k being what `pair_derivation`
     gives (the extra ones from further draws of it; `preferences.pairs.oversample_pairs`).
     The paper's reference code drew twice as many pairs per judgement: the study's
-    ``pairs2x`` ablation uses 2.0. The app derives a judgement's pairs when it is stored and
-    does not oversample."""
+    ``pairs2x`` ablation uses 2.0."""
     max_group_size: Annotated[int, Field(ge=2)] = MAX_GROUP
     """Largest group the group DMs compare (paper §6: 8 keeps comparisons humanly possible)."""
     interactive_gap: Annotated[float, Field(ge=0)] = 1.0
@@ -200,10 +204,27 @@ class LoopConfig:
 
 
 @dataclass(frozen=True, config=_STRICT)
+class TreeConfig:
+    """How the behaviour tree is cut (SPEC §4; `groupwise.behaviour.tree`)."""
+
+    levels: PositiveInt = 4
+    """Number of level bands; the root is at this level, leaves at 0."""
+    method: Literal["complete", "average", "ward"] = "complete"
+    """Linkage of the DTW distances (`behaviour.linkage.LINKAGE_METHODS`)."""
+    bands: Literal["counts", "linear", "geometric"] = "counts"
+    """Threshold spacing (`behaviour.tree.BANDS`): level l holds about N / k^l clusters
+    ("counts"), or cuts at fixed fractions of the root height ("linear", the paper's; or
+    "geometric")."""
+
+
+@dataclass(frozen=True, config=_STRICT)
 class RunConfig:
+    """A whole run: the rounds, the reward model, PPO and the behaviour tree."""
+
     loop: LoopConfig = field(default_factory=LoopConfig)
     reward: RewardConfig = field(default_factory=RewardConfig)
     ppo: PPOConfig = field(default_factory=PPOConfig)
+    tree: TreeConfig = field(default_factory=TreeConfig)
 
     def to_json(self) -> str:
         return json.dumps(dataclasses.asdict(self), indent=2)

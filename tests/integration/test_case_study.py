@@ -9,12 +9,12 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from groupwise.case_study import CASE_FILE, STRIP_FILE, SUMMARY_FILE, VIDEO_FILE, CaseRecord
-from groupwise.case_study_table import curves_figure, markdown_row
 from groupwise.cli import main
 from groupwise.clips.video import probe
 from groupwise.envs import TARGETS, horizon
-from groupwise.loop import CONFIG_FILE, RESULTS_FILE
+from groupwise.run.run import CONFIG_FILE, RESULTS_FILE
+from groupwise.study.case_study import CASE_FILE, STRIP_FILE, SUMMARY_FILE, VIDEO_FILE, CaseRecord
+from groupwise.study.case_study_table import curves_figure, markdown_row
 
 COLUMNS = [
     "round",

@@ -8,7 +8,10 @@ import pytest
 import torch
 
 from groupwise.config import LoopConfig, PPOConfig, RewardConfig, RunConfig
-from groupwise.loop import RESULTS_FILE, RoundRecord, run_session
+from groupwise.run.headless import run_session
+from groupwise.run.progress import OnRoundEnd
+from groupwise.run.records import RoundRecord
+from groupwise.run.run import RESULTS_FILE
 
 TINY = RunConfig(
     loop=LoopConfig(
@@ -69,7 +72,10 @@ def test_resume_after_a_crash_gives_the_same_results(tmp_path):
 
     with pytest.raises(Killed):
         run_session(
-            TINY, tmp_path / "crashed", show_progress=False, on_round=crash_after_first_round
+            TINY,
+            tmp_path / "crashed",
+            show_progress=False,
+            callback=OnRoundEnd(crash_after_first_round),
         )
     resumed = run_session(TINY, tmp_path / "crashed", resume=True, show_progress=False)
     assert _without_timings(resumed) == _without_timings(straight)

@@ -13,7 +13,13 @@ from groupwise.behaviour import from_json
 from groupwise.clips.store import ClipStore, is_valid_id
 from groupwise.clips.video import probe, read_frames
 from groupwise.envs import RenderingUnavailableError, make_env, rendering
-from groupwise.prepare import PoolConfig, PreparedPool, load_fragments, load_policy, prepare_pool
+from groupwise.pool.publish import (
+    PoolConfig,
+    PreparedPool,
+    load_fragments,
+    load_policy,
+    prepare_pool,
+)
 
 GRID = PoolConfig(env="GridWorld", size=20, length=30, width=64, height=64, workers=2)
 FILES = {

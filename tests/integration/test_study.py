@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from groupwise.cli import main
-from groupwise.loop import run_session
 from groupwise.oracles import ORACLES
+from groupwise.run.headless import run_session
+from groupwise.run.progress import OnRoundEnd
 from groupwise.study.cells import Cell, is_done
 from groupwise.study.profiles import SMOKE
 from groupwise.study.runner import StudySpec, run_study
@@ -44,7 +45,7 @@ def study(tmp_path_factory):
             SMOKE.run_config(killed.env, killed.dm, killed.seed),
             killed.directory(root),
             show_progress=False,
-            on_round=_kill_after_first_round,
+            callback=OnRoundEnd(_kill_after_first_round),
         )
     first_row = _rows(killed.directory(root))[0]
     summary = run_study(SPEC, root, workers=2, show_progress=False)

@@ -20,10 +20,10 @@ import pytest
 
 from groupwise.config import LoopConfig, PPOConfig, RunConfig
 from groupwise.envs import make_env
-from groupwise.loop import run_session
 from groupwise.rl.policy import RandomPolicy
 from groupwise.rl.ppo import PPOAgent
 from groupwise.rl.rollout import evaluate
+from groupwise.run.headless import run_session
 
 STEPS = 60_000
 EVAL_EPISODES = 5

@@ -24,10 +24,11 @@ import pytest
 
 from groupwise.config import LoopConfig, PPOConfig, RunConfig
 from groupwise.envs import make_env
-from groupwise.loop import eval_rng, run_session
 from groupwise.rl.policy import RandomPolicy
 from groupwise.rl.ppo import PPOAgent
 from groupwise.rl.rollout import evaluate
+from groupwise.run.headless import run_session
+from groupwise.run.streams import eval_rng
 
 ENV = "Pendulum-v1"
 SEEDS = (0, 1, 2)

@@ -18,7 +18,7 @@ class Hide(importlib.abc.MetaPathFinder):
 
 sys.meta_path.insert(0, Hide())
 import groupwise
-extras = ("groupwise.server", "groupwise.storage", "groupwise.study")
+extras = ("groupwise.server", "groupwise.storage", "groupwise.worker", "groupwise.study")
 names = [m.name for m in pkgutil.walk_packages(groupwise.__path__, "groupwise.")]
 core = [n for n in names if not n.startswith(extras)]
 for name in core:

@@ -4,10 +4,10 @@ import numpy as np
 
 from groupwise.config import RewardConfig
 from groupwise.envs import make_env
-from groupwise.fragments import stack_fragments, tile_fragments
+from groupwise.pool.fragments import stack_fragments, tile_fragments
+from groupwise.pool.sampling import sample_pool
 from groupwise.reward import RewardEnsemble
 from groupwise.rl.policy import RandomPolicy
-from groupwise.sampling import sample_pool
 
 
 def _make():

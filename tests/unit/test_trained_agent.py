@@ -8,9 +8,9 @@ import pytest
 
 import groupwise
 from groupwise.config import LoopConfig, PPOConfig, RewardConfig, RunConfig
-from groupwise.final import continue_run
-from groupwise.loop import run_session
-from groupwise.trained_agent import measure_of
+from groupwise.rl.trained_agent import measure_of
+from groupwise.run.final import continue_run
+from groupwise.run.headless import run_session
 
 TINY = RunConfig(
     loop=LoopConfig(

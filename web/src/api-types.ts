@@ -1161,6 +1161,7 @@ export interface components {
              *       "exploration_fraction": 0.25,
              *       "frame_size": 240,
              *       "pair_derivation": "cover",
+             *       "pair_oversample": 1,
              *       "pool_size": 100,
              *       "ppo": {
              *         "batch_size": 64,
@@ -1282,6 +1283,12 @@ export interface components {
              * @enum {string}
              */
             pair_derivation: "cover" | "cartesian";
+            /**
+             * Pair Oversample
+             * @description pairs per judgement: this many times what the derivation gives
+             * @default 1
+             */
+            pair_oversample: number;
             /**
              * Pool Size
              * @description behaviours per round

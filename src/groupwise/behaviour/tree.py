@@ -65,12 +65,12 @@ from typing import Any, Literal
 import numpy as np
 
 from groupwise.behaviour.linkage import (
-    LINKAGE_METHODS,
     as_condensed,
     linkage_matrix,
     pool_size,
 )
-from groupwise.pool import behaviour_id
+from groupwise.config import TreeConfig
+from groupwise.pool.ids import behaviour_id
 from groupwise.preferences.judgement import MAX_GROUP
 from groupwise.types import FloatArray
 
@@ -117,27 +117,6 @@ BANDS: dict[str, Callable[[FloatArray, int], tuple[float, ...]]] = {
     "geometric": geometric_thresholds,
 }
 """Band name -> thresholds (levels,) from the merge heights and the number of levels."""
-
-
-@dataclass(frozen=True)
-class TreeConfig:
-    """How the behaviour tree is cut (SPEC §4)."""
-
-    levels: int = 4
-    """Number of level bands; the root is at this level, leaves at 0."""
-    method: str = "complete"
-    """Linkage, a key of `LINKAGE_METHODS` ("complete", "average", "ward")."""
-    bands: str = "counts"
-    """Threshold spacing, a key of `BANDS` ("counts", "linear" or "geometric")."""
-
-    def __post_init__(self) -> None:
-        if self.levels < 1:
-            raise ValueError(f"levels must be >= 1, got {self.levels}")
-        if self.method not in LINKAGE_METHODS:
-            choices = sorted(LINKAGE_METHODS)
-            raise ValueError(f"unknown linkage {self.method!r}; choose from {choices}")
-        if self.bands not in BANDS:
-            raise ValueError(f"unknown bands {self.bands!r}; choose from {sorted(BANDS)}")
 
 
 @dataclass(frozen=True)

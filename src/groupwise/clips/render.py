@@ -29,7 +29,7 @@ from tqdm.auto import tqdm
 from groupwise.clips.replay import FrameSettings, even_crop, make_render_env, replay_windows
 from groupwise.clips.store import ClipStore
 from groupwise.clips.video import DEFAULT_FPS, ClipEncoder, poster_bytes, poster_frame
-from groupwise.fragments import Fragment, Trajectory
+from groupwise.pool.fragments import Fragment, Trajectory
 
 logger = logging.getLogger(__name__)
 

@@ -64,10 +64,10 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
 
 
 def run(args: argparse.Namespace) -> int:
-    from groupwise.case_study import CASE_FILE, STRIP_FILE, VIDEO_FILE, run_case_study
     from groupwise.clips.timing import clip_timing, default_clip_seconds, env_step_seconds
     from groupwise.config import LoopConfig, RunConfig
     from groupwise.oracles import ORACLES
+    from groupwise.study.case_study import CASE_FILE, STRIP_FILE, VIDEO_FILE, run_case_study
 
     if args.dm not in ORACLES:
         raise UsageError(f"unknown decision-maker {args.dm!r}; choose from {', '.join(ORACLES)}")

@@ -53,7 +53,7 @@ def run(args: argparse.Namespace) -> int:
 
     from groupwise.clips.timing import env_clip_timing
     from groupwise.clips.video import VideoConfig
-    from groupwise.prepare import PoolConfig, load_policy, prepare_pool
+    from groupwise.pool.publish import PoolConfig, load_policy, prepare_pool
 
     try:
         if args.length is not None and args.seconds is not None:

@@ -63,8 +63,9 @@ def run(args: argparse.Namespace) -> int:
         return _from_session(args)
     from groupwise.config import LoopConfig, RunConfig
     from groupwise.envs import make_env
-    from groupwise.loop import RESULTS_FILE, ConfigMismatchError, run_session
     from groupwise.oracles import ORACLES
+    from groupwise.run.headless import run_session
+    from groupwise.run.run import RESULTS_FILE, ConfigMismatchError
 
     if args.env is None or args.out is None:
         raise UsageError("train needs --env and --out (or --from-session DIR)")
@@ -106,9 +107,9 @@ def run(args: argparse.Namespace) -> int:
 
 def _from_session(args: argparse.Namespace) -> int:
     """More PPO steps on the frozen reward, or more rounds by a simulated DM (docs/app.md)."""
-    from groupwise.final import continue_run
-    from groupwise.loop import CONFIG_FILE, RESULTS_FILE
-    from groupwise.trained_agent import AGENT_VIDEO, AGENT_ZIP
+    from groupwise.rl.trained_agent import AGENT_VIDEO, AGENT_ZIP
+    from groupwise.run.final import continue_run
+    from groupwise.run.run import CONFIG_FILE, RESULTS_FILE
 
     given = [
         f"--{name.replace('_', '-')}"

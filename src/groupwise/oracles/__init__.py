@@ -7,12 +7,12 @@ its text describes; "interactive-distinct" and "interactive-clear" are walks of 
 `query.interactive`); "<dm>-<imperfection>" (e.g. "groupwise-myopic", "pairwise-mistake")
 answers the same queries with a B-Pref-style imperfect teacher (`imperfect.TEACHERS`:
 myopic, mistake, skip, equal). A person answers through the web page
-(`groupwise.server.web_teacher.WebTeacher`).
+(`groupwise.worker.web_teacher.WebTeacher`).
 """
 
 from collections.abc import Callable
 
-from groupwise.config import LoopConfig
+from groupwise.config import LoopConfig, RunConfig
 from groupwise.oracles.base import Feedback, Oracle, Teacher
 from groupwise.oracles.group_decision import Perception, SimulatedTeacher
 from groupwise.oracles.imperfect import TEACHERS, Imperfection
@@ -34,25 +34,29 @@ def _imperfection(cfg: LoopConfig) -> Imperfection:
     )
 
 
-STRATEGIES: dict[str, Callable[[LoopConfig], QueryStrategy]] = {
-    "pairwise": lambda cfg: PairwiseQueries(candidates=cfg.candidate_pairs),
-    "groupwise": lambda cfg: GroupSuggestions(max_group=cfg.max_group_size),
+STRATEGIES: dict[str, Callable[[RunConfig], QueryStrategy]] = {
+    "pairwise": lambda run: PairwiseQueries(candidates=run.loop.candidate_pairs),
+    "groupwise": lambda run: GroupSuggestions(tree=run.tree, max_group=run.loop.max_group_size),
     # the paper's reference code: sum of true returns, every level-1/2 node (padding nodes
     # over single leaves included), two passes
-    "interactive": lambda cfg: InteractiveWalk(
-        rank="sum", min_group=1, max_group=UNLIMITED, padding=True, passes=2
+    "interactive": lambda run: InteractiveWalk(
+        tree=run.tree, rank="sum", min_group=1, max_group=UNLIMITED, padding=True, passes=2
     ),
     # the paper's text: mean true return, groups of 2-8, one pass
-    "interactive-mean": lambda cfg: InteractiveWalk(max_group=cfg.max_group_size),
-    "interactive-distinct": lambda cfg: InteractiveWalk(
-        max_group=cfg.max_group_size,
-        min_gap=cfg.interactive_gap * cfg.fragment_length * cfg.noise_sigma,
+    "interactive-mean": lambda run: InteractiveWalk(
+        tree=run.tree, max_group=run.loop.max_group_size
+    ),
+    "interactive-distinct": lambda run: InteractiveWalk(
+        tree=run.tree,
+        max_group=run.loop.max_group_size,
+        min_gap=run.loop.interactive_gap * run.loop.fragment_length * run.loop.noise_sigma,
     ),
     # ours: only clearly different groups, passes until the budget is used
-    "interactive-clear": lambda cfg: InteractiveWalk(
-        max_group=cfg.max_group_size,
-        clear=cfg.interactive_clear,
-        noise_sd=cfg.fragment_length * cfg.noise_sigma,
+    "interactive-clear": lambda run: InteractiveWalk(
+        tree=run.tree,
+        max_group=run.loop.max_group_size,
+        clear=run.loop.interactive_clear,
+        noise_sd=run.loop.fragment_length * run.loop.noise_sigma,
     ),
 }
 """How each DM chooses its queries (the interactive walks: `groupwise.query.interactive`)."""
@@ -60,8 +64,8 @@ UNLIMITED = 2**31 - 1
 """A group-size limit that limits nothing (the reference code's Interactive-DM)."""
 
 
-def _dm(strategy: str, teacher: Callable[[LoopConfig], Teacher]) -> Callable[[LoopConfig], Oracle]:
-    return lambda cfg: Feedback(STRATEGIES[strategy](cfg), teacher(cfg))
+def _dm(strategy: str, teacher: Callable[[LoopConfig], Teacher]) -> Callable[[RunConfig], Feedback]:
+    return lambda run: Feedback(STRATEGIES[strategy](run), teacher(run.loop))
 
 
 def _paper_teacher(cfg: LoopConfig) -> Teacher:
@@ -72,7 +76,7 @@ def _imperfect(kind: str) -> Callable[[LoopConfig], Teacher]:
     return lambda cfg: TEACHERS[kind](cfg.noise_sigma, _imperfection(cfg))
 
 
-ORACLES: dict[str, Callable[[LoopConfig], Oracle]] = {
+ORACLES: dict[str, Callable[[RunConfig], Feedback]] = {
     "pairwise": _dm("pairwise", lambda cfg: PairwiseTeacher(sigma=cfg.noise_sigma)),
     # the reference code's pairwise labels: Boltzmann-rational, temperature 1
     "pairwise-boltzmann": _dm(
@@ -89,7 +93,7 @@ ORACLES: dict[str, Callable[[LoopConfig], Oracle]] = {
         for kind in TEACHERS
     },
 }
-"""Every registered decision-maker, by name (the study's `--dms`)."""
+"""Every registered decision-maker, by name (the study's `--dms`), built from a run's config."""
 
 __all__ = [
     "ORACLES",

@@ -77,3 +77,34 @@ PAIR_DERIVATIONS: dict[str, Derivation] = {
     "cover": covering_pairs,
     "cartesian": cartesian_pairs,
 }
+
+
+PAIR_STREAM = 1
+"""The key that sets the pair streams apart from a run's round streams."""
+
+
+def pair_rng(seed: int, round_index: int, key: int) -> np.random.Generator:
+    """The generator of the pairs of judgement number `key` of a round (0, 1, … in the order
+    the judgements were given, undone ones included)."""
+    return np.random.default_rng(np.random.SeedSequence([seed, round_index, PAIR_STREAM, key]))
+
+
+def judgement_pairs(
+    judgement: Judgement,
+    derivation: str,
+    oversample: float,
+    *,
+    seed: int,
+    round_index: int,
+    key: int,
+) -> list[Pair]:
+    """The preference pairs of judgement `key` of a round: `derivation` ("cover" or
+    "cartesian", SPEC §6) times `oversample` (`oversample_pairs`), drawn from its own stream
+    (`pair_rng`). The one derivation: the app calls it when a judgement arrives, the round's
+    end (`groupwise.run.round.end_round`) for every judgement of the round.
+
+    Raises:
+        KeyError: unknown derivation.
+    """
+    derive = PAIR_DERIVATIONS[derivation]
+    return oversample_pairs(judgement, derive, oversample, pair_rng(seed, round_index, key))

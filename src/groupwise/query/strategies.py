@@ -19,8 +19,9 @@ from typing import Literal, Protocol
 
 import numpy as np
 
-from groupwise.behaviour import TreeConfig, build_tree, group_candidates
-from groupwise.pool import BehaviourPool
+from groupwise.behaviour import group_candidates
+from groupwise.config import TreeConfig
+from groupwise.pool.behaviours import BehaviourPool
 from groupwise.preferences.judgement import MAX_GROUP
 from groupwise.query.groups import GroupCandidate, return_variance, suggest_groups
 from groupwise.query.interactive import chain_pairs, clear_gaps, evenly_spaced
@@ -65,8 +66,7 @@ def pool_candidates(
     """
     if len(pool) < 2:
         return []
-    tree_ = build_tree(pool.distances, tree)
-    nodes = group_candidates(tree_, levels, min_size, max_size, padding)
+    nodes = group_candidates(pool.tree(tree), levels, min_size, max_size, padding)
     return [GroupCandidate(node.id, node.leaves) for node in nodes]
 
 

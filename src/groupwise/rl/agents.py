@@ -27,7 +27,6 @@ class Agent(Protocol):
         self,
         steps: int,
         seed: int,
-        show_progress: bool = False,
         report: ProgressFn | None = None,
     ) -> None: ...
 
@@ -70,7 +69,6 @@ class SB3Agent:
         self,
         steps: int,
         seed: int,
-        show_progress: bool = False,
         report: ProgressFn | None = None,
     ) -> None:
         if steps <= 0:
@@ -81,7 +79,7 @@ class SB3Agent:
             _quiet_default_logger(self.model)
             self.model.learn(
                 total_timesteps=steps,
-                callback=ProgressCallback(steps, show_progress, report),
+                callback=ProgressCallback(steps, report),
                 reset_num_timesteps=False,
             )
         else:

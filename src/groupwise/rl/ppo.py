@@ -70,7 +70,6 @@ class PPOAgent:
         self,
         steps: int,
         seed: int,
-        show_progress: bool = False,
         report: ProgressFn | None = None,
     ) -> None:
         """Train for at least `steps` env steps (whole rollouts), starting fresh episodes.
@@ -89,7 +88,7 @@ class PPOAgent:
             self.model.set_logger(Logger(folder=None, output_formats=[]))
         self.model.learn(
             total_timesteps=steps,
-            callback=ProgressCallback(steps, show_progress, report),
+            callback=ProgressCallback(steps, report),
             reset_num_timesteps=False,
             tb_log_name="ppo",
         )

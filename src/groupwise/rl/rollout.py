@@ -21,7 +21,7 @@ import numpy as np
 
 from groupwise.envs.spaces import encode_actions
 from groupwise.envs.true_reward import TRUE_REWARD_KEY
-from groupwise.fragments import Trajectory
+from groupwise.pool.fragments import Trajectory
 from groupwise.rl.policy import Policy, random_actions
 
 EnvFactory = Callable[[], gym.Env]

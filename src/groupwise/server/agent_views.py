@@ -1,15 +1,15 @@
 """The end of a session as the page sees it: "Finish now", "Continue training", and the
-final agent (its summary, video and download; `groupwise.final` writes them)."""
+final agent (its summary, video and download; `groupwise.run.final` writes them)."""
 
 from dataclasses import asdict
 from pathlib import Path
 
+from groupwise.rl.trained_agent import AGENT_VIDEO, AGENT_ZIP, AgentSummary, read_summary
 from groupwise.server import schemas
 from groupwise.server.context import AppContext
 from groupwise.server.state import read_state
 from groupwise.storage import ConflictError, NotFoundError, ending
 from groupwise.storage.sessions import FINISHED, get_session, session_directory
-from groupwise.trained_agent import AGENT_VIDEO, AGENT_ZIP, AgentSummary, read_summary
 
 
 def finish_now(context: AppContext, session_id: str) -> schemas.SessionState:

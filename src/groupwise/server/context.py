@@ -7,8 +7,8 @@ from threading import Lock
 from groupwise.clips.store import ClipStore
 from groupwise.server.config import AppConfig
 from groupwise.server.schemas import TreeNodeOut
-from groupwise.server.supervisor import Supervisor
 from groupwise.storage import Database
+from groupwise.worker.supervisor import Supervisor
 
 CLIPS_DIR = "clips"
 """The clip store's folder in the data directory, shared by all sessions."""

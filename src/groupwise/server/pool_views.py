@@ -1,7 +1,7 @@
 """A round's pool as the views need it: the tree, suggestion edges, group suggestions, and
 the pairwise baseline's next pairs; with them, how the pool's clips play (`clip_timing`).
 
-The tree and medoids come from the prepared pool's directory (`groupwise.prepare` layout),
+The tree and medoids come from the prepared pool's directory (`groupwise.pool.publish` layout),
 read once per round and cached: a prepared pool never changes. Everything else is read from
 the database on each request.
 """
@@ -11,7 +11,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from groupwise.pool import behaviour_id
+from groupwise.pool.ids import behaviour_id
 from groupwise.server import schemas
 from groupwise.server.context import AppContext
 from groupwise.storage import ConflictError, Database, InvalidError, NotFoundError

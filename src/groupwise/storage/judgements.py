@@ -6,28 +6,29 @@ adds judgement and pairs in the caller's transaction, which commits before the H
 is sent, so an answered judgement survives a crash. A retry with the same `client_id`
 returns the stored judgement instead of storing it twice.
 
-Pairs are reproducible: judgement number `seq` of a session (0, 1, … in arrival order,
-undone ones included) draws its shuffles from
-``SeedSequence([seed, round, PAIR_STREAM, seq])``.
+Pairs are the round's own: judgement number k of a round (0, 1, … in arrival order, undone
+ones included) gets the pairs `groupwise.preferences.pairs.judgement_pairs` derives for key
+k, the one derivation that the round's end (`groupwise.run.round.end_round`, on
+`round_judgements`) calls again, so the pairs stored and shown are the pairs trained on.
 """
 
 from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import datetime
 
-import numpy as np
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session, selectinload
 
-from groupwise.pool import behaviour_id
+from groupwise.pool.ids import behaviour_id, behaviour_index
 from groupwise.preferences.judgement import (
     EQUAL,
     LEFT_BETTER,
     MAX_GROUP,
     RIGHT_BETTER,
     Judgement,
+    Source,
 )
-from groupwise.preferences.pairs import PAIR_DERIVATIONS
+from groupwise.preferences.pairs import judgement_pairs
 from groupwise.storage.errors import ConflictError, InvalidError, NotFoundError
 from groupwise.storage.models import BehaviourRow, JudgementRow, PairRow, SessionRow, utcnow
 from groupwise.storage.rounds import mark_suggestion_used
@@ -37,14 +38,13 @@ from groupwise.storage.sessions import (
     get_round,
     get_session,
     round_due,
+    settings_of,
     touch,
 )
 
 LABELS: dict[str, float] = {"left": LEFT_BETTER, "right": RIGHT_BETTER, "equal": EQUAL}
 """The page's label → P(left group preferred)."""
 SOURCES = ("suggested", "explored", "pairwise")
-PAIR_STREAM = 1
-"""Tags the pair-derivation generators apart from the worker's streams of the same round."""
 MAX_GROUP_BY_MODE = {"groupwise": MAX_GROUP, "pairwise": 1}
 
 
@@ -116,11 +116,6 @@ def record_of(row: JudgementRow) -> JudgementRecord:
     )
 
 
-def pair_rng(seed: int, round_index: int, seq: int) -> np.random.Generator:
-    """The generator that derives judgement `seq`'s pairs (module docstring)."""
-    return np.random.default_rng(np.random.SeedSequence([seed, round_index, PAIR_STREAM, seq]))
-
-
 def add_judgement(
     s: Session, session_id: str, judgement: JudgementInput, now: datetime | None = None
 ) -> tuple[JudgementRecord, bool]:
@@ -156,11 +151,14 @@ def add_judgement(
     indices = _check_groups(s, session, round_row.id, judgement)
     seq = session.judgement_seq
     session.judgement_seq += 1
-    label = LABELS[judgement.label]
-    derive = PAIR_DERIVATIONS[str(session.settings.get("pair_derivation", "cover"))]
-    derived = derive(
-        Judgement(indices[0], indices[1], label),
-        pair_rng(int(session.settings["seed"]), judgement.round, seq),
+    settings = settings_of(session)
+    derived = judgement_pairs(
+        Judgement(indices[0], indices[1], LABELS[judgement.label]),
+        settings.pair_derivation,
+        settings.pair_oversample,
+        seed=settings.seed,
+        round_index=judgement.round,
+        key=_given_in_round(s, session_id, judgement.round),
     )
     touch(session, now)
     row = JudgementRow(
@@ -186,7 +184,7 @@ def add_judgement(
     s.add(row)
     s.flush()
     mark_suggestion_used(s, round_row.id, judgement.left, judgement.right, judgement.source)
-    limit = int(session.settings.get("comparisons_per_round", 0))
+    limit = settings.comparisons_per_round
     if limit > 0 and _live_in_round(s, session_id, judgement.round) >= limit:
         close_round(s, session, "comparisons", now)
     return record_of(row), True
@@ -253,6 +251,18 @@ def _behaviour_indices(s: Session, round_id: int, names: Sequence[str]) -> dict[
         )
     ).all()
     return {name: index for name, index in rows}
+
+
+def _given_in_round(s: Session, session_id: str, round_index: int) -> int:
+    """Judgements given in the round so far, undone ones included."""
+    return int(
+        s.scalar(
+            select(func.count())
+            .select_from(JudgementRow)
+            .where(JudgementRow.session_id == session_id, JudgementRow.round_index == round_index)
+        )
+        or 0
+    )
 
 
 def _live_in_round(s: Session, session_id: str, round_index: int) -> int:
@@ -334,23 +344,24 @@ def list_judgements(
     return [record_of(row) for row in s.scalars(query)]
 
 
-def live_pairs(s: Session, session_id: str) -> list[tuple[int, PairRecord]]:
-    """Every pair of the session's non-undone judgements as (round, pair), in judgement
-    then pair order: what the reward model trains on."""
-    rows = s.execute(
-        select(JudgementRow.round_index, PairRow.a, PairRow.b, PairRow.label)
-        .join(PairRow, PairRow.judgement_id == JudgementRow.id)
-        .where(JudgementRow.session_id == session_id, JudgementRow.undone.is_(False))
-        .order_by(JudgementRow.seq, PairRow.position)
-    ).all()
-    return [(r, PairRecord(a, b, label)) for r, a, b, label in rows]
-
-
-def live_judgement_counts(s: Session, session_id: str) -> dict[int, int]:
-    """Round → the number of its non-undone judgements."""
-    rows = s.execute(
-        select(JudgementRow.round_index, func.count())
-        .where(JudgementRow.session_id == session_id, JudgementRow.undone.is_(False))
-        .group_by(JudgementRow.round_index)
-    ).all()
-    return {int(r): int(n) for r, n in rows}
+def round_judgements(s: Session, session_id: str, round_index: int) -> list[tuple[int, Judgement]]:
+    """The round's judgements that were not undone, as (key, judgement): the key is the
+    judgement's place among all the round's judgements, undone ones included (what its
+    pairs were derived with), the groups pool indices."""
+    rows = list_judgements(s, session_id, round_index, include_undone=True)
+    return [
+        (
+            key,
+            Judgement(
+                left=tuple(behaviour_index(name) for name in r.left),
+                right=tuple(behaviour_index(name) for name in r.right),
+                label=LABELS[r.label],
+                source=Source(r.source) if r.source in SOURCES else Source.EXPLORED,
+                seconds=r.seconds,
+                edits=r.edits,
+                annotator=r.annotator,
+            ),
+        )
+        for key, r in enumerate(rows)
+        if not r.undone
+    ]

@@ -1,6 +1,6 @@
 """A round's pool in the database: behaviours, group suggestions, edges, the pairwise queue.
 
-The worker computes a round (`groupwise.server.jobs`) and stores it in one transaction with
+The worker computes a round (`groupwise.worker.jobs`) and stores it in one transaction with
 `store_prepared_round`, which also opens the round; everything else here reads it.
 """
 
@@ -11,7 +11,7 @@ from datetime import datetime
 from sqlalchemy import delete, select
 from sqlalchemy.orm import Session
 
-from groupwise.pool import behaviour_id
+from groupwise.pool.ids import behaviour_id
 from groupwise.storage.errors import NotFoundError
 from groupwise.storage.models import (
     BehaviourRow,

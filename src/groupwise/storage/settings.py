@@ -25,6 +25,7 @@ from groupwise.config import (
     LoopConfig,
     PairCap,
     PairDerivation,
+    PairOversample,
     PPOConfig,
     RewardConfig,
     RunConfig,
@@ -55,7 +56,7 @@ HUMAN = "human"
 """`LoopConfig.oracle` of a session a person answers (through the page)."""
 LIBRARY = "library"
 """`SessionSettings.driver` of a session whose rounds a user's program publishes and trains
-(`groupwise.server.web_teacher.WebTeacher`); the app's worker leaves it alone."""
+(`groupwise.worker.web_teacher.WebTeacher`); the app's worker leaves it alone."""
 
 
 class SessionSettings(BaseModel):
@@ -108,6 +109,7 @@ class SessionSettings(BaseModel):
     seed: Seed = 0
     pair_derivation: PairDerivation = "cover"
     pair_cap: PairCap = None
+    pair_oversample: PairOversample = 1.0
     # -- advanced knobs (the New-session page's "Advanced") ------------------------------
     driver: Literal["app", "library"] = Field(
         default="app",
@@ -206,6 +208,8 @@ class SessionSettings(BaseModel):
             eval_episodes=self.eval_episodes,
             pair_derivation=self.pair_derivation,
             pair_cap=self.pair_cap,
+            pair_oversample=self.pair_oversample,
+            pool_size=self.pool_size,
             seed=self.seed,
         )
         return RunConfig(loop=loop, reward=self.reward, ppo=self.ppo)

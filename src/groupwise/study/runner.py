@@ -146,7 +146,7 @@ def run_cell(job: CellJob) -> CellOutcome:
         return CellOutcome(job.cell, "skipped")
     import torch  # in the worker only: the parent never needs it
 
-    from groupwise.loop import run_session
+    from groupwise.run.headless import run_session
 
     # Tiny nets: more intra-op threads only contend with the other workers (see cli.py).
     torch.set_num_threads(1)

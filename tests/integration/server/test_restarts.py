@@ -103,7 +103,7 @@ def test_a_killed_worker_fails_the_session_and_retry_recovers(serve):
 
     def rendering() -> int | None:
         state = server.state()
-        busy = state["phase"] == "preparing" and state["progress"]["phase"] == "pool"
+        busy = state["phase"] == "preparing" and state["progress"]["phase"] == "clips"
         return httpx.get(f"{server.url}/api/health").json()["worker_pid"] if busy else None
 
     pid = wait_until(rendering, timeout=120, every=0.05)

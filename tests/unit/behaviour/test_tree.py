@@ -227,7 +227,7 @@ def test_tree_properties(n, seed, method, bands, levels, ties):
 
 def test_pool_to_tree_end_to_end():
     from groupwise.behaviour import dtw_matrix, pool_features
-    from groupwise.fragments import Fragment
+    from groupwise.pool.fragments import Fragment
 
     rng = np.random.default_rng(5)
     fragments = [

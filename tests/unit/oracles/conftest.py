@@ -5,8 +5,8 @@ from collections.abc import Sequence
 import numpy as np
 import pytest
 
-from groupwise.fragments import Fragment
-from groupwise.pool import BehaviourPool
+from groupwise.pool.behaviours import BehaviourPool
+from groupwise.pool.fragments import Fragment
 
 LENGTH = 10
 

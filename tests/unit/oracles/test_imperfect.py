@@ -1,8 +1,7 @@
 import numpy as np
 import pytest
 
-from groupwise.config import LoopConfig
-from groupwise.fragments import Fragment
+from groupwise.config import LoopConfig, RunConfig
 from groupwise.oracles import ORACLES, Feedback
 from groupwise.oracles.group_decision import Perception, SimulatedTeacher, decide
 from groupwise.oracles.imperfect import (
@@ -12,7 +11,8 @@ from groupwise.oracles.imperfect import (
     Mistake,
     SkipWhenBothBelow,
 )
-from groupwise.pool import BehaviourPool
+from groupwise.pool.behaviours import BehaviourPool
+from groupwise.pool.fragments import Fragment
 from groupwise.preferences.dataset import wrong_labels
 from groupwise.preferences.judgement import EQUAL, LEFT_BETTER, RIGHT_BETTER, Judgement
 from groupwise.preferences.pairs import covering_pairs
@@ -120,7 +120,7 @@ def test_registry_builds_every_oracle_and_each_is_seeded(make_pool):
     }
     assert set(ORACLES) == expected
     pool = make_pool(np.random.default_rng(0).uniform(0, 30, size=40).tolist())
-    cfg = LoopConfig()
+    cfg = RunConfig()
     for name, factory in ORACLES.items():
         oracle = factory(cfg)
         first = oracle.gather(pool, 10, np.random.default_rng(3))

@@ -1,9 +1,9 @@
 import numpy as np
 
-from groupwise.fragments import Fragment
 from groupwise.oracles import Feedback, PairwiseTeacher
 from groupwise.oracles.noise import perceived_returns, preference
-from groupwise.pool import BehaviourPool
+from groupwise.pool.behaviours import BehaviourPool
+from groupwise.pool.fragments import Fragment
 from groupwise.query.strategies import PairwiseQueries
 
 

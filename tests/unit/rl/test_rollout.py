@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from groupwise.envs import make_env
-from groupwise.fragments import tile_fragments
+from groupwise.pool.fragments import tile_fragments
 from groupwise.rl.policy import RandomPolicy
 from groupwise.rl.rollout import evaluate, sample_episodes_for_windows, sample_trajectories
 

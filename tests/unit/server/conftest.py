@@ -15,7 +15,7 @@ with warnings.catch_warnings():  # Starlette 1.x announces a move from httpx to 
 
 from groupwise.server import AppConfig, create_app
 from groupwise.server.context import AppContext
-from groupwise.server.worker import Worker
+from groupwise.worker.process import Worker
 
 TINY = {
     "pool_size": 16,

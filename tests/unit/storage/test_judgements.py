@@ -11,7 +11,7 @@ from groupwise.storage.judgements import (
     JudgementInput,
     add_judgement,
     list_judgements,
-    live_pairs,
+    round_judgements,
     undo_judgement,
 )
 from groupwise.storage.models import JudgementRow, PairRow
@@ -79,7 +79,8 @@ def test_undo_removes_the_pairs_and_keeps_the_record(db, open_session):
             "keep",
             "undo",
         ]
-        assert [p.a for _, p in live_pairs(s, sid)] == ["b2"]
+        assert [p.a for j in list_judgements(s, sid) for p in j.pairs] == ["b2"]
+        assert [key for key, _ in round_judgements(s, sid, 0)] == [0]  # "undo" was key 1
         counts = repo.counts(s, repo.get_session(s, sid))
     assert (counts.comparisons_round, counts.pairs_round) == (1, 1)
     with db.write() as s:  # undoing twice changes nothing

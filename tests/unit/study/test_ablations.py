@@ -7,8 +7,8 @@ import pytest
 
 from groupwise.cli import main
 from groupwise.config import LoopConfig, RunConfig
-from groupwise.loop import derive_pairs
 from groupwise.preferences.judgement import LEFT_BETTER, Judgement
+from groupwise.run.round import round_pairs
 from groupwise.study import runner
 from groupwise.study.ablations import ABLATIONS, ablate
 from groupwise.study.cells import Cell, planned_cells, write_plan
@@ -56,19 +56,21 @@ def test_an_unknown_ablation_names_the_known_ones():
         Cell("GridWorld", "pairwise", 0, "triple")
 
 
-def test_derive_pairs_with_oversampling_two_yields_twice_the_pairs():
+def test_round_pairs_with_oversampling_two_yields_twice_the_pairs():
     judgements = [
         Judgement((0, 1, 2), (3, 4), LEFT_BETTER),
         Judgement((5,), (6,), LEFT_BETTER),
         Judgement((7, 8), (9, 10, 11, 12), LEFT_BETTER),
     ]
-    once = derive_pairs(judgements, LoopConfig(), np.random.default_rng(0))
-    twice = derive_pairs(judgements, LoopConfig(pair_oversample=2.0), np.random.default_rng(0))
+    once = round_pairs(judgements, LoopConfig(), 0, 3, np.random.default_rng(0))
+    twice = round_pairs(judgements, LoopConfig(pair_oversample=2.0), 0, 3, np.random.default_rng(0))
     assert len(once) == 3 + 1 + 4
     assert len(twice) == 2 * len(once)
     assert set(twice) >= {(5, 6, LEFT_BETTER)}
     cartesian = LoopConfig(pair_derivation="cartesian", pair_oversample=2.0)
-    assert len(derive_pairs(judgements, cartesian, np.random.default_rng(0))) == 2 * (6 + 1 + 8)
+    assert len(round_pairs(judgements, cartesian, 0, 3, np.random.default_rng(0))) == 2 * (
+        6 + 1 + 8
+    )
 
 
 def test_a_main_cell_keeps_its_key_and_directory(tmp_path):

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from groupwise.cli import main
-from groupwise.loop import RoundRecord, write_records
+from groupwise.run.records import RoundRecord, write_records
 from groupwise.study.cells import Cell, mark_done, write_plan
 from groupwise.study.profiles import SMOKE
 from groupwise.study.report import NoResultsError, write_report
@@ -195,6 +195,6 @@ def test_two_studies_read_as_one(tmp_path):
     assert _table_row(report, "Hopper")[0] == "Hopper" and _table_row(report, "GridWorld")
     assert not (tmp_path / "six" / "cells").exists()  # the report only
 
-    with pytest.raises(ValueError, match="GridWorld/[a-z]+/seed-0 is in both"):
+    with pytest.raises(ValueError, match=r"GridWorld/[a-z]+/seed-0 is in both"):
         merge_results([load_results(first), load_results(first)], tmp_path / "twice")
     assert main(["report", str(tmp_path / "x"), "--from", str(tmp_path / "nowhere")]) == 2

@@ -144,6 +144,7 @@ export function fakeApi(
       render_workers: 1,
       driver: "app",
       pair_derivation: "cover",
+      pair_oversample: 1,
     },
     round: 1,
     rounds: 5,

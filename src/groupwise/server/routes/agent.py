@@ -3,11 +3,11 @@
 from fastapi import APIRouter
 from fastapi.responses import FileResponse
 
+from groupwise.rl.trained_agent import AGENT_VIDEO, AGENT_ZIP
 from groupwise.server import agent_views
 from groupwise.server.deps import Context, SessionId
 from groupwise.server.routes import ERRORS
 from groupwise.server.schemas import AgentOut, ContinueIn, SessionState
-from groupwise.trained_agent import AGENT_VIDEO, AGENT_ZIP
 
 router = APIRouter(prefix="/api/sessions", tags=["agent"], responses=ERRORS)
 

@@ -26,13 +26,13 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from groupwise.server.progress import ProgressReporter
 from groupwise.storage import Database
 from groupwise.storage.sessions import mark_failed, worker_sessions
+from groupwise.worker.progress import JobProgress, ProgressReporter
 
 if TYPE_CHECKING:  # the server imports this module; only the worker process needs these
     from groupwise.clips.render import RenderPool
-    from groupwise.server.jobs import Job
+    from groupwise.worker.jobs import Job
 
 log = logging.getLogger(__name__)
 
@@ -101,7 +101,7 @@ class Worker:
 
     def run_next(self) -> bool:
         """Run the job of the longest-waiting session, if any; True when one ran."""
-        from groupwise.server import jobs
+        from groupwise.worker import jobs
 
         with self.db.read() as s:
             waiting = [row.id for row in worker_sessions(s)]
@@ -114,19 +114,20 @@ class Worker:
 
     def run_job(self, job: "Job") -> None:
         """Run one job; an exception marks the session failed with its message."""
-        from groupwise.server import finishing, jobs
+        from groupwise.worker import finishing, jobs
 
         log.info("session %s: %s round %d", job.session_id, job.phase, job.round)
         reporter = ProgressReporter(self.db, job.session_id, job.phase, on_tick=_exit_if_orphaned)
         try:
             with reporter:
+                progress = JobProgress(reporter)
                 if job.phase == "preparing":
                     render = self._render_pool(job.settings.render_workers)
-                    jobs.prepare(job, self.db, self.data_dir, render, reporter)
+                    jobs.prepare(job, self.db, self.data_dir, render, progress)
                 elif job.phase == "finishing":
-                    finishing.finish(job, self.db, self.data_dir, reporter)
+                    finishing.finish(job, self.db, self.data_dir, progress)
                 else:
-                    jobs.train(job, self.db, self.data_dir, reporter)
+                    jobs.train(job, self.db, self.data_dir, progress)
         except Exception as error:
             log.exception("session %s: %s round %d failed", job.session_id, job.phase, job.round)
             message = f"{job.phase} round {job.round} failed: {type(error).__name__}: {error}"

@@ -5,7 +5,7 @@ the same name: give it an env factory, an agent (any Stable-Baselines3 algorithm
 anything with `learn(steps)` and `predict(obs)`), a reward ensemble the agent's env is
 rewarded by, and the feedback (a query strategy and a teacher: a simulated decision-maker,
 or a person through the web page, `WebTeacher`). `train()` runs the rounds of SPEC §3 with
-exactly the round function of `groupwise train` and the app (`loop.run_round`).
+exactly the round function of `groupwise train` and the app (`groupwise.run.round`).
 
     make = lambda: gym.make("Pendulum-v1")
     reward = RewardEnsemble.for_env(make, RewardConfig(), np.random.default_rng(0))
@@ -23,12 +23,15 @@ from collections.abc import Callable
 from typing import Any
 
 from groupwise.config import LoopConfig, RewardConfig, RunConfig
-from groupwise.loop import RoundRecord, Session, run_rounds
-from groupwise.oracles.base import Oracle
+from groupwise.oracles.base import Feedback
 from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.reward import RewardEnsemble
 from groupwise.rl.agents import as_agent
 from groupwise.rl.rollout import EnvFactory
+from groupwise.run.headless import round_plan, run_rounds
+from groupwise.run.progress import CallbackList, OnRoundEnd, ProgressBars, RunCallback
+from groupwise.run.records import RoundRecord
+from groupwise.run.run import Run
 
 
 class PreferenceComparisons:
@@ -46,29 +49,39 @@ class PreferenceComparisons:
         make_env: EnvFactory,
         agent: Any,
         reward_model: RewardEnsemble,
-        feedback: Oracle,
+        feedback: Feedback,
         loop: LoopConfig | None = None,
         reward: RewardConfig | None = None,
     ) -> None:
         cfg = RunConfig(loop=loop or LoopConfig(), reward=reward or reward_model.cfg)
         self.feedback = feedback
-        self.session = Session.of(cfg, make_env, reward_model, as_agent(agent))
+        self.run = Run.of(cfg, make_env, reward_model, as_agent(agent))
 
     @property
     def records(self) -> list[RoundRecord]:
         """One record per finished round (what `groupwise train` writes to rounds.csv)."""
-        return self.session.records
+        return self.run.records
 
     @property
     def dataset(self) -> PreferenceDataset:
         """Every preference pair so far, with its fragments."""
-        return self.session.dataset
+        return self.run.dataset
 
     def train(
         self,
         show_progress: bool = False,
         on_round: Callable[[RoundRecord], None] | None = None,
     ) -> list[RoundRecord]:
-        """Run the rounds not run yet (all of them on a fresh object) and return the records."""
-        run_rounds(self.session, self.feedback, show_progress, on_round)
+        """Run the rounds not run yet (all of them on a fresh object) and return the records;
+        `on_round` hears each finished round."""
+        callbacks: list[RunCallback] = [OnRoundEnd(on_round)] if on_round else []
+        bars = None
+        if show_progress:
+            bars = ProgressBars(len(round_plan(self.run.cfg.loop)), self.run.next_round)
+            callbacks.append(bars)
+        try:
+            run_rounds(self.run, self.feedback, CallbackList(callbacks))
+        finally:
+            if bars is not None:
+                bars.close()
         return self.records

@@ -20,7 +20,6 @@ import threading
 from multiprocessing.process import BaseProcess
 
 from groupwise.server.config import AppConfig
-from groupwise.server.worker import THREAD_ENV, kill_group, worker_main
 from groupwise.storage import Database
 from groupwise.storage.sessions import (
     READY,
@@ -30,6 +29,7 @@ from groupwise.storage.sessions import (
     sessions_in,
     worker_sessions,
 )
+from groupwise.worker.process import THREAD_ENV, kill_group, worker_main
 
 log = logging.getLogger(__name__)
 

@@ -1,14 +1,14 @@
 """The end of a run: PPO on the frozen learned reward, the agent's video and its download.
 
-`loop.train_frozen` is a round without feedback: no pool, no judgements, no reward fit; the
+`round.train_frozen` is a round without feedback: no pool, no judgements, no reward fit; the
 agent trains `steps` more PPO steps on the learned reward as the last fit left it, and is
 evaluated on the true reward. Its `RoundRecord` is a row of ``rounds.csv`` like any other
 (comparisons, pairs and the reward columns 0 or nan). `publish_agent` films the greedy
 policy for one episode (``agent.mp4``, `clips.episode_video`) and packs the checkpoint into
-``agent.zip`` with ``agent.json`` beside it (`groupwise.trained_agent`).
+``agent.zip`` with ``agent.json`` beside it (`groupwise.rl.trained_agent`).
 
 The app's worker runs both after a session's last round, after "Finish now" and for
-"Continue training" (`server/jobs.py`); `continue_run` does the same headless for
+"Continue training" (`groupwise.worker.finishing`); `continue_run` does the same headless for
 ``groupwise train --from-session DIR`` (more PPO steps, or more rounds answered by a
 simulated decision-maker, then the final phase again).
 """
@@ -16,27 +16,15 @@ simulated decision-maker, then the final phase again).
 import json
 import logging
 import math
-from collections.abc import Callable
 from pathlib import Path
 
-from groupwise.checkpoint import checkpoint_dir, latest_checkpoint
 from groupwise.clips.episode_video import write_episode_video
 from groupwise.clips.replay import FrameSettings
 from groupwise.config import RunConfig
 from groupwise.envs import DEFAULT_FRAME_SIZE
-from groupwise.loop import (
-    CONFIG_FILE,
-    RESULTS_FILE,
-    RoundRecord,
-    Session,
-    eval_rng,
-    run_round,
-    train_frozen,
-    write_records,
-)
 from groupwise.oracles import ORACLES
 from groupwise.rl.rollout import sample_trajectories
-from groupwise.trained_agent import (
+from groupwise.rl.trained_agent import (
     AGENT_VIDEO,
     AGENT_ZIP,
     SETTINGS_FILE,
@@ -47,38 +35,38 @@ from groupwise.trained_agent import (
     summarise,
     write_agent_zip,
 )
+from groupwise.run.checkpoint import checkpoint_dir, latest_checkpoint
+from groupwise.run.progress import CallbackList, ProgressBars, RunCallback, as_callback
+from groupwise.run.records import RoundRecord
+from groupwise.run.round import run_round, train_frozen
+from groupwise.run.run import CONFIG_FILE, Run
+from groupwise.run.streams import eval_rng
 
 log = logging.getLogger(__name__)
 
-Report = Callable[[str, int, int], None]
-"""Hears (phase, done, total): "ppo", "eval", "video", "package"."""
-
 
 def publish_agent(
-    session: Session,
-    out: Path,
+    run: Run,
     frozen: set[int],
     *,
     frame_size: int = DEFAULT_FRAME_SIZE[0],
-    report: Report | None = None,
+    callback: RunCallback | None = None,
 ) -> AgentSummary:
-    """Film the session's greedy policy for one episode (``out/agent.mp4``) and pack its
-    latest checkpoint (saved by `Session.save`) into ``out/agent.zip``, with the summary
-    ``out/agent.json`` written last. `frozen`: the rounds without feedback."""
-    loop = session.cfg.loop
-    if report is not None:
-        report("video", 0, 1)
+    """Film the run's greedy policy for one episode (``agent.mp4`` in the run's directory)
+    and pack its latest checkpoint (`Run.commit`) into ``agent.zip``, with the summary
+    ``agent.json`` written last. `frozen`: the rounds without feedback."""
+    loop, out, callback = run.cfg.loop, run.directory, as_callback(callback)
+    callback.on_phase("video", 0, 1)
     episode = sample_trajectories(
-        session.make_env, session.agent.policy(deterministic=True), 1, eval_rng(loop.seed)
+        run.make_env, run.agent.policy(deterministic=True), 1, eval_rng(loop.seed)
     )[0]
     video = write_episode_video(
         FrameSettings(loop.env, frame_size, frame_size), episode, out / AGENT_VIDEO
     )
-    if report is not None:
-        report("package", 0, 1)
+    callback.on_phase("package", 0, 1)
     summary = summarise(
-        session.cfg,
-        session.records,
+        run.cfg,
+        run.records,
         frozen,
         VideoSummary(
             file=AGENT_VIDEO,
@@ -90,7 +78,7 @@ def publish_agent(
             episode_return=float(episode.true_rewards.sum()),
         ),
     )
-    round_index = session.next_round - 1
+    round_index = run.next_round - 1
     write_agent_zip(out / AGENT_ZIP, checkpoint_dir(out, round_index), summary, out)
     partial = out / f".{SUMMARY_FILE}.partial"
     partial.write_text(summary.to_json() + "\n")
@@ -136,42 +124,34 @@ def continue_run(
     previous = read_summary(out)
     frozen = _frozen_rounds(cfg, previous, len(found[1]["records"]))
     size = frame_size or (previous.video.width if previous and previous.video else None)
-    session = Session.create(cfg, out)
-    try:
-        session.restore(*found)
-        log.info("continuing %s after round %d", out, found[1]["round"])
+    with Run.create(cfg, out) as run:
+        run.restore()
+        more = 1 if steps is not None else (rounds or 0) + int(cfg.loop.final_steps > 0)
+        bars = ProgressBars(more, desc=cfg.loop.env) if show_progress else None
+        callback = CallbackList([_LogReturn(), *([bars] if bars else [])])
+        try:
+            if steps is not None:
+                frozen.add(run.next_round)
+                train_frozen(run, steps, callback=callback)
+            else:
+                assert rounds is not None and oracle is not None
+                feedback = ORACLES[oracle](cfg)
+                per_round = comparisons or _comparisons_per_round(cfg, out)
+                for _ in range(rounds):
+                    run_round(run, feedback, per_round, cfg.loop.steps // cfg.loop.rounds, callback)
+                if cfg.loop.final_steps > 0:
+                    frozen.add(run.next_round)
+                    train_frozen(run, cfg.loop.final_steps, callback=callback)
+        finally:
+            if bars is not None:
+                bars.close()
+        publish_agent(run, frozen, frame_size=size or DEFAULT_FRAME_SIZE[0])
+        return run.records
 
-        def done(record: RoundRecord) -> None:
-            session.save(out)
-            write_records(out / RESULTS_FILE, session.records)
-            log.info("round %d: true return %.2f", record.round, record.true_return_mean)
 
-        if steps is not None:
-            frozen.add(session.next_round)
-            done(train_frozen(session, session.next_round, steps, show_progress=show_progress))
-        else:
-            assert rounds is not None and oracle is not None
-            teacher = ORACLES[oracle](cfg.loop)
-            per_round = comparisons or _comparisons_per_round(cfg, out)
-            for _ in range(rounds):
-                record = run_round(
-                    session, teacher, per_round, cfg.loop.steps // cfg.loop.rounds, show_progress
-                )
-                done(record)
-            if cfg.loop.final_steps > 0:
-                frozen.add(session.next_round)
-                done(
-                    train_frozen(
-                        session,
-                        session.next_round,
-                        cfg.loop.final_steps,
-                        show_progress=show_progress,
-                    )
-                )
-        publish_agent(session, out, frozen, frame_size=size or DEFAULT_FRAME_SIZE[0])
-    finally:
-        session.ppo.close()
-    return session.records
+class _LogReturn(RunCallback):
+    def on_round_end(self, record: RoundRecord) -> None:
+        log.info("round %d: true return %.2f", record.round, record.true_return_mean)
 
 
 def _comparisons_per_round(cfg: RunConfig, out: Path) -> int:

@@ -1,5 +1,8 @@
 """The worker's progress reports: written to the session row, throttled, with a heartbeat.
 
+`JobProgress` is the run's `RunCallback` for a job: it turns the round's phases into the
+bar's fraction and the message the page shows.
+
 `ProgressReporter.report(phase, fraction, message)` is cheap to call often (PPO calls it once
 per rollout): it writes at most every `min_interval_s`. A heartbeat thread rewrites the
 latest report every `heartbeat_s` with the seconds the phase has been running, so a long
@@ -11,6 +14,7 @@ import threading
 import time
 from collections.abc import Callable
 
+from groupwise.run.progress import RunCallback
 from groupwise.storage import Database
 from groupwise.storage.sessions import set_progress
 
@@ -87,3 +91,46 @@ class ProgressReporter:
                 running = time.monotonic() - self._phase_started
             if phase and quiet:
                 self._write(phase, fraction, f"{message} ({running:.0f} s)")
+
+
+_PHASES: dict[str, tuple[float, float]] = {
+    # phase: (fraction at its start, share of the bar it fills)
+    "load": (0.01, 0.0),
+    "sample": (0.03, 0.0),
+    "clips": (0.08, 0.8),
+    "suggestions": (0.9, 0.0),
+    "reward": (0.03, 0.0),
+    "ppo": (0.1, 0.78),
+    "eval": (0.9, 0.0),
+    "checkpoint": (0.95, 0.0),
+    "video": (0.96, 0.0),
+    "package": (0.98, 0.0),
+}
+
+
+def _message(phase: str, done: int, total: int) -> str:
+    return {
+        "load": "loading the policy and reward model",
+        "sample": f"sampling {total} behaviours from the policy",
+        "clips": f"rendering clips {done} / {total}",
+        "suggestions": "computing suggestions",
+        "reward": f"fitting the reward model on {total:,} pairs",
+        "ppo": f"PPO {done:,} / {total:,} steps",
+        "eval": "measuring the policy's true return",
+        "checkpoint": "saving the checkpoint",
+        "video": "filming the final agent",
+        "package": "packing the agent for download",
+    }[phase]
+
+
+class JobProgress(RunCallback):
+    """A run's phases as a job's progress bar (`ProgressReporter`)."""
+
+    def __init__(self, reporter: ProgressReporter) -> None:
+        self.reporter = reporter
+
+    def on_phase(self, phase: str, done: int, total: int) -> None:
+        start, share = _PHASES[phase]
+        fraction = start + share * done / max(total, 1)
+        message = _message(phase, done, total)
+        self.reporter.report(phase, fraction, message, force=phase not in ("ppo", "clips"))

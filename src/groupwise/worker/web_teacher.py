@@ -25,12 +25,11 @@ from typing import Any
 import numpy as np
 
 from groupwise.clips.render import RenderPool
-from groupwise.pool import BehaviourPool, behaviour_index
-from groupwise.preferences.judgement import Judgement, Source
+from groupwise.pool.behaviours import BehaviourPool
+from groupwise.preferences.judgement import Judgement
 from groupwise.query.strategies import Query
-from groupwise.server.jobs import publish_round
 from groupwise.storage import Database, SessionSettings, default_url
-from groupwise.storage.judgements import LABELS, list_judgements
+from groupwise.storage.judgements import round_judgements
 from groupwise.storage.sessions import (
     FAILED,
     FINISHED,
@@ -44,13 +43,13 @@ from groupwise.storage.sessions import (
     set_progress,
 )
 from groupwise.storage.settings import LIBRARY
+from groupwise.worker.jobs import publish_offer
 
 log = logging.getLogger(__name__)
 
 MAX_ROUNDS = next(m.le for m in SessionSettings.model_fields["rounds"].metadata if hasattr(m, "le"))
 """Rounds of a session whose `settings` name none (the most a session may have): the
 program, not the app, decides when it ends (`close`)."""
-SOURCES = {"suggested": Source.SUGGESTED, "explored": Source.EXPLORED, "pairwise": Source.PAIRWISE}
 
 
 class SessionGoneError(RuntimeError):
@@ -110,16 +109,8 @@ class WebTeacher:
         """
         sid = self._session_for(pool.round)
         self._render = self._render or RenderPool(self.settings.render_workers)
-        opened = publish_round(
-            self.db,
-            self.data_dir,
-            sid,
-            self.env,
-            self.settings,
-            pool,
-            self._render,
-            rng,
-            queries=queries,
+        opened = publish_offer(
+            self.db, self.data_dir, sid, self.env, self.settings, pool, queries, self._render
         )
         if not opened:
             raise SessionGoneError(f"session {sid} moved on while round {pool.round} was published")
@@ -128,19 +119,7 @@ class WebTeacher:
         with self.db.write() as s:
             set_progress(s, sid, TRAINING, "training", 0.0, "waiting for your program to train")
         with self.db.read() as s:
-            records = list_judgements(s, sid, pool.round)
-        return [
-            Judgement(
-                left=tuple(behaviour_index(name) for name in r.left),
-                right=tuple(behaviour_index(name) for name in r.right),
-                label=LABELS[r.label],
-                source=SOURCES.get(r.source, Source.EXPLORED),
-                seconds=r.seconds,
-                edits=r.edits,
-                annotator=r.annotator,
-            )
-            for r in records
-        ]
+            return [judgement for _, judgement in round_judgements(s, sid, pool.round)]
 
     def close(self) -> None:
         """The program is done: the session shows as finished; render workers stop."""

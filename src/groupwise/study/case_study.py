@@ -1,13 +1,13 @@
 """A case study (paper §"Example Cases"): teach a behaviour that has no reward and measure it
 by its target score.
 
-The loop is `groupwise train`'s (`loop.run_rounds` over a `Session`; the same checkpoints,
+The loop is `groupwise train`'s (`run.headless.run_rounds` over a `Run`; the same checkpoints,
 ``config.json`` and ``rounds.csv``); the target env pays PPO nothing, its per-step target
 score is the true reward the simulated decision-maker perceives (with the SPEC §7 noise).
 After every round the greedy policy is evaluated on the target: ``case-study.csv`` gets
 the preferences so far, the target score (mean, sd), the success and stretch rates, the
 label error and the wall time of each phase. At the end the evaluated episode with the
-highest target score is filmed (``final.mp4``, ``strip.png``, `groupwise.film`) and
+highest target score is filmed (``final.mp4``, ``strip.png``, `groupwise.study.case_study_film`) and
 ``summary.json`` states the target, its thresholds and the final evaluation.
 """
 
@@ -25,20 +25,16 @@ import numpy as np
 from groupwise.config import RunConfig
 from groupwise.envs import TARGET_TOTAL_KEY, Target
 from groupwise.envs.targets import TARGET_SCORE_KEY
-from groupwise.film import Film, film_episode, write_film
-from groupwise.loop import (
-    CONFIG_FILE,
-    RESULTS_FILE,
-    RoundRecord,
-    Session,
-    eval_rng,
-    run_rounds,
-    write_records,
-)
-from groupwise.oracles import ORACLES, Oracle
+from groupwise.oracles import Feedback
 from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.rl.policy import Policy
 from groupwise.rl.rollout import EnvFactory
+from groupwise.run.headless import feedback_of, round_plan, run_rounds
+from groupwise.run.progress import CallbackList, OnRoundEnd, ProgressBars
+from groupwise.run.records import RoundRecord
+from groupwise.run.run import Run
+from groupwise.run.streams import eval_rng
+from groupwise.study.case_study_film import Film, film_episode, write_film
 from groupwise.types import FloatArray
 
 CASE_FILE = "case-study.csv"
@@ -198,7 +194,7 @@ def run_case_study(
     eval_episodes: int = 5,
     film: bool = True,
     show_progress: bool = True,
-    oracle: Oracle | None = None,
+    feedback: Feedback | None = None,
 ) -> CaseStudy:
     """Run `cfg` (its env must be `target.env`) into `out` (module docstring).
 
@@ -211,41 +207,36 @@ def run_case_study(
         raise ValueError(f"the config's env {cfg.loop.env!r} is not {target.name}'s {target.env}")
     if eval_episodes < 1:
         raise ValueError(f"need at least one evaluation episode, got {eval_episodes}")
-    if oracle is None:
-        if cfg.loop.oracle not in ORACLES:
-            raise ValueError(f"no simulated decision-maker {cfg.loop.oracle!r}")
-        oracle = ORACLES[cfg.loop.oracle](cfg.loop)
-    out.mkdir(parents=True, exist_ok=True)
-    cfg.save(out / CONFIG_FILE)
+    feedback = feedback or feedback_of(cfg)
     started = time.perf_counter()
-    session = Session.create(cfg, out)
     rows: list[CaseRecord] = []
     evaluations: list[TargetEvaluation] = []
+    with Run.create(cfg, out) as run:
 
-    def finished(record: RoundRecord) -> None:
-        session.save(out)
-        write_records(out / RESULTS_FILE, session.records)
-        begin = time.perf_counter()
-        evaluation = evaluate_target(
-            session.make_env,
-            session.agent.policy(deterministic=True),
-            eval_episodes,
-            eval_rng(cfg.loop.seed),
-        )
-        now = time.perf_counter()
-        previous = rows[-1] if rows else None
-        rows.append(
-            CaseRecord.of(
-                record, previous, session.dataset, evaluation, target, now - begin, now - started
+        def scored(record: RoundRecord) -> None:
+            begin = time.perf_counter()
+            evaluation = evaluate_target(
+                run.make_env,
+                run.agent.policy(deterministic=True),
+                eval_episodes,
+                eval_rng(cfg.loop.seed),
             )
-        )
-        evaluations.append(evaluation)
-        _write_rows(out / CASE_FILE, rows)
+            now = time.perf_counter()
+            previous = rows[-1] if rows else None
+            rows.append(
+                CaseRecord.of(
+                    record, previous, run.dataset, evaluation, target, now - begin, now - started
+                )
+            )
+            evaluations.append(evaluation)
+            _write_rows(out / CASE_FILE, rows)
 
-    try:
-        run_rounds(session, oracle, show_progress, finished)
-    finally:
-        session.ppo.close()
+        bars = ProgressBars(len(round_plan(cfg.loop)), desc=target.name) if show_progress else None
+        try:
+            run_rounds(run, feedback, CallbackList([OnRoundEnd(scored), *([bars] if bars else [])]))
+        finally:
+            if bars is not None:
+                bars.close()
     evaluation = evaluations[-1]
     best = int(np.argmax(evaluation.scores))
     movie = None

@@ -1,6 +1,6 @@
-"""A published pool's directory: what `prepare.publish_pool` writes and the app reads.
+"""A published pool's directory: what `pool.publish.publish_pool` writes and the app reads.
 
-Directory layout (``format: groupwise.pool/1``)::
+Directory layout (``format: groupwise.pool.behaviours/1``)::
 
     pool.json         manifest: config, metadata (policy, seed), env, counts, file names,
                       "length" (L) and "fps", and under "clip" the clips' timing
@@ -11,6 +11,8 @@ Directory layout (``format: groupwise.pool/1``)::
                       reset_seed, true_return, clip id, poster id
     behaviours.npz    obs (N, L, obs_dim), acts (N, L, act_dim), actions (N, L, *act_shape)
                       raw, true_rewards (N, L), episode, start, reset_seed (N,)
+    predictions.npz   predicted_returns (N, K) of the ensemble that chose the pool, and
+                      step_variance (N,) when known
     episodes.npz      episode, reset_seed, length (E,), actions (E, T, *act_shape) padded
                       with zeros after each episode's `length` steps: enough to replay
                       (re-render) any window of the sampled episodes
@@ -22,32 +24,72 @@ Directory layout (``format: groupwise.pool/1``)::
     clips/            the clip store (unless another store is passed in)
 """
 
-import dataclasses
 import json
 from collections.abc import Mapping
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
-from groupwise.behaviour import to_json
+from groupwise.behaviour import BehaviourTree, TreeNode, to_json
 from groupwise.clips.replay import episode_arrays
-from groupwise.fragments import Fragment, Trajectory
-from groupwise.pool import behaviour_id
+from groupwise.clips.store import ClipStore
+from groupwise.clips.timing import ClipTiming
+from groupwise.pool.behaviours import BehaviourPool
+from groupwise.pool.fragments import Fragment
+from groupwise.pool.ids import behaviour_id
+from groupwise.types import FloatArray
 
-if TYPE_CHECKING:
-    from groupwise.prepare import PoolConfig, PreparedPool
+FORMAT = "groupwise.pool.behaviours/1"
 
-FORMAT = "groupwise.pool/1"
+
+@dataclass(frozen=True)
+class PoolTimings:
+    """Seconds per phase. Wall times of the parent, except the worker sums (see below)."""
+
+    sample_s: float  # sampling episodes and cutting windows
+    clips_s: float  # from handing jobs to the workers until the last clip is stored
+    features_s: float  # kept for the format: features are part of dtw_s now
+    dtw_s: float  # DTW distance matrix (overlaps clips_s)
+    tree_s: float  # tree, group candidates, medoids (overlaps clips_s)
+    write_s: float  # writing the directory
+    total_s: float  # the whole call, wall time
+    render_s: float  # worker-seconds in env.render(), summed over workers
+    encode_s: float  # worker-seconds handing frames to ffmpeg, posters, storing, summed
+    ffmpeg_cpu_s: float  # CPU seconds of the ffmpeg processes (they run beside the workers)
+    replay_s: float  # worker-seconds stepping and checking replays, summed over workers
+    workers: int
+    behaviours: int
+    frames: int  # frames rendered (N × ⌈L / k⌉)
+
+
+@dataclass(frozen=True)
+class PreparedPool:
+    """A prepared pool (also written to `directory`, see the module docstring)."""
+
+    directory: Path
+    store: ClipStore
+    fragments: tuple[Fragment, ...]  # (N,) in behaviour-index order
+    clips: tuple[str, ...]  # (N,) clip-store id of each behaviour's MP4
+    posters: tuple[str, ...]  # (N,) clip-store id of each behaviour's poster
+    distances: FloatArray  # (N (N - 1) / 2,) condensed DTW distances
+    tree: BehaviourTree
+    candidates: tuple[TreeNode, ...]
+    timings: PoolTimings
+    timing: ClipTiming  # steps per behaviour, frame stride, fps, seconds
 
 
 def write_pool(
-    pool: "PreparedPool",
-    trajectories: list[Trajectory],
+    pool: PreparedPool,
+    sampled: BehaviourPool,
     representatives: Mapping[str, tuple[int, ...]],
-    cfg: "PoolConfig",
+    config: Mapping[str, Any],
     metadata: Mapping[str, Any],
 ) -> None:
+    """Write the directory of a published pool (module docstring); `config` is the
+    `PoolConfig` it was published with, as JSON."""
+    trajectories = list(sampled.episodes)
     out, fragments = pool.directory, pool.fragments
     by_episode = {t.episode: t for t in trajectories}
     raw = np.stack([by_episode[f.episode].actions[f.start : f.start + f.length] for f in fragments])
@@ -61,6 +103,10 @@ def write_pool(
         start=np.array([f.start for f in fragments]),
         reset_seed=np.array([f.reset_seed for f in fragments]),
     )
+    predictions = {"predicted_returns": sampled.predicted_returns}
+    if sampled.step_variance is not None:
+        predictions["step_variance"] = sampled.step_variance
+    np.savez(out / "predictions.npz", **predictions)  # type: ignore[arg-type]
     np.savez(out / "episodes.npz", **episode_arrays(trajectories))  # type: ignore[arg-type]
     np.save(out / "distances.npy", pool.distances)
     behaviours = [
@@ -94,15 +140,15 @@ def write_pool(
     write_json(out / "medoids.json", {k: list(v) for k, v in representatives.items()})
     manifest = {
         "format": FORMAT,
-        "env": cfg.env,
+        "env": config["env"],
         "behaviours": len(fragments),
         "episodes": len(trajectories),
         "length": pool.timing.steps,
         "fps": round(pool.timing.fps, 6),
         "clip": pool.timing.as_json(),
-        "frame_size": [cfg.width, cfg.height],
+        "frame_size": [config["width"], config["height"]],
         "store": _relative(pool.store.root, out),
-        "config": dataclasses.asdict(cfg),
+        "config": dict(config),
         "metadata": dict(metadata),
     }
     write_json(out / "pool.json", manifest)
@@ -122,6 +168,18 @@ def load_fragments(directory: Path) -> tuple[Fragment, ...]:
             )
             for i in range(len(data["start"]))
         )
+
+
+def load_pool(directory: Path, round_index: int) -> BehaviourPool:
+    """The pool published in `directory` (without its episodes); a pool written before
+    predictions were kept has an ensemble of none (predicted returns (N, 0))."""
+    fragments = load_fragments(directory)
+    predicted, step_variance = np.zeros((len(fragments), 0)), None
+    if (directory / "predictions.npz").is_file():
+        with np.load(directory / "predictions.npz") as data:
+            predicted = data["predicted_returns"]
+            step_variance = data["step_variance"] if "step_variance" in data else None
+    return BehaviourPool(round_index, fragments, predicted, step_variance)
 
 
 def _relative(path: Path, base: Path) -> str:

@@ -1,6 +1,6 @@
 """A trained agent as one file: the end of a session, for use elsewhere (docs/library.md).
 
-`write_agent_zip` packs a checkpoint (`groupwise.checkpoint`) into ``agent.zip``:
+`write_agent_zip` packs a checkpoint (`groupwise.run.checkpoint`) into ``agent.zip``:
 
     README.md          how to load it, with and without groupwise
     agent.json         `AgentSummary`: env, round, steps, the true return per round, the

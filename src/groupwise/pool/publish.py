@@ -28,31 +28,33 @@ from typing import Any
 import numpy as np
 
 from groupwise.behaviour import (
-    BehaviourTree,
     TreeConfig,
-    TreeNode,
-    build_tree,
     group_candidates,
     medoids,
 )
 from groupwise.clips.render import RenderPool, plan_jobs
 from groupwise.clips.replay import FrameSettings, make_render_env
 from groupwise.clips.store import ClipStore
-from groupwise.clips.timing import ClipTiming, clip_timing, step_seconds
+from groupwise.clips.timing import clip_timing, step_seconds
 from groupwise.clips.video import VideoConfig
 from groupwise.envs import make_env
-from groupwise.fragments import Fragment
-from groupwise.pool import BehaviourPool
-from groupwise.pool_files import FORMAT, load_fragments, write_json, write_pool
+from groupwise.pool.behaviours import BehaviourPool
+from groupwise.pool.files import (
+    FORMAT,
+    PoolTimings,
+    PreparedPool,
+    load_fragments,
+    write_json,
+    write_pool,
+)
+from groupwise.pool.sampling import sample_pool
 from groupwise.preferences.judgement import MAX_GROUP
 from groupwise.rl.policy import Policy, RandomPolicy
-from groupwise.sampling import sample_pool
-from groupwise.types import FloatArray
 
 logger = logging.getLogger(__name__)
 
 STORE_DIR = "clips"
-__all__ = ["FORMAT", "load_fragments"]  # the directory format, re-exported for callers
+__all__ = ["FORMAT", "PoolTimings", "PreparedPool", "load_fragments"]  # re-exported
 
 
 @dataclass(frozen=True)
@@ -78,8 +80,6 @@ class PoolConfig:
     """Clip and poster encoding."""
     tree: TreeConfig = field(default_factory=TreeConfig)
     """How the behaviour tree is cut."""
-    dtw_window: int | None = None
-    """Sakoe–Chiba radius of the DTW distances in steps (None: unconstrained)."""
     candidate_levels: tuple[int, ...] = (1, 2)
     """Tree levels whose nodes are group candidates (SPEC §4)."""
     max_group: int = MAX_GROUP
@@ -100,42 +100,6 @@ class PoolConfig:
             raise ValueError(f"workers must be >= 0, got {self.workers}")
         if not 0.0 <= self.exploration_fraction < 1.0:
             raise ValueError(f"exploration must be in [0, 1), got {self.exploration_fraction}")
-
-
-@dataclass(frozen=True)
-class PoolTimings:
-    """Seconds per phase. Wall times of the parent, except the worker sums (see below)."""
-
-    sample_s: float  # sampling episodes and cutting windows
-    clips_s: float  # from handing jobs to the workers until the last clip is stored
-    features_s: float  # kept for the format: features are part of dtw_s now
-    dtw_s: float  # DTW distance matrix (overlaps clips_s)
-    tree_s: float  # tree, group candidates, medoids (overlaps clips_s)
-    write_s: float  # writing the directory
-    total_s: float  # the whole call, wall time
-    render_s: float  # worker-seconds in env.render(), summed over workers
-    encode_s: float  # worker-seconds handing frames to ffmpeg, posters, storing, summed
-    ffmpeg_cpu_s: float  # CPU seconds of the ffmpeg processes (they run beside the workers)
-    replay_s: float  # worker-seconds stepping and checking replays, summed over workers
-    workers: int
-    behaviours: int
-    frames: int  # frames rendered (N × ⌈L / k⌉)
-
-
-@dataclass(frozen=True)
-class PreparedPool:
-    """A prepared pool (also written to `directory`, see the module docstring)."""
-
-    directory: Path
-    store: ClipStore
-    fragments: tuple[Fragment, ...]  # (N,) in behaviour-index order
-    clips: tuple[str, ...]  # (N,) clip-store id of each behaviour's MP4
-    posters: tuple[str, ...]  # (N,) clip-store id of each behaviour's poster
-    distances: FloatArray  # (N (N - 1) / 2,) condensed DTW distances
-    tree: BehaviourTree
-    candidates: tuple[TreeNode, ...]
-    timings: PoolTimings
-    timing: ClipTiming  # steps per behaviour, frame stride, fps, seconds
 
 
 def load_policy(spec: str, env: str) -> Policy:
@@ -255,7 +219,7 @@ def publish_pool(
         distances = pool.distances
         dtw_s = time.perf_counter() - mark
         mark = time.perf_counter()
-        tree = build_tree(distances, cfg.tree)
+        tree = pool.tree(cfg.tree)
         candidates = group_candidates(tree, cfg.candidate_levels, 2, cfg.max_group)
         representatives = {
             node.id: medoids(node, distances, cfg.medoids)
@@ -302,7 +266,7 @@ def publish_pool(
         timings=partial,
         timing=timing,
     )
-    write_pool(prepared, trajectories, representatives, cfg, metadata or {})
+    write_pool(prepared, pool, representatives, dataclasses.asdict(cfg), metadata or {})
     write_s = time.perf_counter() - tick
     timings = dataclasses.replace(partial, write_s=write_s, total_s=time.perf_counter() - started)
     write_json(out / "timings.json", dataclasses.asdict(timings))

@@ -1,36 +1,18 @@
-"""A round's behaviour pool: the fragments on offer and what the ensemble predicts of them.
-
-Behaviour i of a pool is named ``b<i>`` wherever a person or a file sees it (the tree's leaf
-ids, the page, the database, exports); `behaviour_id` and `behaviour_index` are the only
-places that spell that name.
-"""
+"""A round's behaviour pool: the fragments on offer and what the ensemble predicts of them
+(behaviour i is named ``b<i>``: `groupwise.pool.ids`)."""
 
 import functools
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from groupwise.fragments import Fragment, Trajectory
+from groupwise.pool.fragments import Fragment, Trajectory
 from groupwise.types import FloatArray
 
-BEHAVIOUR_PREFIX = "b"
-
-
-def behaviour_id(index: int) -> str:
-    """The name of pool behaviour `index`: ``b<index>``."""
-    return f"{BEHAVIOUR_PREFIX}{int(index)}"
-
-
-def behaviour_index(name: str) -> int:
-    """The pool index of behaviour `name` (``b<index>``).
-
-    Raises:
-        ValueError: `name` is not a behaviour name.
-    """
-    digits = name[len(BEHAVIOUR_PREFIX) :]
-    if not name.startswith(BEHAVIOUR_PREFIX) or not digits.isdigit():
-        raise ValueError(f"{name!r} is not a behaviour id (b<index>)")
-    return int(digits)
+if TYPE_CHECKING:
+    from groupwise.behaviour import BehaviourTree
+    from groupwise.config import TreeConfig
 
 
 @dataclass(frozen=True)
@@ -51,6 +33,9 @@ class BehaviourPool:
     predicted_returns: FloatArray  # (N, K)
     step_variance: FloatArray | None = None  # (N,)
     episodes: tuple[Trajectory, ...] = field(default=(), repr=False)
+    _trees: dict["TreeConfig", "BehaviourTree"] = field(
+        default_factory=dict, init=False, repr=False, compare=False
+    )
 
     def __post_init__(self) -> None:
         if self.predicted_returns.shape[0] != len(self.fragments):
@@ -78,3 +63,14 @@ class BehaviourPool:
         from groupwise.behaviour import dtw_matrix, pool_features
 
         return dtw_matrix(pool_features(self.fragments))
+
+    def tree(self, cfg: "TreeConfig | None" = None) -> "BehaviourTree":
+        """The pool's behaviour tree cut by `cfg` (SPEC §4), built once per config: the one
+        tree the strategies' candidates, the published pool and the page share."""
+        from groupwise.behaviour import build_tree
+        from groupwise.config import TreeConfig
+
+        cfg = cfg or TreeConfig()
+        if cfg not in self._trees:
+            self._trees[cfg] = build_tree(self.distances, cfg)
+        return self._trees[cfg]

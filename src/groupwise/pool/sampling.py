@@ -11,8 +11,8 @@ from typing import Literal
 
 import numpy as np
 
-from groupwise.fragments import most_uncertain, stack_fragments, tile_fragments
-from groupwise.pool import BehaviourPool
+from groupwise.pool.behaviours import BehaviourPool
+from groupwise.pool.fragments import most_uncertain, stack_fragments, tile_fragments
 from groupwise.query.groups import step_variance
 from groupwise.reward import RewardEnsemble
 from groupwise.rl.policy import Policy

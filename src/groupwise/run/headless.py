@@ -1,0 +1,108 @@
+"""A whole run without a person: `groupwise train`, the simulation study and the library.
+
+`round_plan` says what each round asks (comparisons, PPO steps; a last row without
+feedback when `final_steps` is set); `run_rounds` runs the rounds not run yet
+(`round.run_round`, `round.train_frozen`); `run_session` does that for a fresh or resumed
+`Run` in a directory, answered by a simulated decision-maker from `ORACLES`.
+"""
+
+import logging
+from pathlib import Path
+
+from groupwise.config import LoopConfig, RunConfig
+from groupwise.oracles import ORACLES, Feedback
+from groupwise.query.schedule import comparisons_per_round
+from groupwise.run.progress import CallbackList, ProgressBars, RunCallback, as_callback
+from groupwise.run.records import RoundRecord
+from groupwise.run.round import run_round, train_frozen
+from groupwise.run.run import Run
+
+log = logging.getLogger(__name__)
+
+
+def round_plan(loop: LoopConfig) -> list[tuple[int, int]]:
+    """(comparisons, PPO steps) of each round; a last (0, final_steps) row when set."""
+    schedule = comparisons_per_round(
+        loop.comparisons, loop.rounds, loop.initial_fraction, loop.schedule
+    )
+    plan = [(n, loop.steps // loop.rounds) for n in schedule]
+    if loop.final_steps > 0:
+        plan.append((0, loop.final_steps))
+    return plan
+
+
+def feedback_of(cfg: RunConfig) -> Feedback:
+    """The simulated decision-maker `cfg.loop.oracle` (`groupwise.oracles.ORACLES`).
+
+    Raises:
+        ValueError: no such decision-maker (e.g. "human": a person answers app sessions).
+    """
+    if cfg.loop.oracle not in ORACLES:
+        raise ValueError(
+            f"no simulated decision-maker {cfg.loop.oracle!r} (a person answers an app "
+            f"session's rounds); choose from {', '.join(ORACLES)}"
+        )
+    return ORACLES[cfg.loop.oracle](cfg)
+
+
+def run_rounds(
+    run: Run, feedback: Feedback, callback: RunCallback | None = None
+) -> list[RoundRecord]:
+    """Run the rounds of `round_plan` not run yet, each committed when the run has a
+    directory; the one round driver of `run_session`, the case studies and
+    `PreferenceComparisons.train`."""
+    plan = round_plan(run.cfg.loop)
+    while run.next_round < len(plan):
+        budget, steps = plan[run.next_round]
+        if budget == 0:  # the final row: PPO on the frozen reward
+            train_frozen(run, steps, callback=callback)
+        else:
+            run_round(run, feedback, budget, steps, callback)
+    return run.records
+
+
+def run_session(
+    cfg: RunConfig,
+    out: Path,
+    resume: bool = False,
+    show_progress: bool = True,
+    feedback: Feedback | None = None,
+    callback: RunCallback | None = None,
+) -> list[RoundRecord]:
+    """Run (or continue, with `resume`) a whole RLHF run, writing it into `out`.
+
+    Writes `config.json`, `rounds.csv` (rewritten after every round), TensorBoard logs and
+    one checkpoint per round. Rounds 0 … R−1 gather feedback from `feedback` (default: the
+    decision-maker `cfg.loop.oracle`); when `final_steps` > 0 a last row (round R, no
+    comparisons) trains PPO further on the frozen learned reward.
+
+    Raises:
+        ConfigMismatchError: `resume` and `out` was written by another configuration.
+        ValueError: unknown env or decision-maker.
+    """
+    feedback = feedback or feedback_of(cfg)
+    with Run.create(cfg, out, check=resume) as run:
+        if resume:
+            run.restore()
+        callbacks = [_RoundLog(), as_callback(callback)]
+        bars = None
+        if show_progress:
+            bars = ProgressBars(len(round_plan(cfg.loop)), run.next_round, cfg.loop.env)
+            callbacks.append(bars)
+        try:
+            return run_rounds(run, feedback, CallbackList(callbacks))
+        finally:
+            if bars is not None:
+                bars.close()
+
+
+class _RoundLog(RunCallback):
+    def on_round_end(self, record: RoundRecord) -> None:
+        log.info(
+            "round %d: %d pairs in total, label error %.3f, reward acc %.3f, true return %.2f",
+            record.round,
+            record.pairs_total,
+            record.label_error_rate_total,
+            record.reward_accuracy,
+            record.true_return_mean,
+        )

@@ -1,0 +1,189 @@
+"""A run: the RLHF loop's mutable state and, when it has one, its directory.
+
+`Run` owns everything a run persists — ``config.json``, one checkpoint per round
+(`groupwise.run.checkpoint`), ``rounds.csv``, TensorBoard logs under ``tb/`` — and is the one
+way `groupwise train`, the case studies, the final phase and the app's worker write them:
+
+    run = Run.create(cfg, out)          # our PPO, a fresh reward ensemble; writes config.json
+    run.restore()                       # the latest checkpoint (or `restore(after=r)`)
+    ... a round (`groupwise.run.round`) ...
+    run.commit()                        # checkpoint of the last round + rounds.csv
+    run.close()
+
+A user's own env factory and agent come in through `Run.of` (the library,
+`groupwise.run.preference_comparisons`), which persists nothing unless given a directory.
+"""
+
+import dataclasses
+import json
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from groupwise.config import RunConfig
+from groupwise.envs import make_env
+from groupwise.preferences.dataset import PreferenceDataset
+from groupwise.reward import RewardEnsemble
+from groupwise.rl.agents import Agent
+from groupwise.rl.ppo import PPOAgent
+from groupwise.rl.rollout import EnvFactory
+from groupwise.run.checkpoint import (
+    DATASET_FILE,
+    REWARD_FILE,
+    STATE_FILE,
+    checkpoint_dir,
+    latest_checkpoint,
+    write_checkpoint,
+)
+from groupwise.run.records import RoundRecord, write_records
+from groupwise.run.streams import init_rng
+
+log = logging.getLogger(__name__)
+
+CONFIG_FILE = "config.json"
+RESULTS_FILE = "rounds.csv"
+TENSORBOARD_DIR = "tb"
+
+
+class ConfigMismatchError(ValueError):
+    """A run directory was written by a different configuration than the one resuming it."""
+
+
+@dataclass
+class Run:
+    """The state of one RLHF run (what a checkpoint saves) and its directory `out`."""
+
+    cfg: RunConfig
+    make_env: EnvFactory
+    ensemble: RewardEnsemble
+    agent: Agent
+    dataset: PreferenceDataset
+    records: list[RoundRecord]
+    out: Path | None = None
+
+    @classmethod
+    def create(cls, cfg: RunConfig, out: Path | None = None, *, check: bool = False) -> "Run":
+        """A fresh run with groupwise's own PPO on `cfg.loop.env`, writing into `out`
+        (``config.json`` now; TensorBoard logs under ``tb/`` when PPO asks for them).
+
+        Raises:
+            ConfigMismatchError: `check` and `out` holds a ``config.json`` of another
+                configuration (resuming must use the same options).
+            ValueError: unknown env.
+        """
+        if out is not None:
+            out.mkdir(parents=True, exist_ok=True)
+            path = out / CONFIG_FILE
+            if check and path.exists() and RunConfig.load(path) != cfg:
+                raise ConfigMismatchError(
+                    f"{path} was written by a different configuration; "
+                    "use the same options to resume or another --out"
+                )
+            cfg.save(path)
+        name = cfg.loop.env
+        make_env(name).close()  # fail early, with the registry's message, on an unknown env
+        make: EnvFactory = lambda: make_env(name)  # noqa: E731
+        ensemble = RewardEnsemble.for_env(make, cfg.reward, init_rng(cfg.loop.seed))
+        agent = PPOAgent(
+            make,
+            cfg.ppo,
+            seed=cfg.loop.seed,
+            reward_fn=ensemble.mean_reward,
+            log_dir=None if out is None else out / TENSORBOARD_DIR,
+        )
+        return cls.of(cfg, make, ensemble, agent, out)
+
+    @classmethod
+    def of(
+        cls,
+        cfg: RunConfig,
+        make: EnvFactory,
+        ensemble: RewardEnsemble,
+        agent: Agent,
+        out: Path | None = None,
+    ) -> "Run":
+        """A fresh run over given parts (no feedback yet)."""
+        dataset = PreferenceDataset.empty(
+            cfg.loop.fragment_length, ensemble.obs_dim, ensemble.act_dim
+        )
+        return cls(cfg, make, ensemble, agent, dataset, [], out)
+
+    @property
+    def next_round(self) -> int:
+        """The index of the round to run next."""
+        return len(self.records)
+
+    @property
+    def ppo(self) -> PPOAgent:
+        """The agent as groupwise's own PPO (checkpoints need it)."""
+        if not isinstance(self.agent, PPOAgent):
+            raise TypeError("checkpoints need groupwise's own PPOAgent")
+        return self.agent
+
+    @property
+    def directory(self) -> Path:
+        if self.out is None:
+            raise ValueError("this run has no directory")
+        return self.out
+
+    def restore(self, after: int | None = None) -> bool:
+        """Load the checkpoint written after round `after` (the latest when None; none,
+        leaving the run fresh, for −1). False when there was none to load.
+
+        Raises:
+            FileNotFoundError: round `after`'s checkpoint is missing.
+        """
+        if after is not None and after < 0:
+            return False
+        if after is None:
+            found = latest_checkpoint(self.directory)
+            if found is None:
+                return False
+            directory, state = found
+        else:
+            directory = checkpoint_dir(self.directory, after)
+            state = _read_state(directory)
+        self.ppo.load(directory)
+        self.ensemble.load_state(directory / REWARD_FILE)
+        self.dataset = PreferenceDataset.load(directory / DATASET_FILE)
+        self.records = [RoundRecord(**row) for row in state["records"]]
+        log.info("%s restored after round %d", self.directory, state["round"])
+        return True
+
+    def commit(self) -> Path:
+        """Write the checkpoint of the last round (atomically) and ``rounds.csv``."""
+        out = self.directory
+
+        def files(directory: Path) -> None:
+            self.ppo.save(directory)
+            self.ensemble.save(directory / REWARD_FILE)
+            self.dataset.save(directory / DATASET_FILE)
+
+        state = {
+            "round": self.next_round - 1,
+            "records": [dataclasses.asdict(r) for r in self.records],
+        }
+        path = write_checkpoint(out, self.next_round - 1, state, files)
+        write_records(out / RESULTS_FILE, self.records)
+        return path
+
+    def close(self) -> None:
+        """Release the agent's envs and loggers."""
+        close = getattr(self.agent, "close", None)
+        if callable(close):
+            close()
+
+    def __enter__(self) -> "Run":
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+def _read_state(directory: Path) -> dict[str, Any]:
+    path = directory / STATE_FILE
+    if not path.is_file():
+        raise FileNotFoundError(f"no checkpoint in {directory}")
+    state: dict[str, Any] = json.loads(path.read_text())
+    return state

@@ -1,0 +1,246 @@
+"""The worker's jobs: the two halves of a round, run apart in time because a person answers
+in between (`groupwise.run.round`), on the session's `Run` in ``DIR/sessions/<session>/``.
+
+prepare round r: the run as round r − 1 left it (`Run.restore`) → `begin_round` with the
+    session's query strategy (the Groupwise-DM's group suggestions, or the Pairwise-DM's
+    queries in pairwise mode) → `publish_offer`: clips into the shared store ``DIR/clips``,
+    the tree and candidates (`pool.publish.publish_pool`), the queries as the page's
+    suggestions and pairwise queue (`offers`), stored in one transaction that opens the round.
+train after round r: the run as round r − 1 left it → the round's stored judgements (not
+    undone, each keyed by its place in the round) → `end_round`: pairs, dataset, reward fit,
+    PPO for `ppo_steps_per_round`, evaluation, checkpoint and ``rounds.csv`` → round r + 1
+    preparing, or finishing.
+
+A person and a simulated decision-maker therefore answer the same queries, and their
+answers become training by the same function.
+"""
+
+import json
+import logging
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+from groupwise.clips.render import RenderPool
+from groupwise.clips.store import ClipStore
+from groupwise.config import RunConfig
+from groupwise.oracles import STRATEGIES
+from groupwise.pool.behaviours import BehaviourPool
+from groupwise.pool.files import load_pool
+from groupwise.pool.publish import PoolConfig, publish_pool
+from groupwise.query.strategies import Query, QueryStrategy
+from groupwise.rl.trained_agent import SETTINGS_FILE
+from groupwise.run.checkpoint import checkpoint_dir
+from groupwise.run.round import Offer, begin_round, end_round
+from groupwise.run.run import Run
+from groupwise.storage import Database, SessionSettings
+from groupwise.storage.judgements import round_judgements
+from groupwise.storage.rounds import store_prepared_round
+from groupwise.storage.sessions import (
+    WORK_PHASES,
+    elapsed,
+    finish_training,
+    get_round,
+    get_session,
+    round_directory,
+    session_directory,
+    settings_of,
+)
+from groupwise.worker.offers import prepared_round
+from groupwise.worker.progress import JobProgress
+
+log = logging.getLogger(__name__)
+
+QUEUE_FACTOR = 2
+"""A round offers this many times its comparison budget in queries (skips use some up)."""
+
+
+@dataclass(frozen=True)
+class Job:
+    """One step of one session, as the worker found it in the database."""
+
+    session_id: str
+    env: str
+    mode: str  # "groupwise" or "pairwise"
+    phase: str  # "preparing", "training" or "finishing"
+    round: int
+    settings: SessionSettings
+    elapsed_s: float  # the round's timer when training started (for the round record)
+    frozen_steps: int | None = None
+    """PPO steps of the current round when it is one without feedback (`RoundRow`)."""
+
+
+def open_run(job: Job, data_dir: Path, after: int) -> Run:
+    """The session's run as round `after` left it (fresh for −1); writes its
+    ``config.json`` and ``settings.json`` (the settings may have changed since: "Finish
+    now", "Continue training")."""
+    cfg = job.settings.run_config(job.env)
+    out = data_dir / session_directory(job.session_id)
+    run = Run.create(cfg, out)
+    (out / SETTINGS_FILE).write_text(job.settings.model_dump_json(indent=2) + "\n")
+    run.restore(after)
+    return run
+
+
+def session_strategy(cfg: RunConfig, mode: str) -> QueryStrategy:
+    """What the page suggests: the Pairwise-DM's queries in pairwise mode, else the
+    Groupwise-DM's group suggestions (`groupwise.oracles.STRATEGIES`)."""
+    return STRATEGIES["pairwise" if mode == "pairwise" else "groupwise"](cfg)
+
+
+def offered_queries(settings: SessionSettings) -> int:
+    """How many queries a round offers: `QUEUE_FACTOR` × its budget (× its pool when it
+    has no limit)."""
+    return QUEUE_FACTOR * (settings.comparisons_per_round or settings.pool_size)
+
+
+def prepare(
+    job: Job, db: Database, data_dir: Path, render: RenderPool, progress: JobProgress
+) -> None:
+    """Prepare round `job.round`'s offer and open the round (module docstring)."""
+    settings = job.settings
+    progress.on_phase("load", 0, 1)
+    with open_run(job, data_dir, job.round - 1) as run:
+        progress.on_phase("sample", 0, settings.pool_size)
+        offer = begin_round(
+            run,
+            session_strategy(run.cfg, job.mode),
+            settings.comparisons_per_round,
+            n_queries=offered_queries(settings),
+        )
+    publish_offer(
+        db,
+        data_dir,
+        job.session_id,
+        job.env,
+        settings,
+        offer.pool,
+        offer.queries,
+        render,
+        progress=progress,
+        sample_s=offer.sample_s,
+    )
+    log.info(
+        "session %s: round %d ready (%d behaviours)", job.session_id, job.round, len(offer.pool)
+    )
+
+
+def publish_offer(
+    db: Database,
+    data_dir: Path,
+    session_id: str,
+    env: str,
+    settings: SessionSettings,
+    pool: BehaviourPool,
+    queries: Sequence[Query],
+    render: RenderPool,
+    *,
+    progress: JobProgress | None = None,
+    sample_s: float = 0.0,
+) -> bool:
+    """Publish `pool` as round `pool.round` of a session and open the round: clips, tree
+    and candidates (`pool.publish.publish_pool`), then `queries` as the page's suggestions
+    and pairwise queue, stored in one transaction. False (nothing opened) when the session
+    moved on meanwhile."""
+    if progress is not None:
+        progress.on_phase("clips", 0, len(pool))
+    published = publish_pool(
+        pool_config(env, settings, render.workers),
+        pool,
+        data_dir / round_directory(session_id, pool.round),
+        store=ClipStore(data_dir / "clips"),
+        render_pool=render,
+        metadata={"session": session_id, "round": pool.round},
+        show_progress=False,
+        sample_s=sample_s,
+    )
+    if progress is not None:
+        progress.on_phase("suggestions", 0, 1)
+    prepared = prepared_round(pool, published, queries, settings.suggestions)
+    with db.write() as s:
+        if not store_prepared_round(s, session_id, pool.round, prepared):
+            log.warning("session %s moved on while round %d was prepared", session_id, pool.round)
+            return False
+    return True
+
+
+def pool_config(env: str, settings: SessionSettings, workers: int) -> PoolConfig:
+    """How the app publishes a session's pools."""
+    cfg = settings.run_config(env)
+    return PoolConfig(
+        env=env,
+        size=settings.pool_size,
+        length=cfg.loop.fragment_length,
+        exploration_fraction=settings.exploration_fraction,
+        width=settings.frame_size,
+        height=settings.frame_size,
+        tree=cfg.tree,
+        workers=workers,
+    )
+
+
+def train(job: Job, db: Database, data_dir: Path, progress: JobProgress) -> None:
+    """End round `job.round` on its stored judgements (module docstring)."""
+    settings, r = job.settings, job.round
+    progress.on_phase("load", 0, 1)
+    with db.read() as s:
+        pool_dir = get_round(s, job.session_id, r).pool_dir
+        keyed = round_judgements(s, job.session_id, r)
+    if pool_dir is None:
+        raise FileNotFoundError(f"round {r} has no pool directory")
+    with open_run(job, data_dir, r - 1) as run:
+        record = end_round(
+            run,
+            published_offer(data_dir / pool_dir, r, settings.comparisons_per_round, job.mode),
+            [judgement for _, judgement in keyed],
+            settings.ppo_steps_per_round,
+            keys=[key for key, _ in keyed],
+            feedback_s=job.elapsed_s,
+            callback=progress,
+        )
+    checkpoint = checkpoint_dir(Path(session_directory(job.session_id)), r)
+    with db.write() as s:
+        if not finish_training(s, job.session_id, r, str(checkpoint), record.stats()):
+            log.warning("session %s moved on while round %d trained", job.session_id, r)
+    log.info(
+        "session %s: round %d trained on %d pairs (reward acc %.2f, true return %.1f)",
+        job.session_id,
+        r,
+        record.pairs_total,
+        record.reward_accuracy,
+        record.true_return_mean,
+    )
+
+
+def published_offer(directory: Path, round_index: int, budget: int, mode: str) -> Offer:
+    """The offer of a published round, as `end_round` needs it: the pool read back from its
+    directory (its tree and queries live in the database and the page; group candidates are
+    counted in groupwise mode, as the Groupwise-DM's strategy counts them)."""
+    pool = load_pool(directory, round_index)
+    try:
+        timings = json.loads((directory / "timings.json").read_text())
+        candidates = json.loads((directory / "candidates.json").read_text())["candidates"]
+        sample_s = float(timings["total_s"])
+        offered = float(len(candidates)) if mode != "pairwise" else math.nan
+    except (OSError, ValueError, KeyError):
+        sample_s, offered = math.nan, math.nan
+    return Offer(pool, None, (), budget, candidates=offered, sample_s=sample_s)
+
+
+def job_of(db: Database, session_id: str) -> Job | None:
+    """The job a session waits for, or None when it waits for none."""
+    with db.read() as s:
+        session = get_session(s, session_id)
+        if session.phase not in WORK_PHASES:
+            return None
+        return Job(
+            session_id=session.id,
+            env=session.env,
+            mode=session.mode,
+            phase=session.phase,
+            round=session.round,
+            settings=settings_of(session),
+            elapsed_s=elapsed(session),
+            frozen_steps=get_round(s, session.id, session.round).frozen_steps,
+        )

@@ -1,0 +1,142 @@
+"""An app round and a headless round are one round: the same seed and the same judgements
+give the same pool, queries, pairs, dataset and reward model, bit for bit.
+
+The app's side runs as a user's page and the worker do: judgements (one undone) posted to
+the real HTTP routes on a real SQLite database, the worker's jobs picked up from it
+(`Worker.run_next`: prepare, train). The headless side is `begin_round` → the same
+judgements → `end_round` on a `Run` of the session's own config.
+"""
+
+import uuid
+from pathlib import Path
+
+import numpy as np
+import torch
+from sqlalchemy import select
+
+from groupwise.config import RunConfig
+from groupwise.pool.files import load_fragments
+from groupwise.pool.ids import behaviour_index
+from groupwise.preferences.dataset import PreferenceDataset
+from groupwise.preferences.judgement import LEFT_BETTER, RIGHT_BETTER, Judgement
+from groupwise.run.round import begin_round, end_round
+from groupwise.run.run import CONFIG_FILE, Run
+from groupwise.storage.models import PairQueueRow, RoundRow, SuggestionRow
+from groupwise.storage.sessions import round_directory
+from groupwise.storage.settings import SessionSettings
+from groupwise.worker.jobs import offered_queries, session_strategy
+from tests.unit.server.conftest import TINY, context_of, new_session, run_worker_once
+
+# round → (left, right, label, undone) in the order given; the undone one keeps its key
+ANSWERS = {
+    0: [(("b0", "b1"), ("b2",), "left", False), (("b5",), ("b3", "b4", "b6"), "right", False)],
+    1: [
+        (("b2", "b7"), ("b1",), "right", False),
+        (("b9",), ("b8",), "left", True),
+        (("b3", "b4", "b10", "b13"), ("b11", "b12", "b14"), "left", False),
+    ],
+}
+LABELS = {"left": LEFT_BETTER, "right": RIGHT_BETTER}
+
+
+def _answer(client, sid: str, round_index: int) -> None:
+    for left, right, label, undone in ANSWERS[round_index]:
+        body = {
+            "client_id": str(uuid.uuid4()),
+            "round": round_index,
+            "left": list(left),
+            "right": list(right),
+            "label": label,
+            "source": "explored",
+        }
+        stored = client.post(f"/api/sessions/{sid}/judgements", json=body)
+        assert stored.status_code == 201, stored.text
+        if undone:
+            gone = client.delete(f"/api/sessions/{sid}/judgements/{stored.json()['id']}")
+            assert gone.status_code == 200, gone.text
+    assert client.post(f"/api/sessions/{sid}/end-round").json()["phase"] == "training"
+
+
+def _kept(round_index: int) -> tuple[list[Judgement], list[int]]:
+    """The judgements the app trains on and their keys (places in the round)."""
+    kept = [
+        (
+            key,
+            Judgement(
+                tuple(map(behaviour_index, left)), tuple(map(behaviour_index, right)), LABELS[label]
+            ),
+        )
+        for key, (left, right, label, undone) in enumerate(ANSWERS[round_index])
+        if not undone
+    ]
+    return [j for _, j in kept], [k for k, _ in kept]
+
+
+def _state(checkpoint: Path) -> tuple[PreferenceDataset, dict[str, torch.Tensor]]:
+    """The checkpoint's dataset and the reward ensemble's parameters (with its normaliser
+    and L2 weight)."""
+    saved = torch.load(checkpoint / "reward.pt", weights_only=True)
+    params = {**saved["state_dict"], "l2_weight": torch.as_tensor(saved["l2_weight"])}
+    return PreferenceDataset.load(checkpoint / "dataset.npz"), params
+
+
+def test_an_app_round_and_a_headless_round_are_the_same_round(client, tmp_path):
+    sid = new_session(client, seed=7)["id"]
+    data = context_of(client).data_dir
+    app_dir = data / "sessions" / sid
+    settings = SessionSettings.model_validate({**TINY, "seed": 7}).for_env("GridWorld")
+    for r in (0, 1):
+        run_worker_once(client)  # prepare round r
+        _answer(client, sid, r)
+        run_worker_once(client)  # train after round r
+    cfg = RunConfig.load(app_dir / CONFIG_FILE)
+    assert cfg == settings.run_config("GridWorld")
+
+    with Run.create(cfg, tmp_path / "headless") as run:
+        for r in (0, 1):
+            offer = begin_round(
+                run,
+                session_strategy(cfg, "groupwise"),
+                settings.comparisons_per_round,
+                n_queries=offered_queries(settings),
+            )
+            # the same pool …
+            pool_dir = data / round_directory(sid, r)
+            published = load_fragments(pool_dir)
+            assert len(published) == len(offer.pool)
+            for ours, theirs in zip(offer.pool.fragments, published, strict=True):
+                assert np.array_equal(ours.obs, theirs.obs)
+                assert np.array_equal(ours.acts, theirs.acts)
+            # … and the same queries, stored as the page's suggestions in their order
+            with context_of(client).db.read() as s:
+                round_id = s.scalar(
+                    select(RoundRow.id).where(RoundRow.session_id == sid, RoundRow.index == r)
+                )
+                stored = s.scalars(
+                    select(SuggestionRow)
+                    .where(SuggestionRow.round_id == round_id)
+                    .order_by(SuggestionRow.rank)
+                ).all()
+                assert not s.scalars(
+                    select(PairQueueRow).where(PairQueueRow.round_id == round_id)
+                ).first()
+            assert [
+                (tuple(map(behaviour_index, q.left)), tuple(map(behaviour_index, q.right)))
+                for q in stored
+            ] == [(q.left, q.right) for q in offer.queries]
+            assert offer.queries, "the group strategy proposed nothing"
+
+            judgements, keys = _kept(r)
+            end_round(run, offer, judgements, settings.ppo_steps_per_round, keys=keys)
+
+            app_data, app_reward = _state(app_dir / "checkpoints" / f"round-{r:04d}")
+            our_data, our_reward = _state(tmp_path / "headless" / "checkpoints" / f"round-{r:04d}")
+            assert len(app_data) == len(our_data) > 0
+            for name in ("obs", "acts", "true_returns", "pairs", "labels", "rounds"):
+                assert np.array_equal(getattr(app_data, name), getattr(our_data, name)), name
+            assert app_reward.keys() == our_reward.keys()
+            for name, tensor in app_reward.items():
+                assert torch.equal(tensor, our_reward[name]), name
+    # the pairs stored with each judgement are the pairs trained on
+    listed = client.get(f"/api/sessions/{sid}/judgements").json()
+    assert sum(len(j["pairs"]) for j in listed) == len(our_data)
