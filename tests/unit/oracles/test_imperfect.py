@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from groupwise.config import LoopConfig, RunConfig
+from groupwise.config import RunConfig
 from groupwise.oracles import ORACLES, Feedback
 from groupwise.oracles.group_decision import Perception, SimulatedTeacher, decide
 from groupwise.oracles.imperfect import (

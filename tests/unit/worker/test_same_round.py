@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 import torch
 from sqlalchemy import select
+from tests.unit.server.conftest import TINY, context_of, new_session, run_worker_once
 
 from groupwise.config import RunConfig
 from groupwise.pool.files import load_fragments
@@ -25,7 +26,6 @@ from groupwise.storage.models import PairQueueRow, RoundRow, SuggestionRow
 from groupwise.storage.sessions import round_directory
 from groupwise.storage.settings import SessionSettings
 from groupwise.worker.jobs import offered_queries, session_strategy
-from tests.unit.server.conftest import TINY, context_of, new_session, run_worker_once
 
 # round → (left, right, label, undone) in the order given; the undone one keeps its key
 ANSWERS = {
