@@ -8,7 +8,7 @@ import pytest
 
 import groupwise
 from groupwise.config import LoopConfig, PPOConfig, RewardConfig, RunConfig
-from groupwise.rl.trained_agent import measure_of
+from groupwise.run.agent_package import measure_of
 from groupwise.run.final import continue_run
 from groupwise.run.headless import run_session
 

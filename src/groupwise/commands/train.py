@@ -107,7 +107,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _from_session(args: argparse.Namespace) -> int:
     """More PPO steps on the frozen reward, or more rounds by a simulated DM (docs/app.md)."""
-    from groupwise.rl.trained_agent import AGENT_VIDEO, AGENT_ZIP
+    from groupwise.run.agent_package import AGENT_VIDEO, AGENT_ZIP
     from groupwise.run.final import continue_run
     from groupwise.run.run import CONFIG_FILE, RESULTS_FILE
 

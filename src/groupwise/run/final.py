@@ -24,7 +24,7 @@ from groupwise.config import RunConfig
 from groupwise.envs import DEFAULT_FRAME_SIZE
 from groupwise.oracles import ORACLES
 from groupwise.rl.rollout import sample_trajectories
-from groupwise.rl.trained_agent import (
+from groupwise.run.agent_package import (
     AGENT_VIDEO,
     AGENT_ZIP,
     SETTINGS_FILE,

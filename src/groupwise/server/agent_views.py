@@ -4,7 +4,7 @@ final agent (its summary, video and download; `groupwise.run.final` writes them)
 from dataclasses import asdict
 from pathlib import Path
 
-from groupwise.rl.trained_agent import AGENT_VIDEO, AGENT_ZIP, AgentSummary, read_summary
+from groupwise.run.agent_package import AGENT_VIDEO, AGENT_ZIP, AgentSummary, read_summary
 from groupwise.server import schemas
 from groupwise.server.context import AppContext
 from groupwise.server.state import read_state

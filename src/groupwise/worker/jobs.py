@@ -30,7 +30,7 @@ from groupwise.pool.behaviours import BehaviourPool
 from groupwise.pool.files import load_pool
 from groupwise.pool.publish import PoolConfig, publish_pool
 from groupwise.query.strategies import Query, QueryStrategy
-from groupwise.rl.trained_agent import SETTINGS_FILE
+from groupwise.run.agent_package import SETTINGS_FILE
 from groupwise.run.checkpoint import checkpoint_dir
 from groupwise.run.round import Offer, begin_round, end_round
 from groupwise.run.run import Run

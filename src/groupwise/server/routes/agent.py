@@ -3,7 +3,7 @@
 from fastapi import APIRouter
 from fastapi.responses import FileResponse
 
-from groupwise.rl.trained_agent import AGENT_VIDEO, AGENT_ZIP
+from groupwise.run.agent_package import AGENT_VIDEO, AGENT_ZIP
 from groupwise.server import agent_views
 from groupwise.server.deps import Context, SessionId
 from groupwise.server.routes import ERRORS

@@ -1,0 +1,249 @@
+"""The take-away agent's package: ``agent.zip`` and its summary ``agent.json``.
+
+`write_agent_zip` packs a checkpoint (`groupwise.run.checkpoint`) into ``agent.zip``:
+
+    README.md          how to load it, with and without groupwise
+    agent.json         `AgentSummary`: env, round, steps, the true return per round, the
+                       observation normaliser's constants
+    policy.zip         the Stable-Baselines3 PPO policy (it acts on normalised observations)
+    vecnormalize.npz   the observation normaliser's running mean and variance
+    reward.pt          the learned reward ensemble (`RewardEnsemble.load`)
+    config.json        the core's `RunConfig` of the run
+    settings.json      the app session's settings (app sessions only)
+    rounds.csv         one row per round, as the run wrote it
+
+Reading the summary (`read_summary`) needs neither torch nor SB3: the app's server serves
+it; `groupwise.rl.trained_agent.load_agent` loads the policy.
+"""
+
+import json
+import math
+import os
+import zipfile
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+from groupwise.config import RunConfig
+from groupwise.envs import TARGETS, resolve_id
+
+FORMAT = "groupwise.agent/1"
+AGENT_ZIP = "agent.zip"
+"""The download's name in a session's directory."""
+AGENT_VIDEO = "agent.mp4"
+"""The final agent's video in a session's directory."""
+SUMMARY_FILE = "agent.json"
+"""The summary, in the zip and beside it in the session's directory."""
+SETTINGS_FILE = "settings.json"
+"""An app session's settings, beside its ``config.json``."""
+CLIP_OBS = 10.0
+EPSILON = 1e-8
+"""VecNormalize's observation clip and epsilon (SB3's defaults, which `PPOAgent` uses)."""
+
+ZIP_POLICY, ZIP_NORMALISER, ZIP_REWARD = "policy.zip", "vecnormalize.npz", "reward.pt"
+ZIP_CONFIG, ZIP_ROUNDS = "config.json", "rounds.csv"
+
+
+@dataclass(frozen=True)
+class RoundSummary:
+    """One round of the run, as the page's chart shows it."""
+
+    round: int
+    feedback: bool
+    """False for a round without feedback: PPO on the frozen learned reward only."""
+    judgements: int
+    pairs_total: int
+    env_steps: int
+    true_return_mean: float | None
+    """None when the round was not evaluated (`eval_episodes` = 0)."""
+    true_return_std: float | None
+
+
+@dataclass(frozen=True)
+class VideoSummary:
+    """The agent's video (`clips.episode_video.EpisodeVideo`) and its episode's return."""
+
+    file: str
+    seconds: float
+    fps: float
+    frames: int
+    width: int
+    height: int
+    episode_return: float
+
+
+@dataclass(frozen=True)
+class AgentSummary:
+    """``agent.json``: what the agent is and how it came about."""
+
+    format: str
+    env: str
+    round: int
+    """The round whose checkpoint this is (the last row of ``rounds.csv``)."""
+    env_steps: int
+    measure: str
+    """What `true_return_mean` measures: "true return", or a target env's score."""
+    true_return_mean: float | None
+    true_return_std: float | None
+    normalize_obs: bool
+    clip_obs: float
+    epsilon: float
+    rounds: tuple[RoundSummary, ...]
+    video: VideoSummary | None = None
+
+    def to_json(self) -> str:
+        return json.dumps(asdict(self), indent=1)
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "AgentSummary":
+        """Raises ValueError for another format, KeyError/TypeError for a broken one."""
+        if data.get("format") != FORMAT:
+            raise ValueError(f"not a groupwise agent summary ({data.get('format')!r})")
+        video = data.get("video")
+        return cls(
+            **{k: v for k, v in data.items() if k not in ("rounds", "video")},
+            rounds=tuple(RoundSummary(**r) for r in data["rounds"]),
+            video=None if video is None else VideoSummary(**video),
+        )
+
+
+def measure_of(env: str) -> str:
+    """What an env's true return is: a target env's score names its unit (docs/case-studies.md)."""
+    try:
+        wanted = resolve_id(env)
+    except ValueError:
+        return "true return"
+    for target in TARGETS.values():
+        if resolve_id(target.env) == wanted:
+            return f"target score ({target.unit})"
+    return "true return"
+
+
+def _finite(value: float) -> float | None:
+    return float(value) if math.isfinite(value) else None
+
+
+def summarise(
+    cfg: RunConfig,
+    records: Sequence[Any],
+    frozen: set[int],
+    video: VideoSummary | None,
+) -> AgentSummary:
+    """The summary of a run whose rounds are `records` (`loop.RoundRecord`s); `frozen`
+    holds the indices of rounds without feedback."""
+    last = records[-1]
+    return AgentSummary(
+        format=FORMAT,
+        env=cfg.loop.env,
+        round=int(last.round),
+        env_steps=int(last.env_steps),
+        measure=measure_of(cfg.loop.env),
+        true_return_mean=_finite(last.true_return_mean),
+        true_return_std=_finite(last.true_return_std),
+        normalize_obs=cfg.ppo.normalize_obs,
+        clip_obs=CLIP_OBS,
+        epsilon=EPSILON,
+        rounds=tuple(
+            RoundSummary(
+                round=int(r.round),
+                feedback=int(r.round) not in frozen,
+                judgements=int(r.judgements),
+                pairs_total=int(r.pairs_total),
+                env_steps=int(r.env_steps),
+                true_return_mean=_finite(r.true_return_mean),
+                true_return_std=_finite(r.true_return_std),
+            )
+            for r in records
+        ),
+        video=video,
+    )
+
+
+def read_summary(directory: Path) -> AgentSummary | None:
+    """The summary written beside a run's ``agent.zip``, or None when there is none."""
+    try:
+        return AgentSummary.from_dict(json.loads((directory / SUMMARY_FILE).read_text()))
+    except FileNotFoundError:
+        return None
+
+
+def write_agent_zip(
+    path: Path,
+    checkpoint: Path,
+    summary: AgentSummary,
+    run_dir: Path,
+) -> None:
+    """Pack `checkpoint`'s policy, normaliser and reward ensemble with `summary`, a README,
+    and `run_dir`'s ``config.json``, ``rounds.csv`` and ``settings.json`` (when present)
+    into `path`, replaced atomically."""
+    partial = path.with_name(f".{path.name}.partial")
+    with zipfile.ZipFile(partial, "w", compression=zipfile.ZIP_DEFLATED) as archive:
+        archive.writestr("README.md", readme(summary))
+        archive.writestr(SUMMARY_FILE, summary.to_json() + "\n")
+        for name in (ZIP_POLICY, ZIP_NORMALISER, ZIP_REWARD):
+            archive.write(checkpoint / name, name)
+        for name in (ZIP_CONFIG, ZIP_ROUNDS, SETTINGS_FILE):
+            if (run_dir / name).is_file():
+                archive.write(run_dir / name, name)
+    os.replace(partial, path)
+
+
+def readme(summary: AgentSummary) -> str:
+    """The zip's README.md: what it holds and how to load it."""
+    judged = sum(r.judgements for r in summary.rounds)
+    feedback = sum(r.feedback for r in summary.rounds)
+    score = (
+        "not measured"
+        if summary.true_return_mean is None
+        else f"{summary.true_return_mean:.4g} ± {summary.true_return_std or 0:.3g}"
+    )
+    return f"""# groupwise agent: {summary.env}, round {summary.round}
+
+A PPO policy trained by groupwise on a reward model learned from preferences:
+{judged} judgements over {feedback} feedback round(s), {summary.env_steps:,} PPO env steps
+in all. Its {summary.measure} after round {summary.round}: {score}.
+
+## Load it with groupwise
+
+```python
+import groupwise
+
+agent = groupwise.load_agent("agent.zip")
+action = agent.predict(obs)                 # one observation, or a batch (B, obs_dim)
+returns = agent.evaluate("{summary.env}", episodes=5, seed=0)   # or an env, or a factory
+reward = agent.reward_model()               # the learned reward ensemble
+```
+
+`predict` applies the saved observation normaliser before the policy, greedy by default
+(`deterministic=False` samples). `evaluate` returns each episode's true return (a target
+env's score) as an array.
+
+## Load it without groupwise
+
+```python
+import numpy as np
+from stable_baselines3 import PPO
+
+model = PPO.load("policy.zip", device="cpu")
+norm = np.load("vecnormalize.npz")
+def act(obs):
+    x = np.clip((obs - norm["obs_mean"]) / np.sqrt(norm["obs_var"] + {summary.epsilon}),
+                -{summary.clip_obs}, {summary.clip_obs})
+    return model.predict(x, deterministic=True)[0]
+```
+
+(observations are normalised only when `agent.json`'s `normalize_obs` is true).
+
+## Files
+
+| file | holds |
+|---|---|
+| `policy.zip` | the Stable-Baselines3 PPO policy (`PPO.load`); it acts on normalised observations |
+| `vecnormalize.npz` | the observation normaliser: `obs_mean`, `obs_var` (and return statistics) |
+| `reward.pt` | the learned reward ensemble (`groupwise.RewardEnsemble.load`) |
+| `agent.json` | env, round, steps, the {summary.measure} per round, the normaliser's constants |
+| `config.json` | the run's configuration (`groupwise.RunConfig.load`) |
+| `settings.json` | the app session's settings (sessions of the app only) |
+| `rounds.csv` | one row per round, as `groupwise train` and the app write it |
+"""
