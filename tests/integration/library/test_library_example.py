@@ -65,3 +65,16 @@ class _RandomModel:
     def predict(self, obs, deterministic=False):
         del deterministic
         return np.stack([self.space.sample() for _ in range(len(obs))]), None
+
+
+def test_the_documented_round_halves_run_on_the_examples_loop():
+    """The "One round in two halves" block, after the example: one more round by hand."""
+    blocks = re.findall(r"```python\n(.*?)```", DOC.read_text(), flags=re.S)
+    halves = next(b for b in blocks if "begin_round" in b)
+    scope: dict = {"__name__": "example"}
+    exec(compile(_first_python_block(), str(DOC), "exec"), scope)
+    scope["my_teacher"] = gw.SimulatedTeacher(gw.Perception(0.25))
+    exec(compile(halves, str(DOC), "exec"), scope)
+    record, loop = scope["record"], scope["loop"]
+    assert record.round == 2 and record.judgements > 0
+    assert loop.records[-1] is record and record.pairs_total == len(loop.dataset)
