@@ -8,7 +8,7 @@ from groupwise.clips.store import ClipStore
 from groupwise.server.config import AppConfig
 from groupwise.server.schemas import TreeNodeOut
 from groupwise.storage import Database
-from groupwise.worker.supervisor import Supervisor
+from groupwise.worker.supervisor import Supervisor, WorkerConfig
 
 CLIPS_DIR = "clips"
 """The clip store's folder in the data directory, shared by all sessions."""
@@ -42,5 +42,13 @@ class AppContext:
             config=config,
             db=db,
             clips=ClipStore(config.data_dir / CLIPS_DIR),
-            supervisor=Supervisor(db, config),
+            supervisor=Supervisor(
+                db,
+                WorkerConfig(
+                    config.db_url,
+                    config.data_dir,
+                    worker_poll_s=config.worker_poll_s,
+                    supervisor_poll_s=config.supervisor_poll_s,
+                ),
+            ),
         )

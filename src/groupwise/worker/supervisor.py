@@ -1,6 +1,6 @@
 """The server's side of the training worker: start it, watch it, report its death.
 
-`Supervisor.check()` runs every `AppConfig.supervisor_poll_s` in the app's lifespan task (on
+`Supervisor.check()` runs every `WorkerConfig.supervisor_poll_s` in the app's lifespan task (on
 a thread, so it never blocks the event loop). Each check:
 
 1. when the worker process has died (killed, out of memory), marks the sessions it was
@@ -17,18 +17,15 @@ import logging
 import multiprocessing
 import os
 import threading
+from dataclasses import dataclass
 from multiprocessing.process import BaseProcess
+from pathlib import Path
 
-from groupwise.server.config import AppConfig
 from groupwise.storage import Database
-from groupwise.storage.sessions import (
-    READY,
-    close_if_due,
-    mark_failed,
-    round_due,
-    sessions_in,
-    worker_sessions,
-)
+from groupwise.storage.lifecycle import close_if_due, mark_failed
+from groupwise.storage.phases import READY
+from groupwise.storage.sessions import sessions_in, worker_sessions
+from groupwise.storage.timer import round_due
 from groupwise.worker.process import THREAD_ENV, kill_group, worker_main
 
 log = logging.getLogger(__name__)
@@ -37,10 +34,24 @@ QUEUED = "queued"
 """The progress phase of a session that no worker has started on yet."""
 
 
+@dataclass(frozen=True)
+class WorkerConfig:
+    """Where the worker finds its work and how often the two sides look."""
+
+    db_url: str
+    """The database the server and the worker share."""
+    data_dir: Path
+    """The data directory (clips, sessions' runs)."""
+    worker_poll_s: float = 0.25
+    """How often an idle worker reads the database for work."""
+    supervisor_poll_s: float = 0.25
+    """How often the server checks that its worker lives (and starts one when work waits)."""
+
+
 class Supervisor:
     """Owns the worker process. Thread-safe: checks run on worker threads of the app."""
 
-    def __init__(self, db: Database, config: AppConfig) -> None:
+    def __init__(self, db: Database, config: WorkerConfig) -> None:
         self.db = db
         self.config = config
         self._lock = threading.Lock()
