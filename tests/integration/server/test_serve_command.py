@@ -1,5 +1,6 @@
 """`groupwise serve` refuses bad input in one line with exit code 2, before serving."""
 
+import asyncio
 import socket
 
 import pytest
@@ -90,8 +91,36 @@ def test_only_loopback_hosts_go_without_a_token(host, loopback):
     assert _is_loopback(host) is loopback
 
 
-def test_the_listening_socket_is_tcp_so_answers_are_not_delayed():
+class _Accepted(asyncio.Protocol):
+    """Reports the TCP_NODELAY option of the connection it is made for."""
+
+    def __init__(self, nodelay: "asyncio.Future[int]") -> None:
+        self.nodelay = nodelay
+
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        sock = transport.get_extra_info("socket")
+        self.nodelay.set_result(sock.getsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY))
+        transport.close()
+
+
+async def _nodelay_of_an_accepted_connection(sock: socket.socket) -> int:
+    """Serve `sock` as uvicorn does (`loop.create_server(sock=...)`) and connect once."""
+    loop = asyncio.get_running_loop()
+    nodelay: asyncio.Future[int] = loop.create_future()
+    server = await loop.create_server(lambda: _Accepted(nodelay), sock=sock)
+    _, writer = await asyncio.open_connection(*sock.getsockname()[:2])
+    try:
+        return await asyncio.wait_for(nodelay, 10)
+    finally:
+        writer.close()
+        server.close()
+        await server.wait_closed()
+
+
+def test_accepted_connections_send_answers_without_delay():
     # asyncio sets TCP_NODELAY only on connections of an IPPROTO_TCP socket; without it
-    # every answer waited ~40 ms for a delayed ACK (see test_session_flow's latency test)
+    # every answer waited ~40 ms for a delayed ACK (Nagle; the latency itself is measured by
+    # benchmarks/submit_latency.py)
     with _bind("127.0.0.1", 0) as sock:
         assert sock.proto == socket.IPPROTO_TCP
+        assert asyncio.run(_nodelay_of_an_accepted_connection(sock)) != 0

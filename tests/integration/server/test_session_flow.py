@@ -3,9 +3,7 @@ the pairwise baseline, and clips over real HTTP."""
 
 import json
 import socket
-import statistics
 import threading
-import time
 from urllib.parse import urlsplit
 
 import httpx
@@ -204,13 +202,15 @@ def test_clips_support_range_requests(server):
     assert b"content-range: bytes 0-99/" in head.lower() and len(body) == 100
 
 
-def test_answers_are_not_held_back_by_nagle(server):
-    # with Nagle's algorithm on, every answer waits ~40 ms for the client's delayed ACK
+def test_requests_in_a_row_are_answered_on_one_kept_alive_connection(server):
+    # Nagle's algorithm once held every answer back ~40 ms (the client's delayed ACK). That
+    # is a time, measured by benchmarks/submit_latency.py (one client's p50); its cause, no
+    # TCP_NODELAY on accepted connections, is checked in test_serve_command.py. Here, without
+    # a clock: thirty requests one after another on one connection are all answered.
     with server.client() as http:
-        http.get("/api/health")
-        times = []
+        clients = set()
         for _ in range(30):
-            tick = time.perf_counter()
-            http.get("/api/health")
-            times.append(time.perf_counter() - tick)
-    assert statistics.median(times) < 0.03
+            answer = http.get("/api/health")
+            assert answer.status_code == 200
+            clients.add(answer.extensions["network_stream"].get_extra_info("client_addr"))
+    assert len(clients) == 1, clients  # the client's end of the one connection
