@@ -37,13 +37,28 @@ def test_stochastic_actions_come_from_the_given_generator_and_stay_in_bounds():
     assert a.std() > 0.1 and np.all(np.abs(a) <= 1.0)
 
 
-def test_training_on_the_same_seed_is_deterministic():
-    results = []
+def _weights(agent: PPOAgent) -> dict[str, np.ndarray]:
+    return {name: p.detach().numpy().copy() for name, p in agent.model.policy.named_parameters()}
+
+
+def test_training_on_the_same_seed_is_deterministic_and_changes_the_policy():
+    obs = np.array([[-0.5, 0.0], [-0.9, -0.03], [0.3, 0.05]], dtype=np.float32)
+    weights, actions = [], []
     for _ in range(2):
         agent = PPOAgent(make, SMALL, seed=0)
+        untrained = _weights(agent)
+        untrained_actions = agent.act(obs, np.random.default_rng(0), True)
         agent.learn(256, seed=7)
-        results.append(agent.act(np.zeros((3, 2), np.float32), np.random.default_rng(0), True))
-    np.testing.assert_array_equal(results[0], results[1])
+        # learning moved every weight (actor, critic, log std) and with them the greedy
+        # actions: a `learn` that did nothing would pass the determinism check alone
+        trained = _weights(agent)
+        assert [n for n in trained if np.array_equal(trained[n], untrained[n])] == []
+        actions.append(agent.act(obs, np.random.default_rng(0), True))
+        assert not np.allclose(actions[-1], untrained_actions)
+        weights.append(trained)
+    np.testing.assert_array_equal(actions[0], actions[1])
+    for name, value in weights[0].items():
+        np.testing.assert_array_equal(value, weights[1][name], err_msg=name)
 
 
 def test_learning_without_tensorboard_writes_nothing_to_the_temp_dir(tmp_path, monkeypatch):
