@@ -27,7 +27,8 @@ import numpy as np
 
 from groupwise.clips.timing import env_clip_timing
 from groupwise.envs.rendering import ensure_gl_backend
-from groupwise.pool.publish import PoolConfig, PoolTimings, load_policy, prepare_pool
+from groupwise.pool.publish import PoolTimings, PublishConfig, prepare_pool
+from groupwise.rl.policy_files import load_policy
 
 
 def _cpu_seconds() -> float:
@@ -37,9 +38,12 @@ def _cpu_seconds() -> float:
     return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
 
 
-def run_once(cfg: PoolConfig, seed: int) -> tuple[PoolTimings, float]:
-    """Prepare one pool in a fresh temporary directory; its timings and the CPU seconds of
-    every process involved (the pool's workers have exited when it returns)."""
+def run_once(
+    cfg: PublishConfig, size: int, length: int, oversample: float, seed: int
+) -> tuple[PoolTimings, float]:
+    """Prepare one pool of `size` behaviours of `length` steps (from `oversample` × `size`
+    windows) in a fresh temporary directory; its timings and the CPU seconds of every
+    process involved (the pool's workers have exited when it returns)."""
     with tempfile.TemporaryDirectory() as out:
         before = _cpu_seconds()
         pool = prepare_pool(
@@ -47,6 +51,9 @@ def run_once(cfg: PoolConfig, seed: int) -> tuple[PoolTimings, float]:
             load_policy("random", cfg.env),
             np.random.default_rng(seed),
             Path(out),
+            size=size,
+            length=length,
+            oversample=oversample,
             show_progress=False,
         )
         cpu = _cpu_seconds() - before
@@ -107,15 +114,12 @@ def main(argv: Sequence[str] | None = None) -> None:
     args = parser.parse_args([] if argv is None else list(argv))
     backend = ensure_gl_backend()
     clip = env_clip_timing(args.env, args.seconds, steps=args.length)
-    cfg = PoolConfig(
-        env=args.env,
-        size=args.n,
-        length=clip.steps,
-        oversample=args.oversample,
-        workers=args.workers,
-    )
+    cfg = PublishConfig(env=args.env, workers=args.workers)
     load_before = os.getloadavg()[0]
-    runs = [run_once(cfg, args.seed + k) for k in range(args.repeats)]
+    runs = [
+        run_once(cfg, args.n, clip.steps, args.oversample, args.seed + k)
+        for k in range(args.repeats)
+    ]
     load_after = os.getloadavg()[0]
     median = statistics.median(t.total_s for t, _ in runs)
     shown, cpu = min(runs, key=lambda run: abs(run[0].total_s - median))

@@ -1,5 +1,6 @@
 """Pool preparation end to end: clips in the store, tree and index on disk, reproducible."""
 
+import dataclasses
 import json
 import os
 import subprocess
@@ -13,15 +14,11 @@ from groupwise.behaviour import from_json
 from groupwise.clips.store import ClipStore, is_valid_id
 from groupwise.clips.video import probe, read_frames
 from groupwise.envs import RenderingUnavailableError, make_env, rendering
-from groupwise.pool.publish import (
-    PoolConfig,
-    PreparedPool,
-    load_fragments,
-    load_policy,
-    prepare_pool,
-)
+from groupwise.pool.publish import PreparedPool, PublishConfig, load_fragments, prepare_pool
+from groupwise.rl.policy_files import load_policy
 
-GRID = PoolConfig(env="GridWorld", size=20, length=30, width=64, height=64, workers=2)
+GRID = PublishConfig(env="GridWorld", width=64, height=64, workers=2)
+GRID_SAMPLING = {"size": 20, "length": 30}
 FILES = {
     "pool.json",
     "behaviours.json",
@@ -45,7 +42,13 @@ def grid_pool(tmp_path_factory: pytest.TempPathFactory) -> PreparedPool:
     out = tmp_path_factory.mktemp("grid")
     policy = load_policy("random", "GridWorld")
     return prepare_pool(
-        GRID, policy, np.random.default_rng(5), out, metadata={"seed": 5}, show_progress=False
+        GRID,
+        policy,
+        np.random.default_rng(5),
+        out,
+        **GRID_SAMPLING,
+        metadata={"seed": 5},
+        show_progress=False,
     )
 
 
@@ -69,6 +72,14 @@ def test_gridworld_pool_writes_every_file(grid_pool: PreparedPool) -> None:
     clip = manifest["clip"]
     assert (clip["steps"], clip["stride"], clip["frames"]) == (30, 1, 30)
     assert (clip["fps"], clip["seconds"], clip["speed"]) == (30.0, 1.0, 1.0)
+    assert manifest["frame_size"] == [64, 64]
+    # the config as before issue 19: how the pool was sampled, then how it was published
+    assert list(manifest["config"]) == [
+        "env", "size", "length", "oversample", "exploration_fraction", "width", "height",
+        "video", "tree", "candidate_levels", "max_group", "medoids", "workers",
+    ]  # fmt: skip
+    sampled = {k: manifest["config"][k] for k in ("size", "length", "oversample")}
+    assert sampled == {"size": 20, "length": 30, "oversample": 1.0}
 
 
 def test_every_clip_has_l_frames_of_h264(grid_pool: PreparedPool) -> None:
@@ -113,10 +124,11 @@ def test_same_seed_gives_byte_identical_clips_in_process_too(
 ) -> None:
     # rendered in this process instead of two workers: same ids, i.e. the same bytes
     again = prepare_pool(
-        PoolConfig(**{**GRID.__dict__, "workers": 0}),
+        dataclasses.replace(GRID, workers=0),
         load_policy("random", "GridWorld"),
         np.random.default_rng(5),
         tmp_path,
+        **GRID_SAMPLING,
         show_progress=False,
     )
     assert again.clips == grid_pool.clips and again.posters == grid_pool.posters
@@ -124,12 +136,14 @@ def test_same_seed_gives_byte_identical_clips_in_process_too(
 
 
 def test_hopper_clips_show_the_window(tmp_path: Path) -> None:
-    cfg = PoolConfig(env="Hopper", size=6, length=20, width=96, height=96, workers=2)
+    cfg = PublishConfig(env="Hopper", width=96, height=96, workers=2)
     pool = prepare_pool(
         cfg,
         load_policy("random", "Hopper"),
         np.random.default_rng(0),
         tmp_path,
+        size=6,
+        length=20,
         show_progress=False,
     )
     assert len(set(pool.clips)) == 6
@@ -162,9 +176,16 @@ def test_missing_renderer_names_the_system_package(
     monkeypatch.delenv("MUJOCO_GL", raising=False)
     monkeypatch.delenv("PYOPENGL_PLATFORM", raising=False)
     monkeypatch.setattr(rendering, "_backend_works", lambda backend: False)
-    cfg = PoolConfig(env="Hopper", size=2, workers=0)
+    cfg = PublishConfig(env="Hopper", workers=0)
     with pytest.raises(RenderingUnavailableError, match="apt-get install libegl1"):
-        prepare_pool(cfg, load_policy("random", "Hopper"), np.random.default_rng(0), tmp_path)
+        prepare_pool(
+            cfg,
+            load_policy("random", "Hopper"),
+            np.random.default_rng(0),
+            tmp_path,
+            size=2,
+            length=30,
+        )
 
 
 def test_checkpoint_policy_samples_a_pool(tmp_path: Path) -> None:
@@ -176,8 +197,8 @@ def test_checkpoint_policy_samples_a_pool(tmp_path: Path) -> None:
     agent.save(checkpoint)
     agent.close()
     policy = load_policy(str(checkpoint), "GridWorld")
-    cfg = PoolConfig(env="GridWorld", size=4, width=32, height=32, workers=0)
-    pool = prepare_pool(cfg, policy, np.random.default_rng(0), tmp_path / "pool")
+    cfg = PublishConfig(env="GridWorld", width=32, height=32, workers=0)
+    pool = prepare_pool(cfg, policy, np.random.default_rng(0), tmp_path / "pool", size=4, length=30)
     assert len(pool.clips) == 4
 
 
@@ -207,6 +228,7 @@ def test_cli_prepares_a_pool(tmp_path: Path) -> None:
         (["--env", "NoSuchEnv"], "NoSuchEnv"),
         (["--env", "GridWorld", "--policy", "/no/such/checkpoint"], "checkpoint"),
         (["--env", "GridWorld", "--size", "33"], "even"),
+        (["--env", "GridWorld", "--exploration", "1"], "exploration"),
     ],
 )
 def test_cli_errors_are_one_line(

@@ -55,6 +55,7 @@ def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from groupwise.behaviour import TreeConfig
+    from groupwise.rl.policy_files import load_policy
     from groupwise.study.clustering_plot import plot_variances
     from groupwise.study.clustering_report import markdown_table, to_json
     from groupwise.study.clustering_runner import ClusteringStudyConfig, run_clustering_study
@@ -74,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
         )
         rng = np.random.default_rng(args.seed)
         policies = mixed_policies(
-            cfg.env, cfg.checkpoints, cfg.biased_policies, cfg.bias_scale, rng
+            cfg.env, cfg.checkpoints, cfg.biased_policies, cfg.bias_scale, rng, load_policy
         )
     except (ValueError, OSError) as error:
         raise UsageError(str(error)) from None

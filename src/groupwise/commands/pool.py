@@ -53,20 +53,20 @@ def run(args: argparse.Namespace) -> int:
 
     from groupwise.clips.timing import env_clip_timing
     from groupwise.clips.video import VideoConfig
-    from groupwise.pool.publish import PoolConfig, load_policy, prepare_pool
+    from groupwise.pool.publish import PublishConfig, prepare_pool
+    from groupwise.rl.policy_files import load_policy
 
     try:
         if args.length is not None and args.seconds is not None:
             raise ValueError("give --length or --seconds, not both")
+        if not 0.0 <= args.exploration < 1.0:  # before the output directory is made
+            raise ValueError(f"exploration must be in [0, 1), got {args.exploration}")
         timing = env_clip_timing(args.env, args.seconds, steps=args.length)
-        cfg = PoolConfig(
+        cfg = PublishConfig(
             env=args.env,
-            size=args.n,
-            length=timing.steps,
             width=args.size,
             height=args.size,
             workers=args.workers,
-            exploration_fraction=args.exploration,
             video=VideoConfig(preset=args.preset),
         )
         policy = load_policy(args.policy, args.env)
@@ -80,6 +80,9 @@ def run(args: argparse.Namespace) -> int:
             policy,
             rng,
             out,
+            size=args.n,
+            length=timing.steps,
+            exploration_fraction=args.exploration,
             metadata={"policy": args.policy, "seed": args.seed},
             show_progress=not args.quiet,
         )

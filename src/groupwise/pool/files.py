@@ -2,7 +2,8 @@
 
 Directory layout (``format: groupwise.pool.behaviours/1``)::
 
-    pool.json         manifest: config, metadata (policy, seed), env, counts, file names,
+    pool.json         manifest: config (sampling and `PublishConfig`), metadata (policy,
+                      seed), env, counts, frame_size [width, height], file names,
                       "length" (L) and "fps", and under "clip" the clips' timing
                       (`ClipTiming.as_json`): steps (L), stride (a frame every k-th
                       step), frames (⌈L / k⌉), fps, seconds (L · dt, simulated and
@@ -87,8 +88,9 @@ def write_pool(
     config: Mapping[str, Any],
     metadata: Mapping[str, Any],
 ) -> None:
-    """Write the directory of a published pool (module docstring); `config` is the
-    `PoolConfig` it was published with, as JSON."""
+    """Write the directory of a published pool (module docstring); `config` is how it was
+    sampled (size, length, oversample, exploration_fraction) and the `PublishConfig` it was
+    published with, as JSON (its "width" and "height" give the manifest's frame size)."""
     trajectories = list(sampled.episodes)
     out, fragments = pool.directory, pool.fragments
     by_episode = {t.episode: t for t in trajectories}

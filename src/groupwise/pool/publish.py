@@ -1,7 +1,8 @@
 """Publishing a round's behaviour pool: everything the interface needs, written to a directory.
 
-`publish_pool` takes a sampled pool (`loop.sample_pool` in the app, `sampling.sample_pool`
-from a bare policy in `prepare_pool`) and, readable top to bottom:
+`publish_pool` takes a sampled pool (`run.round.begin_round` in the app, `sampling.sample_pool`
+from a bare policy in `prepare_pool`) and a `PublishConfig` (what publishing alone needs:
+frame size, encoding, tree, candidates, render workers) and, readable top to bottom:
 
 1. **clips**: hands the windows to the render workers (`clips.render`), which replay each
    episode from its reset seed, render exactly the pool's windows (at real speed, a frame
@@ -9,7 +10,7 @@ from a bare policy in `prepare_pool`) and, readable top to bottom:
    store, while the parent computes
 2. the pool's **DTW** distances (`BehaviourPool.distances`), the **tree**, its group
    candidates and medoids (`behaviour`);
-3. **writes** the directory (`pool_files`) and returns a `PreparedPool` with per-phase
+3. **writes** the directory (`files`) and returns a `PreparedPool` with per-phase
    timings.
 
 The worker processes start (and build their rendering envs) before the parent computes
@@ -49,7 +50,7 @@ from groupwise.pool.files import (
 )
 from groupwise.pool.sampling import sample_pool
 from groupwise.preferences.judgement import MAX_GROUP
-from groupwise.rl.policy import Policy, RandomPolicy
+from groupwise.rl.policy import Policy
 
 logger = logging.getLogger(__name__)
 
@@ -58,20 +59,14 @@ __all__ = ["FORMAT", "PoolTimings", "PreparedPool", "load_fragments"]  # re-expo
 
 
 @dataclass(frozen=True)
-class PoolConfig:
-    """What pool to prepare and how."""
+class PublishConfig:
+    """How a sampled pool is published: its clips, tree and group candidates.
+
+    What pool it is (env steps, N behaviours of L steps) is the sampler's business: the run
+    config's `LoopConfig` in the app, `prepare_pool`'s arguments for `groupwise pool`."""
 
     env: str = "Hopper"
-    """Short env name (`groupwise.envs.ENVS`) or Gymnasium id with a fixed horizon."""
-    size: int = 200
-    """Behaviours in the pool, N (SPEC §1: 100-200; the paper advises < 200)."""
-    length: int = 30
-    """Steps per behaviour, L; each clip shows them at real speed, a frame every k-th step
-    (`clips.timing`; the app's default L is the env's clip duration, `env_clip_timing`)."""
-    oversample: float = 1.0
-    """Sample episodes for this many times `size` windows, of which `size` are kept."""
-    exploration_fraction: float = 0.0
-    """Share of steps taken by random actions while sampling (SPEC §3.1)."""
+    """Short env name (`groupwise.envs.ENVS`) or Gymnasium id the pool was sampled in."""
     width: int = 240
     """Frame width in pixels (even)."""
     height: int = 240
@@ -79,7 +74,7 @@ class PoolConfig:
     video: VideoConfig = field(default_factory=VideoConfig)
     """Clip and poster encoding."""
     tree: TreeConfig = field(default_factory=TreeConfig)
-    """How the behaviour tree is cut."""
+    """How the behaviour tree is cut (the run config's `RunConfig.tree`)."""
     candidate_levels: tuple[int, ...] = (1, 2)
     """Tree levels whose nodes are group candidates (SPEC §4)."""
     max_group: int = MAX_GROUP
@@ -90,77 +85,52 @@ class PoolConfig:
     """Render worker processes (0: render in this process)."""
 
     def __post_init__(self) -> None:
-        if self.size < 1 or self.length < 1:
-            raise ValueError(f"size and length must be >= 1, got {self.size}, {self.length}")
-        if self.oversample < 1.0:
-            raise ValueError(f"oversample must be >= 1, got {self.oversample}")
         if self.width < 2 or self.height < 2 or self.width % 2 or self.height % 2:
             raise ValueError(f"frame size must be even, got {self.width}×{self.height}")
         if self.workers < 0:
             raise ValueError(f"workers must be >= 0, got {self.workers}")
-        if not 0.0 <= self.exploration_fraction < 1.0:
-            raise ValueError(f"exploration must be in [0, 1), got {self.exploration_fraction}")
-
-
-def load_policy(spec: str, env: str) -> Policy:
-    """ "random", or a checkpoint directory (``policy.zip`` + ``vecnormalize.npz``, as
-    written by `groupwise train` under ``<out>/checkpoints/round-NNNN/``).
-
-    A checkpoint is loaded with the PPO settings of its run's ``config.json`` when that is
-    found two levels up, the defaults otherwise; it acts stochastically.
-
-    Raises:
-        FileNotFoundError: the directory has no ``policy.zip``.
-        ValueError: unknown env, or the checkpoint's spaces do not match the env's.
-    """
-    if spec == "random":
-        probe = make_env(env)
-        try:
-            return RandomPolicy(probe.action_space)
-        finally:
-            probe.close()
-    from groupwise.config import PPOConfig, RunConfig
-    from groupwise.rl.ppo import POLICY_FILE, PPOAgent
-
-    directory = Path(spec)
-    if not (directory / POLICY_FILE).is_file():
-        raise FileNotFoundError(f"{directory} is not a checkpoint directory (no {POLICY_FILE})")
-    config_file = directory.parent.parent / "config.json"
-    ppo = RunConfig.load(config_file).ppo if config_file.is_file() else PPOConfig()
-    ppo = dataclasses.replace(ppo, n_envs=1, tensorboard=False)
-    agent = PPOAgent(lambda: make_env(env), ppo, seed=0)
-    agent.load(directory)
-    return agent.policy(deterministic=False)
 
 
 def prepare_pool(
-    cfg: PoolConfig,
+    cfg: PublishConfig,
     policy: Policy,
     rng: np.random.Generator,
     out: Path,
     *,
+    size: int,
+    length: int,
+    oversample: float = 1.0,
+    exploration_fraction: float = 0.0,
     store: ClipStore | None = None,
     render_pool: RenderPool | None = None,
     metadata: Mapping[str, Any] | None = None,
     show_progress: bool = True,
 ) -> PreparedPool:
-    """Sample `cfg.size` behaviours of `policy` (a random subset of `cfg.oversample` ×
-    `cfg.size` windows) and publish them into `out` (`publish_pool`)."""
+    """Sample `size` behaviours of `length` steps from `policy` in `cfg.env` (a random
+    subset of `oversample` × `size` windows, a share `exploration_fraction` of the steps
+    random: `sampling.sample_pool`) and publish them into `out` (`publish_pool`).
+
+    Raises:
+        ValueError: as `sample_pool` (e.g. `size` < 1, `oversample` < 1, an exploration
+            fraction outside [0, 1)) and `publish_pool`.
+    """
     tick = time.perf_counter()
     pool = sample_pool(
         lambda: make_env(cfg.env),
         policy,
-        cfg.size,
-        cfg.length,
+        size,
+        length,
         rng,
-        exploration_fraction=cfg.exploration_fraction,
-        oversample=cfg.oversample,
+        exploration_fraction=exploration_fraction,
+        oversample=oversample,
     )
     sample_s = time.perf_counter() - tick
     return publish_pool(
         cfg,
         pool,
         out,
+        oversample=oversample,
+        exploration_fraction=exploration_fraction,
         store=store,
         render_pool=render_pool,
         metadata=metadata,
@@ -170,10 +140,12 @@ def prepare_pool(
 
 
 def publish_pool(
-    cfg: PoolConfig,
+    cfg: PublishConfig,
     pool: BehaviourPool,
     out: Path,
     *,
+    oversample: float = 1.0,
+    exploration_fraction: float = 0.0,
     store: ClipStore | None = None,
     render_pool: RenderPool | None = None,
     metadata: Mapping[str, Any] | None = None,
@@ -185,8 +157,10 @@ def publish_pool(
     `pool.episodes` must hold the episodes its fragments were cut from (they are replayed
     into clips). `store` defaults to ``out/clips``; `render_pool` (reused across rounds by
     a long-lived caller) defaults to a fresh one with `cfg.workers` workers, closed on
-    return. `metadata` (e.g. policy and seed) is written into ``pool.json``; `sample_s`,
-    the time it took to sample the pool, into the timings.
+    return. `metadata` (e.g. policy and seed) is written into ``pool.json``, and beside
+    `cfg` under "config" how the pool was sampled (N and L, read off `pool`; `oversample` and
+    `exploration_fraction` as given to `sample_pool`: only recorded); `sample_s`, the time it
+    took to sample the pool, into the timings.
 
     Raises:
         RenderingUnavailableError: the env cannot render offscreen (names the packages).
@@ -266,7 +240,15 @@ def publish_pool(
         timings=partial,
         timing=timing,
     )
-    write_pool(prepared, pool, representatives, dataclasses.asdict(cfg), metadata or {})
+    config = {
+        "env": cfg.env,
+        "size": len(fragments),
+        "length": timing.steps,
+        "oversample": oversample,
+        "exploration_fraction": exploration_fraction,
+        **dataclasses.asdict(cfg),
+    }
+    write_pool(prepared, pool, representatives, config, metadata or {})
     write_s = time.perf_counter() - tick
     timings = dataclasses.replace(partial, write_s=write_s, total_s=time.perf_counter() - started)
     write_json(out / "timings.json", dataclasses.asdict(timings))
@@ -279,6 +261,16 @@ def publish_pool(
         write_s,
     )
     return dataclasses.replace(prepared, timings=timings)
+
+
+def __getattr__(name: str) -> Any:
+    # `load_policy` moved to `rl.policy_files` (issue 19); study/policy_mix.py still imports
+    # it from here. Lazy, so pool/ does not import rl/'s PPO side; remove with that import.
+    if name == "load_policy":
+        from groupwise.rl.policy_files import load_policy
+
+        return load_policy
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 def _check_rendering(settings: FrameSettings) -> float:

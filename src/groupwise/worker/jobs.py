@@ -28,7 +28,7 @@ from groupwise.config import RunConfig
 from groupwise.oracles import STRATEGIES
 from groupwise.pool.behaviours import BehaviourPool
 from groupwise.pool.files import load_pool
-from groupwise.pool.publish import PoolConfig, publish_pool
+from groupwise.pool.publish import PublishConfig, publish_pool
 from groupwise.query.strategies import Query, QueryStrategy
 from groupwise.run.agent_package import SETTINGS_FILE
 from groupwise.run.checkpoint import checkpoint_dir
@@ -145,10 +145,13 @@ def publish_offer(
     moved on meanwhile."""
     if progress is not None:
         progress.on_phase("clips", 0, len(pool))
+    run_config = settings.run_config(env)
     published = publish_pool(
-        pool_config(env, settings, render.workers),
+        publish_config(run_config, settings.frame_size, render.workers),
         pool,
         data_dir / round_directory(session_id, pool.round),
+        oversample=run_config.loop.pool_oversample,
+        exploration_fraction=run_config.loop.exploration_fraction,
         store=ClipStore(data_dir / "clips"),
         render_pool=render,
         metadata={"session": session_id, "round": pool.round},
@@ -165,18 +168,10 @@ def publish_offer(
     return True
 
 
-def pool_config(env: str, settings: SessionSettings, workers: int) -> PoolConfig:
-    """How the app publishes a session's pools."""
-    cfg = settings.run_config(env)
-    return PoolConfig(
-        env=env,
-        size=settings.pool_size,
-        length=cfg.loop.fragment_length,
-        exploration_fraction=settings.exploration_fraction,
-        width=settings.frame_size,
-        height=settings.frame_size,
-        tree=cfg.tree,
-        workers=workers,
+def publish_config(cfg: RunConfig, frame_size: int, workers: int) -> PublishConfig:
+    """How the app publishes a session's pools (sampled as `cfg.loop` says)."""
+    return PublishConfig(
+        env=cfg.loop.env, width=frame_size, height=frame_size, tree=cfg.tree, workers=workers
     )
 
 
