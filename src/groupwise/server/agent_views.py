@@ -9,7 +9,8 @@ from groupwise.server import schemas
 from groupwise.server.context import AppContext
 from groupwise.server.state import read_state
 from groupwise.storage import ConflictError, NotFoundError, ending
-from groupwise.storage.sessions import FINISHED, get_session, session_directory
+from groupwise.storage.phases import FINISHED
+from groupwise.storage.sessions import get_session, session_directory
 
 
 def finish_now(context: AppContext, session_id: str) -> schemas.SessionState:

@@ -17,7 +17,8 @@ from groupwise.server.context import AppContext
 from groupwise.storage import ConflictError, Database, InvalidError, NotFoundError
 from groupwise.storage import rounds as repo
 from groupwise.storage.models import RoundRow
-from groupwise.storage.sessions import READY, ROUND_PREPARING, get_round, get_session
+from groupwise.storage.phases import READY, ROUND_PREPARING
+from groupwise.storage.sessions import get_round, get_session
 
 
 def _prepared_round(db: Database, session_id: str, index: int) -> RoundRow:

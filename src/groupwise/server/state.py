@@ -7,20 +7,20 @@ that should have ended (the supervisor also checks, for sessions nobody is looki
 
 from datetime import datetime
 
-from sqlalchemy.orm import Session as OrmSession
+from sqlalchemy.orm import Session as DbSession
 
 from groupwise.envs import horizon
 from groupwise.server import schemas
 from groupwise.server.context import AppContext
-from groupwise.storage import Database, InvalidError
-from groupwise.storage import sessions as repo
+from groupwise.storage import Database, InvalidError, lifecycle, sessions, timer
+from groupwise.storage.counts import Counts, counts
 from groupwise.storage.judgements import JudgementRecord
 from groupwise.storage.models import SessionRow, utcnow
 from groupwise.storage.settings import SessionSettings
 
 
 def state_of(
-    session: SessionRow, counts: repo.Counts, now: datetime, shown_at: datetime | None = None
+    session: SessionRow, counted: Counts, now: datetime, shown_at: datetime | None = None
 ) -> schemas.SessionState:
     """The `SessionState` of a session row (`shown_at`: its current round's)."""
     settings = SessionSettings.model_validate(session.settings)
@@ -40,17 +40,17 @@ def state_of(
         ),
         error=session.error,
         timer=schemas.Timer(
-            elapsed_s=round(repo.elapsed(session, now), 3),
+            elapsed_s=round(timer.elapsed(session, now), 3),
             budget_s=settings.round_seconds,
             paused=session.paused,
             running=session.timer_started_at is not None,
             shown_at=shown_at,
         ),
         counts=schemas.Counts(
-            comparisons_round=counts.comparisons_round,
-            pairs_round=counts.pairs_round,
-            comparisons_total=counts.comparisons_total,
-            pairs_total=counts.pairs_total,
+            comparisons_round=counted.comparisons_round,
+            pairs_round=counted.pairs_round,
+            comparisons_total=counted.comparisons_total,
+            pairs_total=counted.pairs_total,
         ),
         created_at=session.created_at,
         origin=session.origin,
@@ -63,30 +63,30 @@ def close_if_due(db: Database, session_id: str) -> int:
     Raises NotFoundError.
     """
     with db.read() as s:
-        session = repo.get_session(s, session_id)
-        if not repo.round_due(session):
+        session = sessions.get_session(s, session_id)
+        if not timer.round_due(session):
             return session.revision
     with db.write() as s:
-        repo.close_if_due(s, session_id)
-        return repo.get_session(s, session_id).revision
+        lifecycle.close_if_due(s, session_id)
+        return sessions.get_session(s, session_id).revision
 
 
-def _state(s: OrmSession, session: SessionRow, now: datetime) -> schemas.SessionState:
-    return state_of(session, repo.counts(s, session), now, repo.shown_at(s, session))
+def _state(s: DbSession, session: SessionRow, now: datetime) -> schemas.SessionState:
+    return state_of(session, counts(s, session), now, timer.shown_at(s, session))
 
 
 def read_state(db: Database, session_id: str) -> schemas.SessionState:
     """The session's current state. Raises NotFoundError."""
     close_if_due(db, session_id)
     with db.read() as s:
-        return _state(s, repo.get_session(s, session_id), utcnow())
+        return _state(s, sessions.get_session(s, session_id), utcnow())
 
 
 def list_states(db: Database) -> list[schemas.SessionState]:
     """Every session's state, newest first."""
     now = utcnow()
     with db.read() as s:
-        return [_state(s, row, now) for row in repo.list_sessions(s)]
+        return [_state(s, row, now) for row in sessions.list_sessions(s)]
 
 
 def check_env(env: str, settings: SessionSettings) -> SessionSettings:
@@ -115,7 +115,7 @@ def create_session(context: AppContext, request: schemas.SessionCreate) -> schem
     """Create a session (its round 0 is queued for the worker). Raises InvalidError."""
     settings = check_env(request.env, request.settings)
     with context.db.write() as s:
-        session = repo.create_session(s, request.env, request.mode, settings, request.annotator)
+        session = sessions.create_session(s, request.env, request.mode, settings, request.annotator)
         session_id = session.id
     context.supervisor.ensure_worker_soon()
     return read_state(context.db, session_id)
@@ -123,7 +123,7 @@ def create_session(context: AppContext, request: schemas.SessionCreate) -> schem
 
 def pause(db: Database, session_id: str) -> schemas.SessionState:
     with db.write() as s:
-        repo.pause(s, session_id)
+        timer.pause(s, session_id)
     return read_state(db, session_id)
 
 
@@ -131,19 +131,19 @@ def show_round(db: Database, session_id: str, round_index: int) -> schemas.Sessi
     """A page shows the open round: its timer starts the first time. Raises NotFoundError,
     ConflictError."""
     with db.write() as s:
-        repo.show_round(s, session_id, round_index)
+        timer.show_round(s, session_id, round_index)
     return read_state(db, session_id)
 
 
 def resume(db: Database, session_id: str) -> schemas.SessionState:
     with db.write() as s:
-        repo.resume(s, session_id)
+        timer.resume(s, session_id)
     return read_state(db, session_id)
 
 
 def end_round(context: AppContext, session_id: str) -> schemas.SessionState:
     with context.db.write() as s:
-        repo.end_round(s, session_id)
+        lifecycle.end_round(s, session_id)
     context.supervisor.ensure_worker_soon()
     return read_state(context.db, session_id)
 
@@ -151,7 +151,7 @@ def end_round(context: AppContext, session_id: str) -> schemas.SessionState:
 def retry(context: AppContext, session_id: str) -> schemas.SessionState:
     """Re-queue the failed step and make sure a worker runs. Raises ConflictError."""
     with context.db.write() as s:
-        repo.retry(s, session_id)
+        lifecycle.retry(s, session_id)
     context.supervisor.ensure_worker_soon()
     return read_state(context.db, session_id)
 

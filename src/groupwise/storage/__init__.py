@@ -1,8 +1,9 @@
 """The app's database: schema, connections and repositories (docs/app.md, "Processes").
 
 SQLAlchemy 2 on SQLite (WAL) by default, portable to PostgreSQL. Repository functions take
-an open ORM `Session` from `Database.read()` / `Database.write()` and leave the commit to
-that block, so a request is one transaction:
+an open SQLAlchemy session from `Database.read()` / `Database.write()` (imported as
+`DbSession`, since "session" here means an app session, a `SessionRow`) and leave the
+commit to that block, so a request is one transaction:
 
     db = Database(default_url(data_dir)); db.create_schema()
     with db.write() as s:
@@ -10,7 +11,10 @@ that block, so a request is one transaction:
     # committed here, before the HTTP answer
 
 Modules: `models` (tables), `database` (engines, pragmas), `settings` (session settings),
-`sessions` (lifecycle, timer, counts), `ending` ("Finish now", "Continue training"),
+`sessions` (session rows: create, get, list), `phases` (phase names, the open-round guard),
+`lifecycle` (phase changes: open, close, train, final, fail, retry), `timer` (the round
+timer: shown, pause, resume, due), `progress` (the worker's progress line), `counts`
+(comparisons and pairs), `ending` ("Finish now", "Continue training"),
 `rounds` (pools, suggestions, pairwise queue),
 `judgements` (store, retry, undo, list), `export` (JSONL / Parquet, import).
 """

@@ -28,7 +28,8 @@ from typing import Any
 
 from sqlalchemy import Engine, create_engine, event, inspect
 from sqlalchemy.engine import make_url
-from sqlalchemy.orm import Session, sessionmaker
+from sqlalchemy.orm import Session as DbSession
+from sqlalchemy.orm import sessionmaker
 
 from groupwise.storage.models import Base
 
@@ -50,10 +51,10 @@ def default_url(data_dir: Path) -> str:
 class Database:
     """One database, opened for reads and writes.
 
-    `read()` and `write()` are context managers yielding an ORM `Session` whose transaction
-    commits when the block ends normally and rolls back when it raises. Objects stay usable
-    after the block (``expire_on_commit=False``). Thread-safe: each call gets its own
-    session and connection from the engines' pools.
+    `read()` and `write()` are context managers yielding a SQLAlchemy `DbSession` whose
+    transaction commits when the block ends normally and rolls back when it raises. Objects
+    stay usable after the block (``expire_on_commit=False``). Thread-safe: each call gets its
+    own `DbSession` and connection from the engines' pools.
     """
 
     def __init__(self, url: str, *, pool_size: int = 8) -> None:
@@ -89,20 +90,20 @@ class Database:
         add_missing_columns(self.write_engine)
 
     @contextmanager
-    def read(self) -> Iterator[Session]:
+    def read(self) -> Iterator[DbSession]:
         """A read transaction (it may write, but on SQLite a write may then fail busy)."""
-        with self._reader() as session, session.begin():
-            yield session
+        with self._reader() as s, s.begin():
+            yield s
 
     @contextmanager
-    def write(self) -> Iterator[Session]:
+    def write(self) -> Iterator[DbSession]:
         """A write transaction: on SQLite it holds the write lock from its start."""
         with (
             self._write_lock or nullcontext(),
-            self._writer() as session,
-            session.begin(),
+            self._writer() as s,
+            s.begin(),
         ):
-            yield session
+            yield s
 
     def dispose(self) -> None:
         """Close every pooled connection."""

@@ -1,7 +1,7 @@
 """The end of a session: "Finish now" and "Continue training" (docs/app.md, "Session end").
 
 After its last round a session trains PPO further on the frozen learned reward in a round
-without feedback (`sessions.start_final`, phase ``finishing``) and then shows the final
+without feedback (`lifecycle.start_final`, phase ``finishing``) and then shows the final
 agent (``finished``). A person may end the session early, and continue a finished one:
 
 - `finish_now`: no more rounds after the current one. An open round ends now and is
@@ -11,35 +11,25 @@ agent (``finished``). A person may end the session early, and continue a finishe
   the frozen reward (another round without feedback) or `rounds` more feedback rounds
   (followed by the final phase again).
 
-Like `groupwise.storage.sessions`, every function takes an open ORM `Session` and leaves
+Like `groupwise.storage.lifecycle`, every function takes an open `DbSession` and leaves
 committing to the caller.
 """
 
 from datetime import datetime
 
 from sqlalchemy import select
-from sqlalchemy.orm import Session
+from sqlalchemy.orm import Session as DbSession
 
 from groupwise.storage.errors import ConflictError, InvalidError
+from groupwise.storage.lifecycle import close_round, start_final
 from groupwise.storage.models import CheckpointRow, RoundRow, SessionRow, utcnow
-from groupwise.storage.sessions import (
-    FINISHED,
-    PREPARING,
-    READY,
-    TRAINING,
-    _new_round,
-    _set_progress,
-    close_round,
-    get_round,
-    get_session,
-    settings_of,
-    start_final,
-    touch,
-)
+from groupwise.storage.phases import FINISHED, PREPARING, READY, TRAINING
+from groupwise.storage.progress import write_progress
+from groupwise.storage.sessions import get_round, get_session, new_round, settings_of, touch
 from groupwise.storage.settings import LIBRARY, MAX_ROUNDS
 
 
-def finish_now(s: Session, session_id: str, now: datetime | None = None) -> SessionRow:
+def finish_now(s: DbSession, session_id: str, now: datetime | None = None) -> SessionRow:
     """End the session after its current round (module docstring).
 
     Raises:
@@ -74,7 +64,7 @@ def finish_now(s: Session, session_id: str, now: datetime | None = None) -> Sess
 
 
 def continue_training(
-    s: Session,
+    s: DbSession,
     session_id: str,
     *,
     steps: int | None = None,
@@ -115,8 +105,8 @@ def continue_training(
     _set_rounds(session, following + rounds)
     session.round = following
     session.phase = PREPARING
-    s.add(_new_round(session.id, following))
-    _set_progress(session, "queued", 0.0, f"round {following}: waiting for the worker")
+    s.add(new_round(session.id, following))
+    write_progress(session, "queued", 0.0, f"round {following}: waiting for the worker")
     touch(session, now)
     return session
 
@@ -133,7 +123,7 @@ def _set_rounds(session: SessionRow, rounds: int) -> None:
     session.settings = {**session.settings, "rounds": rounds}
 
 
-def _has_checkpoint(s: Session, session_id: str) -> bool:
+def _has_checkpoint(s: DbSession, session_id: str) -> bool:
     query = (
         select(CheckpointRow.id)
         .join(RoundRow, CheckpointRow.round_id == RoundRow.id)
@@ -143,7 +133,7 @@ def _has_checkpoint(s: Session, session_id: str) -> bool:
     return s.scalars(query).first() is not None
 
 
-def frozen_rounds(s: Session, session_id: str) -> set[int]:
+def frozen_rounds(s: DbSession, session_id: str) -> set[int]:
     """The indices of the session's rounds without feedback (PPO on the frozen reward)."""
     query = select(RoundRow.index).where(
         RoundRow.session_id == session_id, RoundRow.frozen_steps.is_not(None)

@@ -30,20 +30,14 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 from sqlalchemy import select
-from sqlalchemy.orm import Session
+from sqlalchemy.orm import Session as DbSession
 
 from groupwise.preferences.judgement import LABELS as PAIR_LABELS
 from groupwise.storage.errors import InvalidError
 from groupwise.storage.judgements import LABELS, SOURCES, list_judgements
 from groupwise.storage.models import JudgementRow, PairRow, RoundRow, SessionRow, utcnow
-from groupwise.storage.sessions import (
-    FINISHED,
-    MODES,
-    ROUND_CLOSED,
-    get_session,
-    new_session_id,
-    touch,
-)
+from groupwise.storage.phases import FINISHED, ROUND_CLOSED
+from groupwise.storage.sessions import MODES, get_session, new_session_id, touch
 from groupwise.storage.settings import SessionSettings
 
 FORMAT = "groupwise.session-export/1"
@@ -111,7 +105,7 @@ class SessionExport:
     judgements: tuple[JudgementLine, ...]
 
 
-def export_session(s: Session, session_id: str) -> SessionExport:
+def export_session(s: DbSession, session_id: str) -> SessionExport:
     """Everything the export holds of a session. Raises NotFoundError."""
     session = get_session(s, session_id)
     rounds = s.scalars(
@@ -275,7 +269,7 @@ def from_parquet(data: bytes) -> SessionExport:
     )
 
 
-def import_session(s: Session, export: SessionExport, now: datetime | None = None) -> SessionRow:
+def import_session(s: DbSession, export: SessionExport, now: datetime | None = None) -> SessionRow:
     """Add a new, finished session holding the export's rounds, judgements and pairs.
 
     Raises InvalidError when the export contradicts itself (a judgement of a round that is

@@ -17,7 +17,8 @@ from dataclasses import dataclass
 from datetime import datetime
 
 from sqlalchemy import func, select
-from sqlalchemy.orm import Session, selectinload
+from sqlalchemy.orm import Session as DbSession
+from sqlalchemy.orm import selectinload
 
 from groupwise.pool.ids import behaviour_id, behaviour_index
 from groupwise.preferences.judgement import (
@@ -30,17 +31,12 @@ from groupwise.preferences.judgement import (
 )
 from groupwise.preferences.pairs import judgement_pairs
 from groupwise.storage.errors import ConflictError, InvalidError, NotFoundError
+from groupwise.storage.lifecycle import close_round
 from groupwise.storage.models import BehaviourRow, JudgementRow, PairRow, SessionRow, utcnow
+from groupwise.storage.phases import READY
 from groupwise.storage.rounds import mark_suggestion_used
-from groupwise.storage.sessions import (
-    READY,
-    close_round,
-    get_round,
-    get_session,
-    round_due,
-    settings_of,
-    touch,
-)
+from groupwise.storage.sessions import get_round, get_session, settings_of, touch
+from groupwise.storage.timer import round_due
 
 LABELS: dict[str, float] = {"left": LEFT_BETTER, "right": RIGHT_BETTER, "equal": EQUAL}
 """The page's label → P(left group preferred)."""
@@ -117,7 +113,7 @@ def record_of(row: JudgementRow) -> JudgementRecord:
 
 
 def add_judgement(
-    s: Session, session_id: str, judgement: JudgementInput, now: datetime | None = None
+    s: DbSession, session_id: str, judgement: JudgementInput, now: datetime | None = None
 ) -> tuple[JudgementRecord, bool]:
     """Store a judgement and its pairs; (record, True) when new, (stored, False) on a retry.
 
@@ -190,7 +186,7 @@ def add_judgement(
     return record_of(row), True
 
 
-def _by_client_id(s: Session, session_id: str, client_id: str) -> JudgementRecord | None:
+def _by_client_id(s: DbSession, session_id: str, client_id: str) -> JudgementRecord | None:
     row = s.scalars(
         select(JudgementRow)
         .where(JudgementRow.session_id == session_id, JudgementRow.client_id == client_id)
@@ -213,7 +209,7 @@ def _check_open(session: SessionRow, round_index: int, now: datetime) -> None:
 
 
 def _check_groups(
-    s: Session, session: SessionRow, round_id: int, judgement: JudgementInput
+    s: DbSession, session: SessionRow, round_id: int, judgement: JudgementInput
 ) -> tuple[tuple[int, ...], tuple[int, ...]]:
     if judgement.label not in LABELS:
         raise InvalidError(f"label must be one of {', '.join(LABELS)}, got {judgement.label!r}")
@@ -244,7 +240,7 @@ def _check_groups(
     )
 
 
-def _behaviour_indices(s: Session, round_id: int, names: Sequence[str]) -> dict[str, int]:
+def _behaviour_indices(s: DbSession, round_id: int, names: Sequence[str]) -> dict[str, int]:
     rows = s.execute(
         select(BehaviourRow.name, BehaviourRow.index).where(
             BehaviourRow.round_id == round_id, BehaviourRow.name.in_(set(names))
@@ -253,7 +249,7 @@ def _behaviour_indices(s: Session, round_id: int, names: Sequence[str]) -> dict[
     return {name: index for name, index in rows}
 
 
-def _given_in_round(s: Session, session_id: str, round_index: int) -> int:
+def _given_in_round(s: DbSession, session_id: str, round_index: int) -> int:
     """Judgements given in the round so far, undone ones included."""
     return int(
         s.scalar(
@@ -265,7 +261,7 @@ def _given_in_round(s: Session, session_id: str, round_index: int) -> int:
     )
 
 
-def _live_in_round(s: Session, session_id: str, round_index: int) -> int:
+def _live_in_round(s: DbSession, session_id: str, round_index: int) -> int:
     return int(
         s.scalar(
             select(func.count(JudgementRow.id)).where(
@@ -279,7 +275,7 @@ def _live_in_round(s: Session, session_id: str, round_index: int) -> int:
 
 
 def undo_judgement(
-    s: Session, session_id: str, judgement_id: int, now: datetime | None = None
+    s: DbSession, session_id: str, judgement_id: int, now: datetime | None = None
 ) -> JudgementRecord:
     """Undo a judgement of the open round: its pairs are deleted, the row stays (undone).
 
@@ -315,7 +311,7 @@ def undo_judgement(
 
 
 def list_judgements(
-    s: Session,
+    s: DbSession,
     session_id: str,
     round_index: int | None = None,
     *,
@@ -344,7 +340,9 @@ def list_judgements(
     return [record_of(row) for row in s.scalars(query)]
 
 
-def round_judgements(s: Session, session_id: str, round_index: int) -> list[tuple[int, Judgement]]:
+def round_judgements(
+    s: DbSession, session_id: str, round_index: int
+) -> list[tuple[int, Judgement]]:
     """The round's judgements that were not undone, as (key, judgement): the key is the
     judgement's place among all the round's judgements, undone ones included (what its
     pairs were derived with), the groups pool indices."""

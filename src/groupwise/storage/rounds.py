@@ -9,10 +9,11 @@ from dataclasses import dataclass
 from datetime import datetime
 
 from sqlalchemy import delete, select
-from sqlalchemy.orm import Session
+from sqlalchemy.orm import Session as DbSession
 
 from groupwise.pool.ids import behaviour_id
 from groupwise.storage.errors import NotFoundError
+from groupwise.storage.lifecycle import open_round
 from groupwise.storage.models import (
     BehaviourRow,
     JudgementRow,
@@ -21,7 +22,8 @@ from groupwise.storage.models import (
     SuggestionEdgeRow,
     SuggestionRow,
 )
-from groupwise.storage.sessions import PREPARING, get_round, get_session, open_round
+from groupwise.storage.phases import PREPARING
+from groupwise.storage.sessions import get_round, get_session
 
 
 @dataclass(frozen=True)
@@ -69,7 +71,7 @@ class PreparedRound:
 
 
 def store_prepared_round(
-    s: Session,
+    s: DbSession,
     session_id: str,
     round_index: int,
     prepared: PreparedRound,
@@ -120,7 +122,7 @@ def store_prepared_round(
     return True
 
 
-def behaviours(s: Session, round_id: int) -> list[BehaviourRow]:
+def behaviours(s: DbSession, round_id: int) -> list[BehaviourRow]:
     """The pool of a round, by index."""
     return list(
         s.scalars(
@@ -131,7 +133,7 @@ def behaviours(s: Session, round_id: int) -> list[BehaviourRow]:
     )
 
 
-def compared(s: Session, round_row: RoundRow) -> list[str]:
+def compared(s: DbSession, round_row: RoundRow) -> list[str]:
     """Names of the behaviours in a live judgement of the round, in first-compared order."""
     seen: dict[str, None] = {}
     for left, right in s.execute(
@@ -143,7 +145,7 @@ def compared(s: Session, round_row: RoundRow) -> list[str]:
     return list(seen)
 
 
-def edges(s: Session, round_id: int, k: int) -> list[SuggestionEdgeRow]:
+def edges(s: DbSession, round_id: int, k: int) -> list[SuggestionEdgeRow]:
     """The round's `k` best pairwise suggestion edges, best first."""
     return list(
         s.scalars(
@@ -166,7 +168,7 @@ def query_key(left: Iterable[str], right: Iterable[str]) -> str:
 
 
 def next_suggestion(
-    s: Session, round_id: int, exclude: Sequence[tuple[Sequence[str], Sequence[str]]] = ()
+    s: DbSession, round_id: int, exclude: Sequence[tuple[Sequence[str], Sequence[str]]] = ()
 ) -> SuggestionRow | None:
     """The best unused group suggestion that is none of `exclude` (either side order)."""
     query = select(SuggestionRow).where(
@@ -179,7 +181,7 @@ def next_suggestion(
 
 
 def mark_suggestion_used(
-    s: Session, round_id: int, left: Sequence[str], right: Sequence[str], source: str
+    s: DbSession, round_id: int, left: Sequence[str], right: Sequence[str], source: str
 ) -> None:
     """Mark the suggestion a judgement answered as used.
 
@@ -208,7 +210,7 @@ def mark_suggestion_used(
         best[2].used = True
 
 
-def pairwise_next(s: Session, round_id: int, count: int = 2) -> list[PairQueueRow]:
+def pairwise_next(s: DbSession, round_id: int, count: int = 2) -> list[PairQueueRow]:
     """The next `count` pairs of the round's queue that were neither judged nor skipped."""
     judged = {
         frozenset((left[0], right[0]))
@@ -232,7 +234,7 @@ def pairwise_next(s: Session, round_id: int, count: int = 2) -> list[PairQueueRo
     return out
 
 
-def skip_pair(s: Session, round_id: int, a: str, b: str) -> None:
+def skip_pair(s: DbSession, round_id: int, a: str, b: str) -> None:
     """Skip a pair of the round's queue (either order). Raises NotFoundError."""
     rows = list(
         s.scalars(

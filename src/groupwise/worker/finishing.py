@@ -19,7 +19,8 @@ from groupwise.run.final import publish_agent
 from groupwise.run.round import train_frozen
 from groupwise.storage import Database
 from groupwise.storage.ending import frozen_rounds
-from groupwise.storage.sessions import finish_final, session_directory
+from groupwise.storage.lifecycle import finish_final
+from groupwise.storage.sessions import session_directory
 from groupwise.worker.jobs import Job, open_run
 from groupwise.worker.progress import JobProgress
 

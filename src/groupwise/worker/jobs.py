@@ -36,17 +36,17 @@ from groupwise.run.round import Offer, begin_round, end_round
 from groupwise.run.run import Run
 from groupwise.storage import Database, SessionSettings
 from groupwise.storage.judgements import round_judgements
+from groupwise.storage.lifecycle import finish_training
+from groupwise.storage.phases import WORK_PHASES
 from groupwise.storage.rounds import store_prepared_round
 from groupwise.storage.sessions import (
-    WORK_PHASES,
-    elapsed,
-    finish_training,
     get_round,
     get_session,
     round_directory,
     session_directory,
     settings_of,
 )
+from groupwise.storage.timer import elapsed
 from groupwise.worker.offers import prepared_round
 from groupwise.worker.progress import JobProgress
 

@@ -27,7 +27,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from groupwise.storage import Database
-from groupwise.storage.sessions import mark_failed, worker_sessions
+from groupwise.storage.lifecycle import mark_failed
+from groupwise.storage.sessions import worker_sessions
 from groupwise.worker.progress import JobProgress, ProgressReporter
 
 if TYPE_CHECKING:  # the server imports this module; only the worker process needs these

@@ -16,7 +16,7 @@ from collections.abc import Callable
 
 from groupwise.run.progress import RunCallback
 from groupwise.storage import Database
-from groupwise.storage.sessions import set_progress
+from groupwise.storage.progress import set_progress
 
 log = logging.getLogger(__name__)
 

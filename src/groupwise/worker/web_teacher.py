@@ -30,18 +30,10 @@ from groupwise.preferences.judgement import Judgement
 from groupwise.query.strategies import Query
 from groupwise.storage import Database, SessionSettings, default_url
 from groupwise.storage.judgements import round_judgements
-from groupwise.storage.sessions import (
-    FAILED,
-    FINISHED,
-    PREPARING,
-    READY,
-    TRAINING,
-    create_session,
-    finish_session,
-    finish_training,
-    get_session,
-    set_progress,
-)
+from groupwise.storage.lifecycle import finish_session, finish_training
+from groupwise.storage.phases import FAILED, FINISHED, PREPARING, READY, TRAINING
+from groupwise.storage.progress import set_progress
+from groupwise.storage.sessions import create_session, get_session
 from groupwise.storage.settings import LIBRARY
 from groupwise.worker.jobs import publish_offer
 

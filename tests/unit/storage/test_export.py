@@ -5,7 +5,7 @@ import json
 import pytest
 
 from groupwise.storage import InvalidError
-from groupwise.storage import sessions as repo
+from groupwise.storage.counts import counts
 from groupwise.storage.export import (
     export_session,
     from_jsonl,
@@ -15,12 +15,15 @@ from groupwise.storage.export import (
     to_parquet,
 )
 from groupwise.storage.judgements import JudgementInput, add_judgement, undo_judgement
+from groupwise.storage.phases import FINISHED
+from groupwise.storage.sessions import get_session
+from groupwise.storage.timer import show_round
 
 
 def _session_with_history(db, open_session) -> str:
     sid = open_session()
     with db.write() as s:
-        repo.show_round(s, sid, 0)
+        show_round(s, sid, 0)
     with db.write() as s:
         add_judgement(
             s, sid, JudgementInput("a", 0, ("b1", "b2"), ("b3",), "left", "explored", 4.5, 2)
@@ -54,11 +57,11 @@ def test_export_import_round_trip(db, open_session, write, read):
     assert new_id != sid
     with db.read() as s:
         again = export_session(s, new_id)
-        session = repo.get_session(s, new_id)
-        counts = repo.counts(s, session)
-    assert session.phase == repo.FINISHED and session.origin == sid
+        session = get_session(s, new_id)
+        counted = counts(s, session)
+    assert session.phase == FINISHED and session.origin == sid
     assert _comparable(again) == _comparable(original)
-    assert (counts.comparisons_total, counts.pairs_total) == (2, 3)
+    assert (counted.comparisons_total, counted.pairs_total) == (2, 3)
 
 
 def test_jsonl_is_one_object_per_line(db, open_session):

@@ -6,7 +6,7 @@ import pytest
 from sqlalchemy import func, select
 
 from groupwise.storage import ConflictError, Database, InvalidError
-from groupwise.storage import sessions as repo
+from groupwise.storage.counts import counts
 from groupwise.storage.judgements import (
     JudgementInput,
     add_judgement,
@@ -14,7 +14,11 @@ from groupwise.storage.judgements import (
     round_judgements,
     undo_judgement,
 )
+from groupwise.storage.lifecycle import end_round
 from groupwise.storage.models import JudgementRow, PairRow
+from groupwise.storage.phases import ROUND_CLOSED, TRAINING
+from groupwise.storage.sessions import get_round, get_session
+from groupwise.storage.timer import show_round
 
 
 def judgement(client_id: str = "c1", left=("b1", "b7"), right=("b3",), **kw) -> JudgementInput:
@@ -81,8 +85,8 @@ def test_undo_removes_the_pairs_and_keeps_the_record(db, open_session):
         ]
         assert [p.a for j in list_judgements(s, sid) for p in j.pairs] == ["b2"]
         assert [key for key, _ in round_judgements(s, sid, 0)] == [0]  # "undo" was key 1
-        counts = repo.counts(s, repo.get_session(s, sid))
-    assert (counts.comparisons_round, counts.pairs_round) == (1, 1)
+        counted = counts(s, get_session(s, sid))
+    assert (counted.comparisons_round, counted.pairs_round) == (1, 1)
     with db.write() as s:  # undoing twice changes nothing
         assert undo_judgement(s, sid, gone.id) == undone
 
@@ -129,7 +133,7 @@ def test_judgements_only_for_the_open_round(db, open_session):
             add_judgement(s, sid, judgement(round=1))
     with db.write() as s:
         record, _ = add_judgement(s, sid, judgement())
-        repo.end_round(s, sid)
+        end_round(s, sid)
     with pytest.raises(ConflictError, match="training"), db.write() as s:
         add_judgement(s, sid, judgement("late"))
     with pytest.raises(ConflictError, match="closed"), db.write() as s:
@@ -145,10 +149,10 @@ def test_the_comparison_budget_closes_the_round(db, open_session):
     with db.write() as s:
         add_judgement(s, sid, judgement("2", left=("b2",), right=("b4",)))
     with db.read() as s:
-        session = repo.get_session(s, sid)
-        closed = repo.get_round(s, sid, 0)
-    assert session.phase == repo.TRAINING
-    assert (closed.phase, closed.close_reason) == (repo.ROUND_CLOSED, "comparisons")
+        session = get_session(s, sid)
+        closed = get_round(s, sid, 0)
+    assert session.phase == TRAINING
+    assert (closed.phase, closed.close_reason) == (ROUND_CLOSED, "comparisons")
     assert closed.closed_at is not None and closed.closed_at.tzinfo == UTC
     assert closed.closed_at <= datetime.now(UTC)
 
@@ -156,7 +160,7 @@ def test_the_comparison_budget_closes_the_round(db, open_session):
 def test_no_judgements_once_the_time_is_up(db, open_session):
     sid = open_session(round_seconds=60)
     with db.write() as s:
-        started = repo.show_round(s, sid, 0).shown_at
+        started = show_round(s, sid, 0).shown_at
     assert started is not None
     with db.write() as s:
         add_judgement(s, sid, judgement("in time"), now=started + timedelta(seconds=59))
