@@ -4,7 +4,8 @@ The library's public API (docs/library.md); names load on first use, so ``import
 stays light and the app's extras are needed only for `WebTeacher`:
 
 - the loop: `PreferenceComparisons` (a user's env factory and agent), `LoopConfig`,
-  `RewardConfig`, `PPOConfig`, `RunConfig`, `RoundRecord`, `run_session` (the CLI's loop);
+  `TeacherConfig`, `RewardConfig`, `PPOConfig`, `RunConfig`, `RoundRecord`, `run_session`
+  (the CLI's loop);
 - pools and the behaviour space: `BehaviourPool`, `sample_pool`, `Fragment`, `Trajectory`,
   `build_tree`, `TreeConfig`, `group_candidates`, `pool_candidates`, `suggest_groups`,
   `behaviour_id`;
@@ -25,6 +26,7 @@ __version__ = "0.1.0"
 _EXPORTS = {
     "PreferenceComparisons": "groupwise.run.preference_comparisons",
     "LoopConfig": "groupwise.config",
+    "TeacherConfig": "groupwise.config",
     "RewardConfig": "groupwise.config",
     "PPOConfig": "groupwise.config",
     "RunConfig": "groupwise.config",

@@ -165,8 +165,6 @@ class LoopConfig:
     """... those the ensemble is most uncertain about (SPEC §3.2), or a random N."""
     candidate_pairs: PositiveInt = 10
     """Pairwise active learning: random candidate pairs scored per query."""
-    noise_sigma: Annotated[float, Field(ge=0)] = 0.25
-    """Decision-maker noise per step (SPEC §7): ε ~ N(0, (L·σ)²) per behaviour per judgement."""
     eval_episodes: Annotated[int, Field(ge=0)] = 5
     """Episodes of the true reward used to measure the policy after each round."""
     pair_derivation: PairDerivation = "cover"
@@ -184,23 +182,34 @@ class LoopConfig:
     ``pairs2x`` ablation uses 2.0."""
     max_group_size: Annotated[int, Field(ge=2)] = MAX_GROUP
     """Largest group the group DMs compare (paper §6: 8 keeps comparisons humanly possible)."""
+    seed: Seed = 0
+
+
+@dataclass(frozen=True, config=_STRICT)
+class TeacherConfig:
+    """How the simulated decision-makers perceive and answer (SPEC §7; `groupwise.oracles`).
+
+    A person answering through the page uses none of it; the rounds' diagnostics still
+    measure pools in its noise unit (``return_sd_over_noise``)."""
+
+    noise_sigma: Annotated[float, Field(ge=0)] = 0.25
+    """Decision-maker noise per step (SPEC §7): ε ~ N(0, (L·σ)²) per behaviour per judgement."""
+    gamma: Annotated[float, Field(gt=0, le=1)] = 0.9
+    """Myopic imperfect teachers ("<dm>-myopic"): discount per step back from the last (B-Pref)."""
+    mistake: Annotated[float, Field(ge=0, le=1)] = 0.1
+    """Mistake-prone teachers ("<dm>-mistake"): probability of flipping a label (B-Pref)."""
+    skip_quantile: Annotated[float, Field(ge=0, le=1)] = 0.1
+    """Skipping teachers ("<dm>-skip"): skip when both groups look worse than this quantile
+    of the pool's true returns."""
+    equal_fraction: Annotated[float, Field(ge=0)] = 0.1
+    """Equal-when-close teachers ("<dm>-equal"): answer equal when the groups' mean returns
+    differ by less than this many standard deviations of the pool's true returns."""
     interactive_gap: Annotated[float, Field(ge=0)] = 1.0
     """The "interactive-distinct" DM compares only groups whose mean true returns differ by at
     least this many per-behaviour noise sds (L·σ); the spec's Interactive-DM uses 0."""
     interactive_clear: Annotated[float, Field(ge=0)] = 1.0
     """The "interactive-clear" DM compares groups whose mean true returns differ by at least
     this many typical member deviations (`query.interactive.clear_gaps`)."""
-    teacher_gamma: Annotated[float, Field(gt=0, le=1)] = 0.9
-    """Myopic imperfect teachers ("<dm>-myopic"): discount per step back from the last (B-Pref)."""
-    teacher_mistake: Annotated[float, Field(ge=0, le=1)] = 0.1
-    """Mistake-prone teachers ("<dm>-mistake"): probability of flipping a label (B-Pref)."""
-    teacher_skip_quantile: Annotated[float, Field(ge=0, le=1)] = 0.1
-    """Skipping teachers ("<dm>-skip"): skip when both groups look worse than this quantile
-    of the pool's true returns."""
-    teacher_equal_fraction: Annotated[float, Field(ge=0)] = 0.1
-    """Equal-when-close teachers ("<dm>-equal"): answer equal when the groups' mean returns
-    differ by less than this many standard deviations of the pool's true returns."""
-    seed: Seed = 0
 
 
 @dataclass(frozen=True, config=_STRICT)
@@ -219,9 +228,12 @@ class TreeConfig:
 
 @dataclass(frozen=True, config=_STRICT)
 class RunConfig:
-    """A whole run: the rounds, the reward model, PPO and the behaviour tree."""
+    """A whole run: the rounds, the simulated teacher, the reward model, PPO and the
+    behaviour tree."""
 
     loop: LoopConfig = field(default_factory=LoopConfig)
+    teacher: TeacherConfig = field(default_factory=TeacherConfig)
+    """The simulated decision-maker's perception and imperfections."""
     reward: RewardConfig = field(default_factory=RewardConfig)
     ppo: PPOConfig = field(default_factory=PPOConfig)
     tree: TreeConfig = field(default_factory=TreeConfig)
@@ -234,12 +246,53 @@ class RunConfig:
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "RunConfig":
-        """Validate a config read from JSON (lists become tuples; unknown fields fail)."""
-        return _RUN_CONFIG.validate_python(data)
+        """Validate a config read from JSON (lists become tuples; unknown fields fail).
+
+        Configs written before `TeacherConfig` existed (their teacher fields inside "loop",
+        `LEGACY_TEACHER_FIELDS`) are read as if written now.
+
+        Raises:
+            ValueError: a field fails validation, or an old and a new name give one field.
+        """
+        return _RUN_CONFIG.validate_python(_teacher_moved_out_of_loop(data))
 
     @classmethod
     def load(cls, path: Path) -> "RunConfig":
         return cls.from_dict(json.loads(path.read_text()))
+
+
+LEGACY_TEACHER_FIELDS = {
+    "noise_sigma": "noise_sigma",
+    "interactive_gap": "interactive_gap",
+    "interactive_clear": "interactive_clear",
+    "teacher_gamma": "gamma",
+    "teacher_mistake": "mistake",
+    "teacher_skip_quantile": "skip_quantile",
+    "teacher_equal_fraction": "equal_fraction",
+}
+"""Old `LoopConfig` field → its `TeacherConfig` field (issue 19 moved them out of the loop)."""
+
+
+def _teacher_moved_out_of_loop(data: dict[str, Any]) -> dict[str, Any]:
+    """`data` with the teacher fields of an old layout's "loop" moved into "teacher"."""
+    loop = data.get("loop")
+    if not isinstance(loop, dict) or not loop.keys() & LEGACY_TEACHER_FIELDS.keys():
+        return data
+    teacher = data.get("teacher", {})
+    if not isinstance(teacher, dict):
+        return data  # validation names the bad value
+    moved = {
+        LEGACY_TEACHER_FIELDS[key]: value
+        for key, value in loop.items()
+        if key in LEGACY_TEACHER_FIELDS
+    }
+    if clash := sorted(moved.keys() & teacher.keys()):
+        raise ValueError(f"teacher field(s) {', '.join(clash)} given in both loop and teacher")
+    return {
+        **data,
+        "loop": {key: value for key, value in loop.items() if key not in LEGACY_TEACHER_FIELDS},
+        "teacher": {**teacher, **moved},
+    }
 
 
 _RUN_CONFIG = TypeAdapter(RunConfig)

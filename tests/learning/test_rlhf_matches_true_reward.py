@@ -31,7 +31,7 @@ the test says when it is met.
 import numpy as np
 import pytest
 
-from groupwise.config import LoopConfig, PPOConfig, RunConfig
+from groupwise.config import LoopConfig, PPOConfig, RunConfig, TeacherConfig
 from groupwise.envs import make_env
 from groupwise.rl.policy import RandomPolicy
 from groupwise.rl.ppo import PPOAgent
@@ -59,7 +59,6 @@ def _loop(seed: int) -> LoopConfig:
         rounds=5,
         steps=STEPS,
         fragment_length=25,
-        noise_sigma=0.05,
         eval_episodes=EPISODES,
         seed=seed,
     )
@@ -83,7 +82,11 @@ def test_rlhf_closes_the_gap_to_true_reward_ppo_without_collapse(tmp_path):
         policy = agent.policy(deterministic=True)
         true_ppo.append(evaluate(make, policy, EPISODES, eval_rng(seed)).mean())
         agent.close()
-        cfg = RunConfig(loop=_loop(seed), ppo=PPOConfig(tensorboard=False))
+        cfg = RunConfig(
+            loop=_loop(seed),
+            teacher=TeacherConfig(noise_sigma=0.05),
+            ppo=PPOConfig(tensorboard=False),
+        )
         records = run_session(cfg, tmp_path / f"seed-{seed}", show_progress=False)
         curve = [r.true_return_mean for r in records]
         rlhf.append(curve[-1])

@@ -12,7 +12,7 @@ myopic, mistake, skip, equal). A person answers through the web page
 
 from collections.abc import Callable
 
-from groupwise.config import LoopConfig, RunConfig
+from groupwise.config import RunConfig, TeacherConfig
 from groupwise.oracles.base import Feedback, Oracle, Teacher
 from groupwise.oracles.group_decision import Perception, SimulatedTeacher
 from groupwise.oracles.imperfect import TEACHERS, Imperfection
@@ -25,12 +25,12 @@ from groupwise.query.strategies import (
 )
 
 
-def _imperfection(cfg: LoopConfig) -> Imperfection:
+def _imperfection(cfg: TeacherConfig) -> Imperfection:
     return Imperfection(
-        gamma=cfg.teacher_gamma,
-        mistake=cfg.teacher_mistake,
-        skip_quantile=cfg.teacher_skip_quantile,
-        equal_fraction=cfg.teacher_equal_fraction,
+        gamma=cfg.gamma,
+        mistake=cfg.mistake,
+        skip_quantile=cfg.skip_quantile,
+        equal_fraction=cfg.equal_fraction,
     )
 
 
@@ -49,14 +49,14 @@ STRATEGIES: dict[str, Callable[[RunConfig], QueryStrategy]] = {
     "interactive-distinct": lambda run: InteractiveWalk(
         tree=run.tree,
         max_group=run.loop.max_group_size,
-        min_gap=run.loop.interactive_gap * run.loop.fragment_length * run.loop.noise_sigma,
+        min_gap=run.teacher.interactive_gap * run.loop.fragment_length * run.teacher.noise_sigma,
     ),
     # ours: only clearly different groups, passes until the budget is used
     "interactive-clear": lambda run: InteractiveWalk(
         tree=run.tree,
         max_group=run.loop.max_group_size,
-        clear=run.loop.interactive_clear,
-        noise_sd=run.loop.fragment_length * run.loop.noise_sigma,
+        clear=run.teacher.interactive_clear,
+        noise_sd=run.loop.fragment_length * run.teacher.noise_sigma,
     ),
 }
 """How each DM chooses its queries (the interactive walks: `groupwise.query.interactive`)."""
@@ -64,15 +64,17 @@ UNLIMITED = 2**31 - 1
 """A group-size limit that limits nothing (the reference code's Interactive-DM)."""
 
 
-def _dm(strategy: str, teacher: Callable[[LoopConfig], Teacher]) -> Callable[[RunConfig], Feedback]:
-    return lambda run: Feedback(STRATEGIES[strategy](run), teacher(run.loop))
+def _dm(
+    strategy: str, teacher: Callable[[TeacherConfig], Teacher]
+) -> Callable[[RunConfig], Feedback]:
+    return lambda run: Feedback(STRATEGIES[strategy](run), teacher(run.teacher))
 
 
-def _paper_teacher(cfg: LoopConfig) -> Teacher:
+def _paper_teacher(cfg: TeacherConfig) -> Teacher:
     return SimulatedTeacher(Perception(cfg.noise_sigma))
 
 
-def _imperfect(kind: str) -> Callable[[LoopConfig], Teacher]:
+def _imperfect(kind: str) -> Callable[[TeacherConfig], Teacher]:
     return lambda cfg: TEACHERS[kind](cfg.noise_sigma, _imperfection(cfg))
 
 

@@ -15,7 +15,7 @@ flipped. B-Pref sets its skip and equal thresholds as a fraction of the mean seg
 which means nothing for envs with negative returns (Reacher); we scale them by the pool's
 true returns instead (a quantile for skip, the standard deviation for equal). Every rule
 acts on the *perceived* returns, so the paper's noise (and myopia) applies on top of each
-imperfection; use `noise_sigma = 0` for B-Pref's noise-free teachers.
+imperfection; use `TeacherConfig.noise_sigma = 0` for B-Pref's noise-free teachers.
 """
 
 from collections.abc import Callable

@@ -28,7 +28,7 @@ Three registered walks (`groupwise.oracles.ORACLES`) differ in what they rank an
 - "interactive" — the paper's reference code: rank by the *sum* of the members' true returns
   over every level-1/2 node with at least 2 leaves (no 8-behaviour limit), two passes;
 - "interactive-mean" — the paper's text: rank by the mean, groups of 2–8, one pass (and
-  "interactive-distinct", the same with a partner at least `LoopConfig.interactive_gap`
+  "interactive-distinct", the same with a partner at least `TeacherConfig.interactive_gap`
   noise sds lower);
 - "interactive-clear" — ours, a person who compares only what they can see: a partner must
   be clearly worse relative to both groups' spread and the perception noise (`clear_gaps`),

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from groupwise.behaviour import BehaviourTree
-from groupwise.config import LoopConfig
+from groupwise.config import LoopConfig, RunConfig
 from groupwise.oracles.base import Feedback
 from groupwise.pool.behaviours import BehaviourPool
 from groupwise.pool.sampling import sample_pool
@@ -201,7 +201,7 @@ def end_round(
         true_return_mean=float(returns.mean()),
         true_return_std=float(returns.std()),
         **timer.seconds,
-        **_diagnostics(offer, asked, len(judgements), loop),
+        **_diagnostics(offer, asked, len(judgements), run.cfg),
     )
     return _append(run, record, callback)
 
@@ -291,10 +291,10 @@ def _append(run: Run, record: RoundRecord, callback: RunCallback) -> RoundRecord
 
 
 def _diagnostics(
-    offer: Offer, asked: int | None, judgements: int, loop: LoopConfig
+    offer: Offer, asked: int | None, judgements: int, cfg: RunConfig
 ) -> dict[str, float]:
     """The round's query diagnostics (SPEC §7) for its record; nan where a person answered."""
-    noise_sd = loop.fragment_length * loop.noise_sigma
+    noise_sd = cfg.loop.fragment_length * cfg.teacher.noise_sigma
     sd = float(offer.pool.true_returns.std()) if len(offer.pool) else math.nan
     diagnostics = {
         "candidates": offer.candidates,
