@@ -97,18 +97,27 @@ class PPOConfig:
     """Stable-Baselines3 PPO, the study's defaults (SPEC §3)."""
 
     n_envs: Annotated[int, Field(ge=1, le=64)] = 8
+    """Copies of the env stepped together, in one process; a rollout is n_envs × n_steps."""
     n_steps: Annotated[int, Field(ge=8, le=8192)] = 256
     """Steps per env per rollout."""
     batch_size: Annotated[int, Field(ge=2, le=65536)] = 64
+    """Steps per PPO minibatch; at most a rollout (n_envs × n_steps)."""
     n_epochs: Annotated[int, Field(ge=1, le=50)] = 10
+    """Passes over each rollout's minibatches."""
     learning_rate: Annotated[float, Field(gt=0, le=1)] = 2e-3
+    """Adam learning rate of the policy and value networks (constant)."""
     clip_range: Annotated[float, Field(gt=0)] = 0.1
+    """PPO's clip ε: how far one update may move the policy's probability ratio from 1."""
     gamma: Annotated[float, Field(gt=0, le=1)] = 0.97
+    """Discount of the returns PPO maximises (and of the reward normaliser's running return)."""
     gae_lambda: Annotated[float, Field(ge=0, le=1)] = 0.95
+    """λ of generalised advantage estimation: 0 one-step TD, 1 Monte Carlo returns."""
     ent_coef: Annotated[float, Field(ge=0)] = 0.01
+    """Weight of the entropy bonus in the loss (keeps the policy exploring)."""
     net_arch: Annotated[
         tuple[Annotated[int, Field(ge=1, le=1024)], ...], Field(min_length=1, max_length=4)
     ] = (32, 32)
+    """Hidden layer widths of the policy network and, separately, of the value network."""
     normalize_obs: bool = True
     """Running observation normalisation (VecNormalize)."""
     normalize_reward: bool = True
@@ -183,6 +192,7 @@ class LoopConfig:
     max_group_size: Annotated[int, Field(ge=2)] = MAX_GROUP
     """Largest group the group DMs compare (paper §6: 8 keeps comparisons humanly possible)."""
     seed: Seed = 0
+    """Every random generator of the run derives from it (`run.streams.round_streams`)."""
 
 
 @dataclass(frozen=True, config=_STRICT)
@@ -232,11 +242,15 @@ class RunConfig:
     behaviour tree."""
 
     loop: LoopConfig = field(default_factory=LoopConfig)
+    """The RLHF rounds: env, budgets, pool, pairs."""
     teacher: TeacherConfig = field(default_factory=TeacherConfig)
     """The simulated decision-maker's perception and imperfections."""
     reward: RewardConfig = field(default_factory=RewardConfig)
+    """The reward-model ensemble and its training."""
     ppo: PPOConfig = field(default_factory=PPOConfig)
+    """The policy's PPO."""
     tree: TreeConfig = field(default_factory=TreeConfig)
+    """How the behaviour tree is cut."""
 
     def to_json(self) -> str:
         return json.dumps(dataclasses.asdict(self), indent=2)

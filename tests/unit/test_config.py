@@ -1,10 +1,19 @@
 """Stored configurations keep meaning what they meant when they were written."""
 
+import dataclasses
 import json
 
 import pytest
+from pydantic import TypeAdapter
 
-from groupwise.config import LoopConfig, RewardConfig, RunConfig, TeacherConfig
+from groupwise.config import (
+    LoopConfig,
+    PPOConfig,
+    RewardConfig,
+    RunConfig,
+    TeacherConfig,
+    TreeConfig,
+)
 from groupwise.storage.settings import SessionSettings
 
 
@@ -25,6 +34,17 @@ def test_configs_stored_before_use_actions_existed_keep_their_action_inputs():
     assert SessionSettings.model_validate({"reward": {"ensemble_size": 2}}).reward.use_actions
     observations = SessionSettings.model_validate({"reward": {"use_actions": False}})
     assert not observations.reward.use_actions
+
+
+@pytest.mark.parametrize(
+    "config", [RewardConfig, PPOConfig, LoopConfig, TreeConfig, TeacherConfig, RunConfig]
+)
+def test_every_config_field_says_what_it_means(config: type) -> None:
+    # the description is the New-session page's help and the OpenAPI schema's
+    properties = TypeAdapter(config).json_schema()["properties"]
+    assert [f.name for f in dataclasses.fields(config)] == list(properties)
+    undocumented = [name for name, schema in properties.items() if not schema.get("description")]
+    assert undocumented == []
 
 
 def _old_layout(config: RunConfig) -> dict:

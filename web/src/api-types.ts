@@ -841,41 +841,49 @@ export interface components {
         PPOConfig: {
             /**
              * Batch Size
+             * @description Steps per PPO minibatch; at most a rollout (n_envs × n_steps).
              * @default 64
              */
             batch_size: number;
             /**
              * Clip Range
+             * @description PPO's clip ε: how far one update may move the policy's probability ratio from 1.
              * @default 0.1
              */
             clip_range: number;
             /**
              * Ent Coef
+             * @description Weight of the entropy bonus in the loss (keeps the policy exploring).
              * @default 0.01
              */
             ent_coef: number;
             /**
              * Gae Lambda
+             * @description λ of generalised advantage estimation: 0 one-step TD, 1 Monte Carlo returns.
              * @default 0.95
              */
             gae_lambda: number;
             /**
              * Gamma
+             * @description Discount of the returns PPO maximises (and of the reward normaliser's running return).
              * @default 0.97
              */
             gamma: number;
             /**
              * Learning Rate
+             * @description Adam learning rate of the policy and value networks (constant).
              * @default 0.002
              */
             learning_rate: number;
             /**
              * N Envs
+             * @description Copies of the env stepped together, in one process; a rollout is n_envs × n_steps.
              * @default 8
              */
             n_envs: number;
             /**
              * N Epochs
+             * @description Passes over each rollout's minibatches.
              * @default 10
              */
             n_epochs: number;
@@ -887,6 +895,7 @@ export interface components {
             n_steps: number;
             /**
              * Net Arch
+             * @description Hidden layer widths of the policy network and, separately, of the value network.
              * @default [
              *       32,
              *       32
