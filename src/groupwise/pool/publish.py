@@ -263,16 +263,6 @@ def publish_pool(
     return dataclasses.replace(prepared, timings=timings)
 
 
-def __getattr__(name: str) -> Any:
-    # `load_policy` moved to `rl.policy_files` (issue 19); study/policy_mix.py still imports
-    # it from here. Lazy, so pool/ does not import rl/'s PPO side; remove with that import.
-    if name == "load_policy":
-        from groupwise.rl.policy_files import load_policy
-
-        return load_policy
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-
-
 def _check_rendering(settings: FrameSettings) -> float:
     """The env's seconds per step (`clips.timing.step_seconds`), after rendering one frame.
 

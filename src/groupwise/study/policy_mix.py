@@ -88,7 +88,7 @@ def mixed_policies(
     load: Callable[[str, str], Policy] | None = None,
 ) -> list[tuple[str, Policy]]:
     """ "random" plus either the checkpoint policies (when `checkpoints` is not empty, loaded
-    with `load`, default `groupwise.pool.publish.load_policy`) or `biased` biased random ones."""
+    with `load`, default `groupwise.rl.policy_files.load_policy`) or `biased` biased random ones."""
     probe = make_env(env)
     space = probe.action_space
     probe.close()
@@ -102,7 +102,7 @@ def mixed_policies(
 
 
 def _load_checkpoint(path: str, env: str) -> Policy:
-    from groupwise.pool.publish import load_policy
+    from groupwise.rl.policy_files import load_policy
 
     return load_policy(path, env)
 
