@@ -1,4 +1,4 @@
-"""Export and import of sessions over HTTP (formats: `groupwise.storage.export`)."""
+"""Export and import of sessions over HTTP (formats: `groupwise.storage.export_format`)."""
 
 from dataclasses import dataclass
 
@@ -6,18 +6,19 @@ from groupwise.server import schemas
 from groupwise.server.state import read_state
 from groupwise.storage import Database, InvalidError
 from groupwise.storage import export as repo
+from groupwise.storage.export_format import from_jsonl, from_parquet, to_jsonl, to_parquet
 
 FORMATS = {
-    "jsonl": ("application/x-ndjson", repo.to_jsonl),
-    "parquet": ("application/vnd.apache.parquet", repo.to_parquet),
+    "jsonl": ("application/x-ndjson", to_jsonl),
+    "parquet": ("application/vnd.apache.parquet", to_parquet),
 }
 """Export format → (media type, writer)."""
 IMPORT_TYPES = {
-    "application/x-ndjson": repo.from_jsonl,
-    "application/jsonl": repo.from_jsonl,
-    "application/json": repo.from_jsonl,
-    "application/vnd.apache.parquet": repo.from_parquet,
-    "application/octet-stream": repo.from_parquet,
+    "application/x-ndjson": from_jsonl,
+    "application/jsonl": from_jsonl,
+    "application/json": from_jsonl,
+    "application/vnd.apache.parquet": from_parquet,
+    "application/octet-stream": from_parquet,
 }
 """Content types an import accepts → parser. Form and text types are refused, so a page on
 another site cannot post an import with a plain HTML form."""

@@ -16,7 +16,8 @@ Modules: `models` (tables), `database` (engines, pragmas), `settings` (session s
 timer: shown, pause, resume, due), `progress` (the worker's progress line), `counts`
 (comparisons and pairs), `ending` ("Finish now", "Continue training"),
 `rounds` (pools, suggestions, pairwise queue),
-`judgements` (store, retry, undo, list), `export` (JSONL / Parquet, import).
+`judgements` (store, retry, undo, list), `export` (a session to its export and back),
+`export_format` (the export as JSONL / Parquet).
 """
 
 from groupwise.storage.database import DATABASE_FILE, Database, default_url, sqlite_url
