@@ -20,6 +20,7 @@ import math
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -184,23 +185,18 @@ def end_round(
         epochs = max(1, round(run.cfg.reward.epochs * multiplier))
         report = fit(run.ensemble, run.dataset, run.cfg.reward, streams.fit, epochs)
     returns = _learn_and_evaluate(run, steps, streams, timer, callback)
-    dataset = run.dataset
-    this_round = dataset.rounds == index
-    record = RoundRecord(
-        round=index,
+    this_round = run.dataset.rounds == index
+    record = _record(
+        run,
+        returns,
+        timer,
         comparisons=offer.budget,
         judgements=len(judgements),
         pairs=int(this_round.sum()),
-        pairs_total=len(dataset),
-        label_error_rate=dataset.label_error_rate(this_round),
-        label_error_rate_total=dataset.label_error_rate(),
+        label_error_rate=run.dataset.label_error_rate(this_round),
         reward_loss=report.loss,
         reward_accuracy=report.accuracy,
         reward_val_accuracy=report.validation_accuracy,
-        env_steps=run.agent.num_timesteps,
-        true_return_mean=float(returns.mean()),
-        true_return_std=float(returns.std()),
-        **timer.seconds,
         **_diagnostics(offer, asked, len(judgements), run.cfg),
     )
     return _append(run, record, callback)
@@ -214,22 +210,17 @@ def train_frozen(run: Run, steps: int, *, callback: RunCallback | None = None) -
     streams = round_streams(run.cfg.loop.seed, run.next_round)
     timer = PhaseTimer({"sample_s": 0.0, "feedback_s": 0.0, "reward_s": 0.0})
     returns = _learn_and_evaluate(run, steps, streams, timer, callback)
-    dataset = run.dataset
-    record = RoundRecord(
-        round=run.next_round,
+    record = _record(
+        run,
+        returns,
+        timer,
         comparisons=0,
         judgements=0,
         pairs=0,
-        pairs_total=len(dataset),
         label_error_rate=math.nan,
-        label_error_rate_total=dataset.label_error_rate(),
         reward_loss=math.nan,
         reward_accuracy=math.nan,
         reward_val_accuracy=math.nan,
-        env_steps=run.agent.num_timesteps,
-        true_return_mean=float(returns.mean()),
-        true_return_std=float(returns.std()),
-        **timer.seconds,
     )
     return _append(run, record, callback)
 
@@ -279,6 +270,20 @@ def _learn_and_evaluate(
             loop.eval_episodes,
             eval_rng(loop.seed),
         )
+
+
+def _record(run: Run, returns: np.ndarray, timer: PhaseTimer, **fields: Any) -> RoundRecord:
+    """Round `run.next_round`'s record: `fields` of the round, the rest from the run now."""
+    values: dict[str, Any] = {**timer.seconds, **fields}
+    return RoundRecord(
+        round=run.next_round,
+        pairs_total=len(run.dataset),
+        label_error_rate_total=run.dataset.label_error_rate(),
+        env_steps=run.agent.num_timesteps,
+        true_return_mean=float(returns.mean()),
+        true_return_std=float(returns.std()),
+        **values,
+    )
 
 
 def _append(run: Run, record: RoundRecord, callback: RunCallback) -> RoundRecord:
