@@ -220,6 +220,26 @@ class TeacherConfig:
     interactive_clear: Annotated[float, Field(ge=0)] = 1.0
     """The "interactive-clear" DM compares groups whose mean true returns differ by at least
     this many typical member deviations (`query.interactive.clear_gaps`)."""
+    pace_s: Annotated[float, Field(gt=0)] | None = None
+    """Seconds of a virtual clock the teacher takes per comparison (a timed teacher,
+    `groupwise.run.continuous`); None: untimed, the rounds' records carry no clock."""
+
+
+@dataclass(frozen=True, config=_STRICT)
+class TrainingConfig:
+    """When the agent trains: after each round's feedback, or all the time (issue 24)."""
+
+    mode: Literal["rounds", "continuous"] = "rounds"
+    """"rounds": PPO trains after the teacher ended the round (SPEC §8, the study's
+    protocol); "continuous": PPO trains while the teacher answers, the reward model refitting
+    between rollouts as pairs arrive (needs a timed teacher headless)."""
+    ppo_steps_per_s: Annotated[float, Field(gt=0)] = 3000.0
+    """PPO env steps per second of a timed teacher's clock (default: one core's measured
+    throughput on Hopper, `python -m benchmarks ppo_throughput`)."""
+    refit_pairs: PositiveInt = 20
+    """Continuous training refits the reward model once this many new pairs arrived ..."""
+    refit_s: Annotated[float, Field(gt=0)] = 60.0
+    """... or this many seconds after the last fit, whichever comes first (with new pairs)."""
 
 
 @dataclass(frozen=True, config=_STRICT)
@@ -250,6 +270,7 @@ class RunConfig:
     ppo: PPOConfig = field(default_factory=PPOConfig)
     """The policy's PPO."""
     tree: TreeConfig = field(default_factory=TreeConfig)
+    training: TrainingConfig = field(default_factory=TrainingConfig)
     """How the behaviour tree is cut."""
 
     def to_json(self) -> str:

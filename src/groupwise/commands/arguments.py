@@ -1,9 +1,14 @@
 """Argument types and the one-line error every subcommand reports bad input with."""
 
 import argparse
+import dataclasses
 import os
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from groupwise.config import RunConfig
 
 
 class UsageError(Exception):
@@ -29,6 +34,17 @@ positive_int = int_at_least(1)
 non_negative_int = int_at_least(0)
 
 
+def positive_float(text: str) -> float:
+    """An argparse type: a number > 0, with a one-line message otherwise."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not value > 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text}")
+    return value
+
+
 def writable_dir(path: Path) -> Path:
     try:
         path.mkdir(parents=True, exist_ok=True)
@@ -37,3 +53,36 @@ def writable_dir(path: Path) -> Path:
     if not os.access(path, os.W_OK | os.X_OK):
         raise UsageError(f"output directory {path} is not writable")
     return path
+
+
+def add_training_arguments(parser: argparse.ArgumentParser) -> None:
+    """--training and --teacher-pace (`groupwise.run.continuous`)."""
+    parser.add_argument(
+        "--training",
+        choices=("rounds", "continuous"),
+        help="rounds: PPO trains after each round's feedback (default); continuous: PPO "
+        "trains while a timed teacher answers, on a virtual clock",
+    )
+    parser.add_argument(
+        "--teacher-pace",
+        type=positive_float,
+        metavar="S",
+        help="seconds of the virtual clock the simulated teacher takes per comparison "
+        "(default with --training continuous: the paper's case studies' rate)",
+    )
+
+
+def timed(cfg: "RunConfig", args: argparse.Namespace, target: str | None) -> "RunConfig":
+    """`cfg` with --training and --teacher-pace applied; continuous training without a
+    pace gets the paper's (`run.continuous.paper_pace`)."""
+    from groupwise.run.continuous import paper_pace
+
+    mode = args.training or cfg.training.mode
+    pace = args.teacher_pace or cfg.teacher.pace_s
+    if mode == "continuous" and pace is None:  # the pairwise DMs: "pairwise", "pairwise-…"
+        pace = paper_pace(target, pairwise=cfg.loop.oracle.startswith("pairwise"))
+    return dataclasses.replace(
+        cfg,
+        training=dataclasses.replace(cfg.training, mode=mode),
+        teacher=dataclasses.replace(cfg.teacher, pace_s=pace),
+    )

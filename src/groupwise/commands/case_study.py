@@ -5,7 +5,14 @@ import argparse
 import dataclasses
 from pathlib import Path
 
-from groupwise.commands.arguments import UsageError, non_negative_int, positive_int, writable_dir
+from groupwise.commands.arguments import (
+    UsageError,
+    add_training_arguments,
+    non_negative_int,
+    positive_int,
+    timed,
+    writable_dir,
+)
 from groupwise.envs import TARGETS
 
 
@@ -59,6 +66,7 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
     case.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
     case.add_argument("--out", type=Path, required=True, help="output directory")
     case.add_argument("--no-video", action="store_true", help="skip the video and the strip")
+    add_training_arguments(case)
     case.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
     case.set_defaults(handler=run)
 
@@ -90,7 +98,7 @@ def run(args: argparse.Namespace) -> int:
             }
         )
         reward = dataclasses.replace(base.reward, use_actions=args.reward_inputs == "obs-act")
-        cfg = dataclasses.replace(base, loop=loop, reward=reward)
+        cfg = timed(dataclasses.replace(base, loop=loop, reward=reward), args, target.name)
     except ValueError as error:
         raise UsageError(str(error)) from None
     out = writable_dir(args.out)

@@ -6,9 +6,24 @@ import dataclasses
 import math
 from pathlib import Path
 
-from groupwise.commands.arguments import UsageError, non_negative_int, positive_int, writable_dir
+from groupwise.commands.arguments import (
+    UsageError,
+    add_training_arguments,
+    non_negative_int,
+    positive_int,
+    timed,
+    writable_dir,
+)
 
-FROM_SESSION_EXCLUDES = ("env", "config", "out", "final_steps", "seed")
+FROM_SESSION_EXCLUDES = (
+    "env",
+    "config",
+    "out",
+    "final_steps",
+    "seed",
+    "training",
+    "teacher_pace",
+)
 """Options --from-session takes from DIR itself (its config.json)."""
 
 
@@ -54,6 +69,7 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
         help="continue an app session's directory (DATA/sessions/s-…) or a train output in "
         "place, from its latest checkpoint: --steps N or --rounds N --dm NAME",
     )
+    add_training_arguments(train)
     train.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
     train.set_defaults(handler=run)
 
@@ -85,8 +101,12 @@ def run(args: argparse.Namespace) -> int:
     try:
         make_env(args.env).close()  # the registry's message names the known envs
         base = RunConfig.load(args.config) if args.config else RunConfig()
-        cfg = dataclasses.replace(
-            base, loop=LoopConfig(**{**dataclasses.asdict(base.loop), **given})
+        cfg = timed(
+            dataclasses.replace(
+                base, loop=LoopConfig(**{**dataclasses.asdict(base.loop), **given})
+            ),
+            args,
+            None,
         )
     except (ValueError, OSError) as error:
         raise UsageError(str(error)) from None

@@ -66,6 +66,11 @@ class PPOAgent:
     def num_timesteps(self) -> int:
         return int(self.model.num_timesteps)
 
+    @property
+    def rollout_steps(self) -> int:
+        """Env steps of one rollout (n_envs × n_steps): `learn` trains in whole rollouts."""
+        return self.cfg.n_envs * self.cfg.n_steps
+
     def learn(
         self,
         steps: int,

@@ -12,6 +12,7 @@ from pathlib import Path
 from groupwise.config import LoopConfig, RunConfig
 from groupwise.oracles import ORACLES, Feedback
 from groupwise.query.schedule import comparisons_per_round
+from groupwise.run.continuous import continuous_round
 from groupwise.run.progress import CallbackList, ProgressBars, RunCallback, as_callback
 from groupwise.run.records import RoundRecord
 from groupwise.run.round import run_round, train_frozen
@@ -50,12 +51,15 @@ def run_rounds(
 ) -> list[RoundRecord]:
     """Run the rounds of `round_plan` not run yet, each committed when the run has a
     directory; the one round driver of `run_session`, the case studies and
-    `PreferenceComparisons.train`."""
+    `PreferenceComparisons.train`. With `training.mode` "continuous" a feedback round's PPO
+    runs while its timed teacher answers (`run.continuous`), not the plan's steps."""
     plan = round_plan(run.cfg.loop)
     while run.next_round < len(plan):
         budget, steps = plan[run.next_round]
         if budget == 0:  # the final row: PPO on the frozen reward
             train_frozen(run, steps, callback=callback)
+        elif run.cfg.training.mode == "continuous":  # PPO's steps come from the clock
+            continuous_round(run, feedback, budget, callback)
         else:
             run_round(run, feedback, budget, steps, callback)
     return run.records

@@ -48,6 +48,9 @@ class RoundRecord:
     return_sd_over_noise: float = math.nan
     """sd of the pool's true returns ÷ the per-behaviour noise sd L·σ: below about 1 the
     labels are near coin flips whatever the strategy (the information limit)."""
+    clock_s: float = math.nan
+    """A timed teacher's virtual clock at the round's end, in seconds of the teacher's time
+    (`groupwise.run.continuous`); nan for an untimed teacher."""
 
     def stats(self) -> dict[str, object]:
         """The record as JSON-ready values (nan and inf as None): the app's round stats."""

@@ -32,7 +32,7 @@ from groupwise.pool.sampling import sample_pool
 from groupwise.preferences.judgement import Judgement
 from groupwise.preferences.pairs import Pair, cap_pairs, judgement_pairs
 from groupwise.query.strategies import Query, QueryStrategy
-from groupwise.reward import fit
+from groupwise.reward import FitReport, fit
 from groupwise.rl.rollout import evaluate
 from groupwise.run.progress import RunCallback, as_callback
 from groupwise.run.records import PhaseTimer, RoundRecord
@@ -117,22 +117,19 @@ def begin_round(
     )
 
 
-def round_pairs(
+def derive_pairs(
     judgements: Sequence[Judgement],
     loop: LoopConfig,
     round_index: int,
-    budget: int,
-    rng: np.random.Generator,
     keys: Sequence[int] | None = None,
 ) -> list[Pair]:
-    """The round's preference pairs: each judgement's (`preferences.pairs.judgement_pairs`,
-    by `loop.pair_derivation` × `loop.pair_oversample`, keyed by `keys`: by default its
-    place in the list), then at most ⌊pair_cap × budget⌋ of them when `loop.pair_cap` is set
-    (the budget of a round without one: its judgements), drawn from `rng`."""
+    """Each judgement's preference pairs (`preferences.pairs.judgement_pairs`, by
+    `loop.pair_derivation` × `loop.pair_oversample`), keyed by `keys`: by default its place
+    in the list."""
     keys = range(len(judgements)) if keys is None else keys
     if len(keys) != len(judgements):
         raise ValueError(f"{len(keys)} keys for {len(judgements)} judgements")
-    pairs = [
+    return [
         pair
         for judgement, key in zip(judgements, keys, strict=True)
         for pair in judgement_pairs(
@@ -144,6 +141,20 @@ def round_pairs(
             key=key,
         )
     ]
+
+
+def round_pairs(
+    judgements: Sequence[Judgement],
+    loop: LoopConfig,
+    round_index: int,
+    budget: int,
+    rng: np.random.Generator,
+    keys: Sequence[int] | None = None,
+) -> list[Pair]:
+    """The round's preference pairs (`derive_pairs`), then at most ⌊pair_cap × budget⌋ of
+    them when `loop.pair_cap` is set (the budget of a round without one: its judgements),
+    drawn from `rng`."""
+    pairs = derive_pairs(judgements, loop, round_index, keys)
     if loop.pair_cap is None:
         return pairs
     return cap_pairs(pairs, math.floor(loop.pair_cap * (budget or len(judgements))), rng)
@@ -184,8 +195,32 @@ def end_round(
         multiplier = run.cfg.reward.initial_epoch_multiplier if index == 0 else 1.0
         epochs = max(1, round(run.cfg.reward.epochs * multiplier))
         report = fit(run.ensemble, run.dataset, run.cfg.reward, streams.fit, epochs)
-    returns = _learn_and_evaluate(run, steps, streams, timer, callback)
-    this_round = run.dataset.rounds == index
+    _learn(run, steps, streams, timer, callback)
+    clock_s = math.nan
+    if run.cfg.teacher.pace_s is not None and asked is not None:
+        pace, rate = run.cfg.teacher.pace_s, run.cfg.training.ppo_steps_per_s
+        clock_s = clock_before(run) + asked * pace + steps / rate
+    return finish_round(
+        run, offer, judgements, report, timer, callback, asked=asked, clock_s=clock_s
+    )
+
+
+def finish_round(
+    run: Run,
+    offer: Offer,
+    judgements: Sequence[Judgement],
+    report: FitReport | None,
+    timer: PhaseTimer,
+    callback: RunCallback,
+    *,
+    asked: int | None,
+    clock_s: float = math.nan,
+) -> RoundRecord:
+    """Every feedback round's end, once its pairs are in the dataset and the agent trained:
+    the greedy policy's true return, the round's record (`report`: the round's last fit,
+    None when there was none), appended and committed."""
+    returns = _evaluate(run, timer, callback)
+    this_round = run.dataset.rounds == run.next_round
     record = _record(
         run,
         returns,
@@ -194,9 +229,10 @@ def end_round(
         judgements=len(judgements),
         pairs=int(this_round.sum()),
         label_error_rate=run.dataset.label_error_rate(this_round),
-        reward_loss=report.loss,
-        reward_accuracy=report.accuracy,
-        reward_val_accuracy=report.validation_accuracy,
+        reward_loss=report.loss if report else math.nan,
+        reward_accuracy=report.accuracy if report else math.nan,
+        reward_val_accuracy=report.validation_accuracy if report else math.nan,
+        clock_s=clock_s,
         **_diagnostics(offer, asked, len(judgements), run.cfg),
     )
     return _append(run, record, callback)
@@ -209,11 +245,14 @@ def train_frozen(run: Run, steps: int, *, callback: RunCallback | None = None) -
     callback = as_callback(callback)
     streams = round_streams(run.cfg.loop.seed, run.next_round)
     timer = PhaseTimer({"sample_s": 0.0, "feedback_s": 0.0, "reward_s": 0.0})
-    returns = _learn_and_evaluate(run, steps, streams, timer, callback)
+    _learn(run, steps, streams, timer, callback)
+    returns = _evaluate(run, timer, callback)
+    timed = run.cfg.teacher.pace_s is not None
     record = _record(
         run,
         returns,
         timer,
+        clock_s=clock_before(run) + steps / run.cfg.training.ppo_steps_per_s if timed else math.nan,
         comparisons=0,
         judgements=0,
         pairs=0,
@@ -248,18 +287,28 @@ def run_round(
     )
 
 
-def _learn_and_evaluate(
+def clock_before(run: Run) -> float:
+    """A timed teacher's virtual clock when round `run.next_round` begins (0 for the first;
+    `groupwise.run.continuous`)."""
+    previous = run.records[-1].clock_s if run.records else 0.0
+    return 0.0 if math.isnan(previous) else previous
+
+
+def _learn(
     run: Run, steps: int, streams: RoundStreams, timer: PhaseTimer, callback: RunCallback
-) -> np.ndarray:
-    """Train the agent `steps` PPO steps (seeded from the round's PPO stream), then its
-    greedy policy's true returns over `eval_episodes` (nan when 0): every round's end."""
-    loop = run.cfg.loop
+) -> None:
+    """Train the agent `steps` PPO steps, seeded from the round's PPO stream."""
     with timer("ppo"):
         run.agent.learn(
             steps,
             int(streams.ppo.integers(2**31 - 1)),
             report=lambda done, total: callback.on_phase("ppo", done, total),
         )
+
+
+def _evaluate(run: Run, timer: PhaseTimer, callback: RunCallback) -> np.ndarray:
+    """The greedy policy's true returns over `eval_episodes` (nan when 0)."""
+    loop = run.cfg.loop
     with timer("eval"):
         if loop.eval_episodes == 0:
             return np.full(1, np.nan)

@@ -1,0 +1,151 @@
+"""Continuous training with a timed teacher on GridWorld (`groupwise.run.continuous`): PPO
+runs while the teacher answers, the reward switches only between rollouts, and a seed's
+run is the same wherever it runs."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+import torch
+
+from groupwise.cli import main
+from groupwise.config import (
+    LoopConfig,
+    PPOConfig,
+    RewardConfig,
+    RunConfig,
+    TeacherConfig,
+    TrainingConfig,
+)
+from groupwise.preferences.dataset import PreferenceDataset
+from groupwise.run.continuous import GROUP_PAIRS_PER_COMPARISON, paper_pace
+from groupwise.run.headless import run_session
+from groupwise.run.progress import RunCallback
+from groupwise.run.records import RoundRecord
+from groupwise.run.run import RESULTS_FILE, Run
+
+PACE, RATE = 2.0, 96.0  # 192 PPO steps per answer: one and a half rollouts
+CONTINUOUS = RunConfig(
+    loop=LoopConfig(
+        env="GridWorld", oracle="groupwise", comparisons=16, rounds=2, eval_episodes=2, seed=5
+    ),
+    teacher=TeacherConfig(pace_s=PACE),
+    training=TrainingConfig(mode="continuous", ppo_steps_per_s=RATE, refit_pairs=6, refit_s=9),
+    reward=RewardConfig(epochs=2, initial_epoch_multiplier=2),
+    ppo=PPOConfig(n_envs=2, n_steps=64, batch_size=64, n_epochs=1, tensorboard=False),
+)
+ROLLOUT = 2 * 64
+TIMINGS = {"sample_s", "feedback_s", "reward_s", "ppo_s", "eval_s"}
+
+
+class _Fits(RunCallback):
+    """Each reward fit's moment: the agent's PPO steps so far, the dataset's size."""
+
+    def __init__(self) -> None:
+        self.run: Run | None = None
+        self.fits: list[tuple[int, int]] = []
+
+    def on_phase(self, phase: str, done: int, total: int) -> None:
+        if phase == "reward":
+            assert self.run is not None
+            self.fits.append((self.run.agent.num_timesteps, total))
+
+
+def _run(tmp_path, cfg=CONTINUOUS, callback=None) -> list[RoundRecord]:
+    return run_session(cfg, tmp_path, show_progress=False, callback=callback)
+
+
+def _comparable(records: list[RoundRecord]) -> list[dict]:
+    return [
+        {k: v for k, v in dataclasses.asdict(r).items() if k not in TIMINGS and v == v}
+        for r in records
+    ]
+
+
+def test_ppo_runs_while_the_teacher_answers_and_refits_fall_between_rollouts(tmp_path):
+    fits = _Fits()
+    original = Run.create
+
+    def create(*args, **kwargs):  # hand the run to the callback, which reads its steps
+        fits.run = original(*args, **kwargs)
+        return fits.run
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(Run, "create", create)
+        records = _run(tmp_path, callback=fits)
+    assert [r.round for r in records] == [0, 1]
+    # the teacher's clock: every query of the round took PACE seconds
+    asked = [r.queries_asked for r in records]
+    assert records[0].clock_s == asked[0] * PACE
+    assert records[1].clock_s == (asked[0] + asked[1]) * PACE
+    # PPO ran on that clock, in whole rollouts, what was left under one rollout dropped
+    steps_before = 0
+    for record, before in zip(records, [0.0, records[0].clock_s], strict=True):
+        owed = (record.clock_s - before) * RATE
+        trained = record.env_steps - steps_before
+        assert trained % ROLLOUT == 0 and owed - ROLLOUT < trained <= owed
+        steps_before = record.env_steps
+    # several fits a round, each between two rollouts, each on more pairs than the last
+    assert len(fits.fits) > 2 * len(records)
+    assert all(steps % ROLLOUT == 0 for steps, _ in fits.fits)
+    sizes = [size for _, size in fits.fits]
+    assert sizes == sorted(sizes) and sizes[0] > 0
+    assert sizes[-1] == records[-1].pairs_total
+    # the reward ensemble was fitted while PPO went on: steps were taken between fits
+    assert len({steps for steps, _ in fits.fits}) > 2
+
+
+def test_a_timed_teachers_run_is_the_same_for_a_seed(tmp_path):
+    first = _run(tmp_path / "a")
+    again = _run(tmp_path / "b")
+    assert _comparable(first) == _comparable(again)
+    a = PreferenceDataset.load(tmp_path / "a" / "checkpoints" / "round-0001" / "dataset.npz")
+    b = PreferenceDataset.load(tmp_path / "b" / "checkpoints" / "round-0001" / "dataset.npz")
+    assert np.array_equal(a.pairs, b.pairs) and np.array_equal(a.labels, b.labels)
+    reward_a = torch.load(tmp_path / "a" / "checkpoints" / "round-0001" / "reward.pt")
+    reward_b = torch.load(tmp_path / "b" / "checkpoints" / "round-0001" / "reward.pt")
+    for name, tensor in reward_a["state_dict"].items():
+        assert torch.equal(tensor, reward_b["state_dict"][name]), name
+
+
+def test_rounds_with_a_timed_teacher_wait_for_ppo_on_the_clock(tmp_path):
+    cfg = dataclasses.replace(
+        CONTINUOUS,
+        loop=dataclasses.replace(CONTINUOUS.loop, steps=2 * 256),
+        training=dataclasses.replace(CONTINUOUS.training, mode="rounds"),
+    )
+    records = _run(tmp_path, cfg)
+    first = records[0]
+    assert first.clock_s == first.queries_asked * PACE + 256 / RATE
+    assert records[1].clock_s == first.clock_s + records[1].queries_asked * PACE + 256 / RATE
+
+
+def test_continuous_training_needs_a_timed_teacher_and_no_pair_cap(tmp_path):
+    untimed = dataclasses.replace(CONTINUOUS, teacher=TeacherConfig())
+    with pytest.raises(ValueError, match="timed teacher"):
+        _run(tmp_path / "a", untimed)
+    capped = dataclasses.replace(CONTINUOUS, loop=dataclasses.replace(CONTINUOUS.loop, pair_cap=1))
+    with pytest.raises(ValueError, match="pair_cap"):
+        _run(tmp_path / "b", capped)
+
+
+def test_the_paper_pace_converts_pairs_to_comparisons():
+    # hopper: 1,032 pairs in 34 min; a group comparison gives 2.71 pairs, a pairwise one 1
+    assert paper_pace("hopper-backflip", pairwise=True) == pytest.approx(34 * 60 / 1032)
+    assert paper_pace("hopper-backflip", pairwise=False) == pytest.approx(
+        34 * 60 / 1032 * GROUP_PAIRS_PER_COMPARISON
+    )
+    assert paper_pace(None, pairwise=True) == pytest.approx(109 * 60 / 2249)
+
+
+def test_train_continuous_from_the_command_line(tmp_path, capsys):
+    args = ["train", "--env", "GridWorld", "--dm", "groupwise", "--comparisons", "8"]
+    args += ["--rounds", "1", "--training", "continuous", "--teacher-pace", "0.5", "-q"]
+    assert main([*args, "--out", str(tmp_path)]) == 0
+    saved = RunConfig.load(tmp_path / "config.json")
+    assert (saved.training.mode, saved.teacher.pace_s) == ("continuous", 0.5)
+    assert (tmp_path / RESULTS_FILE).is_file()
+    with pytest.raises(SystemExit) as refused:
+        main([*args[:-3], "-q", "--teacher-pace", "0", "--out", str(tmp_path / "x")])
+    assert refused.value.code == 2
+    assert "expected a finite number > 0" in capsys.readouterr().err
