@@ -270,8 +270,9 @@ class RunConfig:
     ppo: PPOConfig = field(default_factory=PPOConfig)
     """The policy's PPO."""
     tree: TreeConfig = field(default_factory=TreeConfig)
-    training: TrainingConfig = field(default_factory=TrainingConfig)
     """How the behaviour tree is cut."""
+    training: TrainingConfig = field(default_factory=TrainingConfig)
+    """When the agent trains: after each round's feedback, or while the teacher answers."""
 
     def to_json(self) -> str:
         return json.dumps(dataclasses.asdict(self), indent=2)

@@ -12,6 +12,7 @@ from groupwise.config import (
     RewardConfig,
     RunConfig,
     TeacherConfig,
+    TrainingConfig,
     TreeConfig,
 )
 from groupwise.storage.settings import SessionSettings
@@ -37,7 +38,8 @@ def test_configs_stored_before_use_actions_existed_keep_their_action_inputs():
 
 
 @pytest.mark.parametrize(
-    "config", [RewardConfig, PPOConfig, LoopConfig, TreeConfig, TeacherConfig, RunConfig]
+    "config",
+    [RewardConfig, PPOConfig, LoopConfig, TreeConfig, TeacherConfig, TrainingConfig, RunConfig],
 )
 def test_every_config_field_says_what_it_means(config: type) -> None:
     # the description is the New-session page's help and the OpenAPI schema's
