@@ -48,6 +48,9 @@ class RoundRecord:
     return_sd_over_noise: float = math.nan
     """sd of the pool's true returns ÷ the per-behaviour noise sd L·σ: below about 1 the
     labels are near coin flips whatever the strategy (the information limit)."""
+    label_error_untied: float = math.nan
+    """Share of the round's pairs of unequal true returns whose label disagrees with them (a
+    label on two equal returns is arbitrary, not wrong): the teacher's error rate."""
     clock_s: float = math.nan
     """A timed teacher's virtual clock at the round's end, in seconds of the teacher's time
     (`groupwise.run.continuous`); nan for an untimed teacher."""

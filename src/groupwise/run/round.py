@@ -229,6 +229,7 @@ def finish_round(
         judgements=len(judgements),
         pairs=int(this_round.sum()),
         label_error_rate=run.dataset.label_error_rate(this_round),
+        label_error_untied=run.dataset.label_error_rate(this_round, untied=True),
         reward_loss=report.loss if report else math.nan,
         reward_accuracy=report.accuracy if report else math.nan,
         reward_val_accuracy=report.validation_accuracy if report else math.nan,
