@@ -60,6 +60,9 @@ class Target:
     """The groupwise env it modifies, e.g. "Hopper"."""
     unit: str
     """What the episode score counts, e.g. "backward turns"."""
+    step_unit: str
+    """The unit of a per-step score, e.g. "rad/s" (a sum of them, the true return, is in
+    it too: it is not the episode score)."""
     threshold: float
     """An episode succeeds when its target score is at least this."""
     stretch: float
@@ -100,6 +103,7 @@ TARGETS: dict[str, Target] = {
             env="Hopper-backflip",
             base="Hopper",
             unit="backward turns",
+            step_unit="rad/s",
             threshold=1.0,
             stretch=2.0,
             moment_s=1.0,
@@ -114,6 +118,7 @@ TARGETS: dict[str, Target] = {
             env="HalfCheetah-standup",
             base="HalfCheetah",
             unit="stand-sit cycles + half the mean upness",
+            step_unit="rad",
             threshold=1.0,
             stretch=3.0,
             moment_s=3.0,
@@ -130,6 +135,7 @@ TARGETS: dict[str, Target] = {
             env="Walker2d-splits",
             base="Walker2d",
             unit="s held",
+            step_unit="rad",
             threshold=1.0,
             stretch=4.0,
             moment_s=1.0,
