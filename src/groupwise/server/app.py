@@ -7,7 +7,8 @@ in ``app.state.context``. The app's lifespan runs the worker supervisor (when
 Errors are JSON ``{"detail": "one sentence"}``: the repositories' refusals map to 404 / 409 /
 422 (`groupwise.storage.errors`), FastAPI's validation errors are flattened into one
 sentence naming each bad field (a body that is not JSON: 400 naming where the decoder
-stopped), and an unexpected exception is logged and answered 500 without internals.
+stopped; a body that is not UTF-8: 400 naming the first bad byte), and an unexpected
+exception is logged and answered 500 without internals.
 """
 
 import asyncio
@@ -18,8 +19,10 @@ from collections.abc import AsyncIterator, Callable
 from typing import Any
 
 from fastapi import FastAPI, Request
+from fastapi.exception_handlers import http_exception_handler
 from fastapi.exceptions import RequestValidationError
-from fastapi.responses import JSONResponse
+from fastapi.responses import JSONResponse, Response
+from starlette.exceptions import HTTPException
 from starlette.middleware.trustedhost import TrustedHostMiddleware
 
 from groupwise.server.config import AppConfig
@@ -110,6 +113,7 @@ def create_app(config: AppConfig) -> FastAPI:
     )
     app.add_exception_handler(StorageError, _storage_error)  # type: ignore[arg-type]
     app.add_exception_handler(RequestValidationError, _validation_error)  # type: ignore[arg-type]
+    app.add_exception_handler(HTTPException, _http_error)  # type: ignore[arg-type]
     app.add_exception_handler(Exception, _unexpected_error)
     mount_frontend(app, config.static_root)
     return app
@@ -182,6 +186,20 @@ def _json_error(item: dict[str, Any], document: Any) -> str:
         where = json.JSONDecodeError(reason, document, position)
         reason = f"{reason} at line {where.lineno} column {where.colno}"
     return f"request body is not valid JSON: {reason}"
+
+
+async def _http_error(request: Request, error: HTTPException) -> Response:
+    """FastAPI's own answer, but for a JSON body that is not UTF-8: FastAPI answers any body
+    it cannot decode with a vague 400 ("There was an error parsing the body"); this one says
+    which byte is wrong."""
+    cause = error.__cause__
+    if error.status_code == 400 and isinstance(cause, UnicodeDecodeError):
+        byte, offset = cause.object[cause.start], cause.start
+        detail = (
+            f"request body is not valid UTF-8 JSON: invalid byte 0x{byte:02x} at offset {offset}"
+        )
+        return JSONResponse({"detail": detail}, status_code=400)
+    return await http_exception_handler(request, error)
 
 
 def _unexpected_error(request: Request, error: Exception) -> JSONResponse:

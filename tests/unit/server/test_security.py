@@ -269,6 +269,29 @@ def test_malformed_json_names_where_it_breaks(client, body, detail):
     assert response.json() == {"detail": detail}
 
 
+@pytest.mark.parametrize(
+    ("body", "offset"),
+    [
+        (b'{"env": "Grid\xffWorld"}', 13),  # a byte UTF-8 never uses
+        (b'{"env": "\xc3("}', 9),  # a lead byte without its continuation
+    ],
+)
+def test_a_body_that_is_not_utf8_is_a_clear_400(client, body, offset):
+    response = client.post(
+        "/api/sessions", content=body, headers={"content-type": "application/json"}
+    )
+    assert response.status_code == 400
+    detail = response.json()["detail"]
+    assert detail.startswith("request body is not valid UTF-8 JSON: invalid byte 0x")
+    assert detail.endswith(f"at offset {offset}")
+
+
+def test_other_http_errors_keep_their_answer(client):
+    response = client.get("/clips/not-a-clip")
+    assert response.status_code == 404
+    assert response.json() == {"detail": "there is no such clip"}
+
+
 def test_the_schema_documents_the_guards_answers_on_state_changes(client):
     paths = client.get("/api/openapi.json").json()["paths"]
     judgements = paths["/api/sessions/{session_id}/judgements"]
