@@ -1440,6 +1440,12 @@ export interface components {
              */
             stretch: number;
             /**
+             * Success
+             * @description when an episode succeeds, in words (the threshold in it)
+             * @example a split held ≥ 1 s
+             */
+            success: string;
+            /**
              * Threshold
              * @description an episode succeeds when its score reaches this
              */

@@ -67,6 +67,9 @@ class Target:
     """An episode succeeds when its target score is at least this."""
     stretch: float
     """The more ambitious level (e.g. the paper's double backflip)."""
+    success: str
+    """When an episode succeeds, in words a person reads beside the env's name, with
+    `threshold` in it, e.g. "a split held ≥ 1 s"."""
     moment_s: float
     """How long the behaviour takes to show, s: the span of the five-frame strip."""
     description: str
@@ -106,6 +109,7 @@ TARGETS: dict[str, Target] = {
             step_unit="rad/s",
             threshold=1.0,
             stretch=2.0,
+            success="≥ 1 backward turn",
             moment_s=1.0,
             description=(
                 "net backward turns of the torso made while the centre of mass is at least "
@@ -121,6 +125,7 @@ TARGETS: dict[str, Target] = {
             step_unit="rad",
             threshold=1.0,
             stretch=3.0,
+            success="≥ 1 stand-sit cycle",
             moment_s=3.0,
             description=(
                 "completed cycles of standing on the back legs (upness >= 0.8: front raised "
@@ -138,6 +143,7 @@ TARGETS: dict[str, Target] = {
             step_unit="rad",
             threshold=1.0,
             stretch=4.0,
+            success="a split held ≥ 1 s",
             moment_s=1.0,
             description=(
                 "longest hold, s, of a split: thighs >= 90° apart, torso within 60° of "

@@ -54,6 +54,10 @@ class TargetOut(_Out):
     unit: str = Field(description="what an episode's score counts", examples=["backward turns"])
     threshold: float = Field(description="an episode succeeds when its score reaches this")
     stretch: float = Field(description="the more ambitious level")
+    success: str = Field(
+        description="when an episode succeeds, in words (the threshold in it)",
+        examples=["a split held ≥ 1 s"],
+    )
     description: str = Field(description="the definition in one paragraph")
 
 

@@ -82,6 +82,8 @@ def test_target_envs_are_registered_beside_the_six() -> None:
         assert resolve_id(target.env) in gym.registry
         assert horizon(target.env) == 1000
         assert 0 < target.threshold < target.stretch
+        # the success phrase states the threshold a score is judged by
+        assert f"≥ {target.threshold:g}" in target.success
         assert make_standard_env(target.env).spec.id == resolve_id(target.env)
         # behaviours last as long as the base env's (the app's and case study's default)
         assert default_clip_seconds(target.env) == default_clip_seconds(target.base) == 1.5

@@ -32,6 +32,8 @@ def test_envs_are_the_six_then_the_targets_with_what_they_score(client):
     assert backflip["target"]["unit"] == "backward turns"
     assert (backflip["target"]["threshold"], backflip["target"]["stretch"]) == (1.0, 2.0)
     assert backflip["target"]["base"] == "Hopper" and backflip["target"]["description"]
+    splits = next(e for e in envs if e["name"] == "Walker2d-splits")
+    assert splits["target"]["success"] == "a split held ≥ 1 s"  # words, not "s held ≥ 1"
 
 
 def test_resolve_gives_the_envs_defaults_with_l_in_steps(client):

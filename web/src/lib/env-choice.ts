@@ -11,10 +11,11 @@ function num(x: number): string {
   return Number.isInteger(x) ? String(x) : String(Number(x.toPrecision(3)));
 }
 
-/** An option's text: the name, and for a target what it scores and when an episode succeeds. */
+/** An option's text: the name, and for a target when an episode succeeds, in words
+ * ("Walker2d-splits · success: a split held ≥ 1 s"). */
 export function envOptionText(env: EnvInfo): string {
   const t = env.target;
-  return t ? `${env.name} · ${t.unit} ≥ ${num(t.threshold)}` : env.name;
+  return t ? `${env.name} · success: ${t.success}` : env.name;
 }
 
 /** One line about the chosen env (null: another Gymnasium id). */
@@ -28,8 +29,8 @@ export function envAbout(env: EnvInfo | null): string {
   const t = env.target;
   if (t) {
     return (
-      `Reward-free ${t.base}, scored by its target: ${t.unit}; an episode succeeds at ` +
-      `${num(t.threshold)} (stretch ${num(t.stretch)}). ${capitalise(t.description)}.`
+      `Reward-free ${t.base}, scored by its target (${t.unit}); success: ${t.success}, ` +
+      `stretch: ${num(t.stretch)}. ${capitalise(t.description)}.`
     );
   }
   return `${env.gym_id} · ${env.horizon} steps an episode · ${capitalise(env.description)}.`;

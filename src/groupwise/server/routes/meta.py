@@ -48,6 +48,7 @@ def _env_out(entry: EnvEntry, kind: Literal["env", "target"]) -> EnvOut:
             unit=target.unit,
             threshold=target.threshold,
             stretch=target.stretch,
+            success=target.success,
             description=target.description,
         ),
     )
