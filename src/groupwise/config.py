@@ -220,6 +220,10 @@ class TeacherConfig:
     interactive_clear: Annotated[float, Field(ge=0)] = 1.0
     """The "interactive-clear" DM compares groups whose mean true returns differ by at least
     this many typical member deviations (`query.interactive.clear_gaps`)."""
+    label_error: Annotated[float, Field(gt=0, lt=0.5)] | None = None
+    """A teacher calibrated to people: its noise set per pool so that this share of its
+    comparisons of two behaviours of unequal return is wrong (`oracles.calibration`; the
+    paper's user study: 0.108–0.128, so 0.12); None: `noise_sigma` per step (SPEC §7)."""
     pace_s: Annotated[float, Field(gt=0)] | None = None
     """Seconds of a virtual clock the teacher takes per comparison (a timed teacher,
     `groupwise.run.continuous`); None: untimed, the rounds' records carry no clock."""

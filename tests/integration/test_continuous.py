@@ -141,11 +141,15 @@ def test_the_paper_pace_converts_pairs_to_comparisons():
 def test_train_continuous_from_the_command_line(tmp_path, capsys):
     args = ["train", "--env", "GridWorld", "--dm", "groupwise", "--comparisons", "8"]
     args += ["--rounds", "1", "--training", "continuous", "--teacher-pace", "0.5", "-q"]
+    args += ["--teacher-error", "0.12"]
     assert main([*args, "--out", str(tmp_path)]) == 0
     saved = RunConfig.load(tmp_path / "config.json")
     assert (saved.training.mode, saved.teacher.pace_s) == ("continuous", 0.5)
-    assert (tmp_path / RESULTS_FILE).is_file()
+    assert saved.teacher.label_error == 0.12
+    assert "label_error_untied" in (tmp_path / RESULTS_FILE).read_text().splitlines()[0]
+    assert main([*args[:-2], "--teacher-error", "0.7", "--out", str(tmp_path / "y")]) == 2
+    assert "label_error" in capsys.readouterr().err
     with pytest.raises(SystemExit) as refused:
-        main([*args[:-3], "-q", "--teacher-pace", "0", "--out", str(tmp_path / "x")])
+        main([*args[:-5], "-q", "--teacher-pace", "0", "--out", str(tmp_path / "x")])
     assert refused.value.code == 2
     assert "expected a finite number > 0" in capsys.readouterr().err

@@ -64,6 +64,13 @@ def add_training_arguments(parser: argparse.ArgumentParser) -> None:
         "trains while a timed teacher answers, on a virtual clock",
     )
     parser.add_argument(
+        "--teacher-error",
+        type=positive_float,
+        metavar="E",
+        help="a teacher calibrated to people: wrong on this share of behaviour pairs of "
+        "unequal return (0.12: the paper's user study), its noise set per pool",
+    )
+    parser.add_argument(
         "--teacher-pace",
         type=positive_float,
         metavar="S",
@@ -72,17 +79,24 @@ def add_training_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def timed(cfg: "RunConfig", args: argparse.Namespace, target: str | None) -> "RunConfig":
-    """`cfg` with --training and --teacher-pace applied; continuous training without a
-    pace gets the paper's (`run.continuous.paper_pace`)."""
+def apply_teacher_options(
+    cfg: "RunConfig", args: argparse.Namespace, target: str | None
+) -> "RunConfig":
+    """`cfg` with --training, --teacher-error and --teacher-pace applied; continuous
+    training without a pace gets the paper's (`run.continuous.paper_pace`).
+
+    Raises:
+        ValueError: a teacher error outside (0, 0.5).
+    """
     from groupwise.run.continuous import paper_pace
 
     mode = args.training or cfg.training.mode
     pace = args.teacher_pace or cfg.teacher.pace_s
     if mode == "continuous" and pace is None:  # the pairwise DMs: "pairwise", "pairwise-…"
         pace = paper_pace(target, pairwise=cfg.loop.oracle.startswith("pairwise"))
+    error = args.teacher_error or cfg.teacher.label_error
     return dataclasses.replace(
         cfg,
         training=dataclasses.replace(cfg.training, mode=mode),
-        teacher=dataclasses.replace(cfg.teacher, pace_s=pace),
+        teacher=dataclasses.replace(cfg.teacher, pace_s=pace, label_error=error),
     )

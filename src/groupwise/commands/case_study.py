@@ -8,9 +8,9 @@ from pathlib import Path
 from groupwise.commands.arguments import (
     UsageError,
     add_training_arguments,
+    apply_teacher_options,
     non_negative_int,
     positive_int,
-    timed,
     writable_dir,
 )
 from groupwise.envs import TARGETS
@@ -98,7 +98,9 @@ def run(args: argparse.Namespace) -> int:
             }
         )
         reward = dataclasses.replace(base.reward, use_actions=args.reward_inputs == "obs-act")
-        cfg = timed(dataclasses.replace(base, loop=loop, reward=reward), args, target.name)
+        cfg = apply_teacher_options(
+            dataclasses.replace(base, loop=loop, reward=reward), args, target.name
+        )
     except ValueError as error:
         raise UsageError(str(error)) from None
     out = writable_dir(args.out)

@@ -9,9 +9,9 @@ from pathlib import Path
 from groupwise.commands.arguments import (
     UsageError,
     add_training_arguments,
+    apply_teacher_options,
     non_negative_int,
     positive_int,
-    timed,
     writable_dir,
 )
 
@@ -23,6 +23,7 @@ FROM_SESSION_EXCLUDES = (
     "seed",
     "training",
     "teacher_pace",
+    "teacher_error",
 )
 """Options --from-session takes from DIR itself (its config.json)."""
 
@@ -101,7 +102,7 @@ def run(args: argparse.Namespace) -> int:
     try:
         make_env(args.env).close()  # the registry's message names the known envs
         base = RunConfig.load(args.config) if args.config else RunConfig()
-        cfg = timed(
+        cfg = apply_teacher_options(
             dataclasses.replace(
                 base, loop=LoopConfig(**{**dataclasses.asdict(base.loop), **given})
             ),

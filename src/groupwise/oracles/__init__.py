@@ -10,10 +10,12 @@ myopic, mistake, skip, equal). A person answers through the web page
 (`groupwise.worker.web_teacher.WebTeacher`).
 """
 
+import dataclasses
 from collections.abc import Callable
 
 from groupwise.config import RunConfig, TeacherConfig
 from groupwise.oracles.base import Feedback, Oracle, Teacher
+from groupwise.oracles.calibration import CalibratedTeacher
 from groupwise.oracles.group_decision import Perception, SimulatedTeacher
 from groupwise.oracles.imperfect import TEACHERS, Imperfection
 from groupwise.oracles.pairwise import PairwiseTeacher
@@ -67,7 +69,20 @@ UNLIMITED = 2**31 - 1
 def _dm(
     strategy: str, teacher: Callable[[TeacherConfig], Teacher]
 ) -> Callable[[RunConfig], Feedback]:
-    return lambda run: Feedback(STRATEGIES[strategy](run), teacher(run.teacher))
+    """The DM `strategy` answered by `teacher`, calibrated to `TeacherConfig.label_error`
+    when that is set (its σ then set per pool: `calibration.CalibratedTeacher`)."""
+
+    def build(run: RunConfig) -> Feedback:
+        cfg = run.teacher
+        answer = teacher(cfg)
+        if cfg.label_error is not None:
+            answer = CalibratedTeacher(
+                lambda sigma: teacher(dataclasses.replace(cfg, noise_sigma=sigma)),
+                cfg.label_error,
+            )
+        return Feedback(STRATEGIES[strategy](run), answer)
+
+    return build
 
 
 def _paper_teacher(cfg: TeacherConfig) -> Teacher:

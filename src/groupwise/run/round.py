@@ -27,6 +27,7 @@ import numpy as np
 from groupwise.behaviour import BehaviourTree
 from groupwise.config import LoopConfig, RunConfig
 from groupwise.oracles.base import Feedback
+from groupwise.oracles.calibration import calibrated_noise_sd
 from groupwise.pool.behaviours import BehaviourPool
 from groupwise.pool.sampling import sample_pool
 from groupwise.preferences.judgement import Judgement
@@ -348,9 +349,13 @@ def _append(run: Run, record: RoundRecord, callback: RunCallback) -> RoundRecord
 def _diagnostics(
     offer: Offer, asked: int | None, judgements: int, cfg: RunConfig
 ) -> dict[str, float]:
-    """The round's query diagnostics (SPEC §7) for its record; nan where a person answered."""
+    """The round's query diagnostics (SPEC §7) for its record; nan where a person answered.
+    The noise is the simulated teacher's per behaviour: L·σ, or the calibrated teacher's."""
+    returns = offer.pool.true_returns
     noise_sd = cfg.loop.fragment_length * cfg.teacher.noise_sigma
-    sd = float(offer.pool.true_returns.std()) if len(offer.pool) else math.nan
+    if cfg.teacher.label_error is not None:
+        noise_sd = calibrated_noise_sd(returns, cfg.teacher.label_error)
+    sd = float(returns.std()) if len(offer.pool) else math.nan
     diagnostics = {
         "candidates": offer.candidates,
         "return_sd_over_noise": sd / noise_sd if noise_sd > 0 else math.inf,

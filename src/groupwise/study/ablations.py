@@ -12,6 +12,9 @@ Each one reproduces a choice of the comparison the paper made that our defaults 
   `PPOConfig.normalize_reward`), as a PPO without `VecNormalize` reward scaling would.
 - ``obs-only``: the reward members see the observation alone, not [obs ; act]
   (`RewardConfig.use_actions` off; ARCHITECTURE.md, "Reward inputs").
+- ``calibrated``: the simulated teacher is wrong as often as the paper's people (12 % of
+  behaviour pairs of unequal return, its noise set per pool: `oracles.calibration`) instead
+  of SPEC §7's fixed σ per step.
 """
 
 import dataclasses
@@ -19,6 +22,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from groupwise.config import RunConfig
+from groupwise.oracles.calibration import PEOPLE_LABEL_ERROR
 
 
 @dataclass(frozen=True)
@@ -50,6 +54,11 @@ def _obs_only(config: RunConfig) -> RunConfig:
     return dataclasses.replace(config, reward=dataclasses.replace(config.reward, use_actions=False))
 
 
+def _calibrated(config: RunConfig) -> RunConfig:
+    teacher = dataclasses.replace(config.teacher, label_error=PEOPLE_LABEL_ERROR)
+    return dataclasses.replace(config, teacher=teacher)
+
+
 ABLATIONS: dict[str, Ablation] = {
     "capped": Ablation(
         "at most one preference pair per comparison and round (pair_cap 1.0)",
@@ -67,6 +76,10 @@ ABLATIONS: dict[str, Ablation] = {
     "obs-only": Ablation(
         "reward members over the observation alone (use_actions off)",
         _obs_only,
+    ),
+    "calibrated": Ablation(
+        f"a teacher wrong as often as the paper's people (label_error {PEOPLE_LABEL_ERROR})",
+        _calibrated,
     ),
 }
 """Every ablation by name; the name is also its directory in a study (`cells.Cell`)."""

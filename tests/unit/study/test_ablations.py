@@ -20,6 +20,7 @@ INTENDED = {
     "pairs2x": {("loop", "pair_oversample"): 2.0},
     "no-reward-norm": {("ppo", "normalize_reward"): False},
     "obs-only": {("reward", "use_actions"): False},
+    "calibrated": {("teacher", "label_error"): 0.12},
 }
 
 
