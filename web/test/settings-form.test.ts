@@ -7,6 +7,7 @@ import {
   inputText,
   labelOf,
   parseInput,
+  refusalText,
   settingFields,
   touch,
   valueAt,
@@ -120,6 +121,34 @@ describe("chosenSettings", () => {
     expect([...touched]).toEqual(["clip_seconds"]);
     expect([...touch(touched, "fragment_length")]).toEqual(["fragment_length"]);
     expect([...touch(new Set(["seed"]), "rounds")].sort()).toEqual(["rounds", "seed"]);
+  });
+});
+
+describe("refusalText", () => {
+  it("names a refused field by the label the form shows, not its place in the body", () => {
+    expect(refusalText("settings.pool_size: Input should be less than or equal to 200", fields)).toBe(
+      "Pool size: Input should be less than or equal to 200",
+    );
+    expect(refusalText("settings.ppo.batch_size: Input should be greater than or equal to 2", fields)).toBe(
+      "Batch size (PPO): Input should be greater than or equal to 2",
+    );
+    expect(
+      refusalText(
+        "settings.pool_size: Input should be a valid integer; settings.ppo_steps_per_round: Input should be greater than or equal to 0",
+        fields,
+      ),
+    ).toBe("Pool size: Input should be a valid integer; PPO steps per round: Input should be greater than or equal to 0");
+  });
+
+  it("names a nested config by its section and leaves other sentences alone", () => {
+    expect(refusalText("settings.ppo: Value error, ppo batch_size 4096 is larger than a rollout", fields)).toBe(
+      "PPO: ppo batch_size 4096 is larger than a rollout",
+    );
+    const plain = "fragment_length 7 and clip_seconds 1.0 (30 steps of GridWorld) disagree: give one of them";
+    expect(refusalText(plain, fields)).toBe(plain);
+    expect(refusalText("settings.driver: Input should be 'app' or 'library'", fields)).toBe(
+      "settings.driver: Input should be 'app' or 'library'",
+    );
   });
 });
 

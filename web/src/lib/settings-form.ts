@@ -244,3 +244,25 @@ export function chosenSettings(
   }
   return { settings, errors };
 }
+
+/**
+ * A refusal of the server as the form says it: the server names a bad field by its place in
+ * the body ("settings.pool_size: Input should be …"); the form names it by the label it shows
+ * ("Pool size: Input should be …"), a nested field with its section ("Batch size (PPO): …"), a
+ * nested config as its section ("PPO: …"), without pydantic's "Value error, ". Parts the form
+ * has no field for stay as they are.
+ */
+export function refusalText(message: string, fields: readonly SettingField[]): string {
+  return message
+    .split("; ")
+    .map((part) => {
+      const m = /^settings\.([\w.]+): ([\s\S]*)$/.exec(part);
+      if (!m) return part;
+      const [, key, reason] = m as unknown as [string, string, string];
+      const f = fields.find((x) => x.key === key);
+      const section = fields.find((x) => x.path.length > 1 && x.path[0] === key)?.section;
+      const name = f ? (f.path.length > 1 ? `${f.label} (${f.section})` : f.label) : section;
+      return name ? `${name}: ${reason.replace(/^Value error, /, "")}` : part;
+    })
+    .join("; ");
+}

@@ -14,6 +14,7 @@ import {
   type SettingField,
   chosenSettings,
   inputText,
+  refusalText,
   settingFields,
   touch,
   valueAt,
@@ -90,7 +91,7 @@ export function renderStart(element: HTMLElement, data: StartData, handlers: Sta
   view.envError.hidden = !envError;
   attr(view.env, "aria-invalid", envError && !other ? "true" : null);
   attr(view.gymId, "aria-invalid", envError && other ? "true" : null);
-  const formError = view.localErrors.length ? view.localErrors.join(" ") : error;
+  const formError = view.localErrors.length ? view.localErrors.join(" ") : error && refusalText(error, view.fields);
   text(view.formError, formError ?? "");
   view.formError.hidden = !formError;
   view.submit.disabled =
