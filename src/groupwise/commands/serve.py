@@ -13,12 +13,16 @@ import math
 import secrets
 import socket
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from groupwise.commands.arguments import UsageError, int_at_least, writable_dir
+
+if TYPE_CHECKING:
+    from groupwise.storage import Database
 
 
 def _number(text: str) -> float:
@@ -143,33 +147,43 @@ def choose_session(
     """The session to serve: `session_id`, else the newest unfinished one of `env` and
     `mode` (unless `new`), else a new one with the settings `overrides`.
 
-    Raises UsageError (a clash of options), StorageError (unknown env or session),
-    pydantic.ValidationError (bad settings).
+    Raises UsageError (a clash of options), StorageError (unknown env or session, or an
+    env whose episodes cannot hold a behaviour: `server.state.check_env`, before the
+    database is opened), pydantic.ValidationError (bad settings).
     """
     from groupwise.server.state import check_env
-    from groupwise.storage import Database, SessionSettings
+    from groupwise.storage import SessionSettings
     from groupwise.storage import sessions as repo
 
     settings = SessionSettings.model_validate(overrides)
-    db = Database(database_url, pool_size=1)
-    db.create_schema()
+    if session_id is not None:
+        with _database(database_url) as db, db.write() as s:
+            found = repo.get_session(s, session_id)
+            if env is not None and env != found.env:
+                raise UsageError(f"session {session_id} is a {found.env} session, not {env}")
+            _check_same_settings(found.id, found.settings, overrides)
+            return Chosen(found.id, found.env, found.mode, "resuming")
+    if env is None:
+        raise UsageError("--env is required unless --session names a session")
+    settings = check_env(env, settings)  # before the database: a refused env creates nothing
+    with _database(database_url) as db, db.write() as s:
+        resumable = None if new else repo.find_resumable(s, env, mode)
+        if resumable is not None:
+            _check_same_settings(resumable.id, resumable.settings, overrides)
+            return Chosen(resumable.id, env, mode, "resuming")
+        created = repo.create_session(s, env, mode, settings)
+        return Chosen(created.id, env, mode, "new")
+
+
+@contextmanager
+def _database(url: str) -> "Iterator[Database]":
+    """The database at `url` with its schema, disposed of on exit."""
+    from groupwise.storage import Database
+
+    db = Database(url, pool_size=1)
     try:
-        with db.write() as s:
-            if session_id is not None:
-                found = repo.get_session(s, session_id)
-                if env is not None and env != found.env:
-                    raise UsageError(f"session {session_id} is a {found.env} session, not {env}")
-                _check_same_settings(found.id, found.settings, overrides)
-                return Chosen(found.id, found.env, found.mode, "resuming")
-            if env is None:
-                raise UsageError("--env is required unless --session names a session")
-            settings = check_env(env, settings)
-            resumable = None if new else repo.find_resumable(s, env, mode)
-            if resumable is not None:
-                _check_same_settings(resumable.id, resumable.settings, overrides)
-                return Chosen(resumable.id, env, mode, "resuming")
-            created = repo.create_session(s, env, mode, settings)
-            return Chosen(created.id, env, mode, "new")
+        db.create_schema()
+        yield db
     finally:
         db.dispose()
 

@@ -19,6 +19,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from groupwise.envs.episodes import GIVE_UP_EPISODES, too_short_message
 from groupwise.envs.spaces import encode_actions
 from groupwise.envs.true_reward import TRUE_REWARD_KEY
 from groupwise.pool.fragments import Trajectory
@@ -30,11 +31,6 @@ EXPLORATION_SEGMENT = 10
 """Mean length in steps of one random-action stretch (the agent and the random policy take
 turns in stretches, like imitation's ExplorationWrapper, so random behaviour is visible in a
 clip rather than single jittered steps)."""
-
-GIVE_UP_EPISODES = 16
-"""Episodes `sample_episodes_for_windows` samples without a single window among them before it
-concludes that the env's episodes are too short for the window length (a random Hopper-v5
-falls after 9-73 steps; 16 such episodes show their spread)."""
 
 
 def exploration_mask(
@@ -145,7 +141,9 @@ def sample_episodes_for_windows(
         windows = sum(len(t) // length for t in trajectories)
         if windows == 0:
             if len(trajectories) >= min(GIVE_UP_EPISODES, max_episodes or math.inf):
-                raise ValueError(_too_short(env_name, trajectories, length))
+                raise ValueError(
+                    too_short_message(env_name, np.array([len(t) for t in trajectories]), length)
+                )
             wanted = GIVE_UP_EPISODES - len(trajectories)
         else:
             wanted = math.ceil((n_windows - windows) * len(trajectories) / windows)
@@ -252,12 +250,3 @@ def _step_limit(env: gym.Env, max_steps: int | None) -> int:
 
 def _env_name(env: gym.Env) -> str:
     return env.spec.id if env.spec is not None else type(env.unwrapped).__name__
-
-
-def _too_short(env_name: str, trajectories: list[Trajectory], length: int) -> str:
-    lengths = np.array([len(t) for t in trajectories])
-    return (
-        f"{len(lengths)} episodes of {env_name} lasted {lengths.min()}-{lengths.max()} steps "
-        f"(median {np.median(lengths):g}), none long enough for one window of {length} steps: "
-        "use a shorter fragment length, or an env or policy whose episodes last longer"
-    )

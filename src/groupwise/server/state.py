@@ -7,9 +7,11 @@ that should have ended (the supervisor also checks, for sessions nobody is looki
 
 from datetime import datetime
 
+import numpy as np
 from sqlalchemy.orm import Session as DbSession
 
 from groupwise.envs import horizon
+from groupwise.envs.episodes import check_episode_length
 from groupwise.server import schemas
 from groupwise.server.context import AppContext
 from groupwise.storage import Database, InvalidError, lifecycle, sessions, timer
@@ -91,8 +93,9 @@ def list_states(db: Database) -> list[schemas.SessionState]:
 
 def check_env(env: str, settings: SessionSettings) -> SessionSettings:
     """The settings a new session of `env` stores (`SessionSettings.for_env`: its L in
-    steps). Raises InvalidError unless `env` is known, can be made here, and its episodes
-    hold a behaviour."""
+    steps). Raises InvalidError unless `env` is known, can be made here, its horizon holds a
+    behaviour, and a random policy's episodes last long enough to hold one
+    (`envs.episodes.check_episode_length`)."""
     try:
         steps = horizon(env)
         resolved = settings.for_env(env)  # makes the env once, for its step duration
@@ -103,11 +106,17 @@ def check_env(env: str, settings: SessionSettings) -> SessionSettings:
         # DependencyNotInstalled for CarRacing-v3 without Box2D): the id is the person's error.
         raise InvalidError(f"env {env!r} cannot be made here: {error}") from None
     length = resolved.fragment_length
+    seconds = resolved.clip_timing(env).seconds
     if steps is None or length is None or steps < length:
         raise InvalidError(
             f"env {env} needs a fixed horizon of at least fragment_length = {length} steps "
-            f"({resolved.clip_timing(env).seconds:.3g} s); it has {steps}"
+            f"({seconds:.3g} s); it has {steps}"
         )
+    try:  # an env that ends episodes early (issue 23): round 0 would fail, and every retry
+        window = f" (clip_seconds = {seconds:.3g} s)"
+        check_episode_length(env, length, np.random.default_rng(resolved.seed), window)
+    except ValueError as error:
+        raise InvalidError(str(error)) from None
     return resolved
 
 

@@ -45,6 +45,18 @@ def test_bad_input_is_one_line_and_exit_code_2(tmp_path, capsys, args, message):
     assert "Traceback" not in err
 
 
+def test_an_env_whose_episodes_end_before_a_behaviour_is_refused_and_nothing_created(
+    tmp_path, capsys
+):
+    """InvertedPendulum-v5 ends when the pole tips (3-20 random steps): its session's round 0
+    could never be prepared (issue 23), so serve refuses it as the New-session page does."""
+    code, err = _serve(tmp_path, capsys, "--env", "InvertedPendulum-v5", "--port", "0")
+    assert code == 2 and len(err.splitlines()) == 1
+    assert "episodes of InvertedPendulum-v5 lasted" in err
+    assert "none long enough for one window of 25 steps (clip_seconds = 1 s)" in err
+    assert not (tmp_path / "data" / "groupwise.db").exists()
+
+
 def test_a_port_in_use_is_a_usage_error(tmp_path, capsys):
     with socket.socket() as taken:
         taken.bind(("127.0.0.1", 0))

@@ -66,6 +66,8 @@ def test_resolve_fills_what_follows_from_the_chosen_settings(client):
         (BROKEN, {}, "cannot be made here: Box9D is not installed"),
         ("Hopper", {"clip_seconds": 20}, "fixed horizon"),  # 2500 steps of a 1000-step env
         ("Pendulum-v1", {"clip_seconds": 20}, "fixed horizon"),  # 400 steps of 200
+        # episodes that end before one behaviour (random: 3-20 steps of 25; issue 23)
+        ("InvertedPendulum-v5", {}, "none long enough for one window of 25 steps"),
         ("Hopper", {"fragment_length": 30, "clip_seconds": 1}, "disagree"),
         ("Hopper", {"pool_size": 500}, "settings.pool_size"),
     ],
