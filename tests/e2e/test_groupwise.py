@@ -239,6 +239,8 @@ def test_arcs_by_keyboard_and_previews(server: Server, page: Page, ui: Any, shot
     focused = page.evaluate("document.activeElement.dataset.id")
     expect(page.locator(".preview")).to_be_visible()
     expect(page.locator(".preview video")).to_have_count(1)
+    # as long as the comparison says its clips are (GridWorld: 1 s), at real speed
+    expect(page.locator(".preview .preview-timing")).to_have_text("1 s · real speed")
     page.keyboard.press("Enter")
     assert ui.clip_ids("A") == [focused]
     for _ in range(4):  # outwards to the first real cluster (padding arcs stand for one leaf)

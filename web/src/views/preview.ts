@@ -1,10 +1,12 @@
 /**
  * The floating clip preview beside the pointer (SPEC §9): a leaf's clip, or a cluster's size
- * and up to three representative clips (its medoids). Videos are muted, looping, and
+ * and up to three representative clips (its medoids), with how long a clip is and how fast
+ * it plays ("1.5 s · real speed", as by the comparison's clips). Videos are muted, looping, and
  * unloaded when the preview hides, so sweeping over the chart does not pile up decoders.
  * It stays inside the area `bounds` gives (the chart's), so it never covers the controls
  * beside the chart, such as the answer buttons.
  */
+import { clipCaption } from "../lib/clip-timing";
 import { type Bounds, placeBeside } from "../lib/tooltip";
 import type { TreeNode } from "../lib/tree";
 import type { RoundData } from "../state";
@@ -22,6 +24,8 @@ export interface PreviewContent {
   title: string;
   detail: string;
   clips: PreviewClip[];
+  /** How long each clip is and how fast it plays, e.g. "1.5 s · real speed" ("": not known). */
+  timing: string;
   /** Large single clip (a leaf) or a row of small ones (a cluster). */
   large: boolean;
 }
@@ -43,7 +47,8 @@ export function createPreview(parent: HTMLElement = document.body, bounds?: () =
   const title = h("div", { class: "preview-title" });
   const detail = h("div", { class: "preview-detail" });
   const clips = h("div", { class: "preview-clips" });
-  const element = h("div", { class: "preview", role: "tooltip", hidden: true }, title, detail, clips);
+  const timing = h("div", { class: "preview-timing clip-timing" });
+  const element = h("div", { class: "preview", role: "tooltip", hidden: true }, title, detail, clips, timing);
   parent.append(element);
   let key: string | null = null;
 
@@ -101,6 +106,8 @@ export function createPreview(parent: HTMLElement = document.body, bounds?: () =
       }
       text(title, content.title);
       text(detail, content.detail);
+      text(timing, content.timing);
+      timing.hidden = !content.timing || content.clips.length === 0;
       element.hidden = false;
       place(x, y);
     },
@@ -144,6 +151,8 @@ export function previewContent(
     if (leaf.poster) clip.poster = clipUrl(leaf.poster);
     return clip;
   };
+  // The preview's videos play at their own rate, whatever the comparison's speed control says.
+  const timing = clipCaption(round.clip);
   const n = node.leaves.length;
   if (n === 1) {
     const id = node.leaves[0]!;
@@ -155,6 +164,7 @@ export function previewContent(
       title: `behaviour ${id}`,
       detail: `${node.isLeaf ? "" : `level ${node.level} · `}${where} · ${seen}`,
       clips: clip ? [clip] : [],
+      timing,
       large: true,
     };
   }
@@ -168,6 +178,7 @@ export function previewContent(
     title: `cluster of ${n} behaviours`,
     detail: parts.join(" · "),
     clips: medoidsOf(round, node).map(clipOf).filter((x): x is PreviewClip => x !== null),
+    timing,
     large: false,
   };
 }
