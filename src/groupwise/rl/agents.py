@@ -26,9 +26,12 @@ class Agent(Protocol):
     def learn(
         self,
         steps: int,
-        seed: int,
+        seed: int | None,
         report: ProgressFn | None = None,
-    ) -> None: ...
+    ) -> None:
+        """Train at least `steps` env steps; `seed` reseeds and starts fresh episodes, None
+        continues those in flight."""
+        ...
 
     def policy(self, deterministic: bool = False) -> Policy: ...
 
@@ -68,12 +71,12 @@ class SB3Agent:
     def learn(
         self,
         steps: int,
-        seed: int,
+        seed: int | None,
         report: ProgressFn | None = None,
     ) -> None:
         if steps <= 0:
             return
-        if hasattr(self.model, "set_random_seed"):
+        if seed is not None and hasattr(self.model, "set_random_seed"):
             self.model.set_random_seed(seed)
         if hasattr(self.model, "get_env"):  # SB3: callbacks and a continued step count
             _quiet_default_logger(self.model)

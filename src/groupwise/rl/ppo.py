@@ -74,20 +74,23 @@ class PPOAgent:
     def learn(
         self,
         steps: int,
-        seed: int,
+        seed: int | None,
         report: ProgressFn | None = None,
     ) -> None:
-        """Train for at least `steps` env steps (whole rollouts), starting fresh episodes.
+        """Train for at least `steps` env steps (whole rollouts).
 
-        Every call reseeds SB3 and resets the training envs from `seed`, so the result
-        depends only on the saved state and `seed` (which makes `--resume` exact).
+        With a `seed` the call reseeds SB3 and starts fresh episodes, so the result depends
+        only on the saved state and `seed` (which makes `--resume` exact); with None it
+        continues the episodes in flight and SB3's random state (continuous training's
+        later slices of one round, `groupwise.run.continuous`).
         """
         if steps <= 0:
             return
-        self.model.set_random_seed(seed)
-        if self.cfg.reset_reward_norm:
-            self._normaliser().ret_rms = RunningMeanStd(shape=())
-        self.model.set_env(self.venv, force_reset=True)
+        if seed is not None:
+            self.model.set_random_seed(seed)
+            if self.cfg.reset_reward_norm:
+                self._normaliser().ret_rms = RunningMeanStd(shape=())
+            self.model.set_env(self.venv, force_reset=True)
         if self.model.tensorboard_log is None:
             # without one, SB3 makes an empty /tmp/SB3-<time> folder on every learn call
             self.model.set_logger(Logger(folder=None, output_formats=[]))

@@ -4,7 +4,8 @@ A *timed* teacher takes `TeacherConfig.pace_s` seconds of a virtual clock per co
 In a **continuous** round PPO does not wait for it: while the teacher answers one query,
 PPO advances `TrainingConfig.ppo_steps_per_s` steps per virtual second (in whole rollouts;
 a remainder under one rollout carries over to the next answer and is dropped at the
-round's end), and the reward ensemble refits between rollouts as soon as
+round's end; episodes run on across answers, fresh ones only at the round's start), and the
+reward ensemble refits between rollouts as soon as
 `refit_pairs` new pairs have arrived or `refit_s` seconds have passed since the last fit,
 whichever comes first. A rollout's rewards therefore all come from one fit: the policy's
 reward (`ensemble.mean_reward`, refitted in place) changes only between `learn` calls,
@@ -104,12 +105,17 @@ class _Trainer:
     ) -> None:
         self.run, self.streams, self.timer, self.callback = run, streams, timer, callback
         self.report: FitReport | None = None
+        self.started = False
 
     def learn(self, steps: int) -> None:
+        """`steps` more PPO steps: the round's first call seeds PPO from the round's stream
+        and starts fresh episodes, later ones continue the episodes in flight."""
         tick = time.perf_counter()
+        seed = None if self.started else int(self.streams.ppo.integers(2**31 - 1))
+        self.started = True
         self.run.agent.learn(
             steps,
-            int(self.streams.ppo.integers(2**31 - 1)),
+            seed,
             report=lambda done, total: self.callback.on_phase("ppo", done, total),
         )
         self.timer.seconds["ppo_s"] += time.perf_counter() - tick

@@ -73,3 +73,39 @@ def test_learning_with_tensorboard_logs_under_the_run_dir(tmp_path):
     agent = PPOAgent(make, dataclasses.replace(SMALL, tensorboard=True), 0, log_dir=tmp_path)
     agent.learn(128, seed=1)
     assert list(tmp_path.glob("ppo_*/events.out.tfevents.*"))
+
+
+def test_learning_on_without_a_seed_continues_the_episodes_in_flight():
+    """Two calls, the second without a seed, train exactly as one call of both lengths: the
+    second neither reseeds nor resets the envs (continuous training's slices)."""
+    reward = lambda obs, acts: -np.abs(acts[:, 0])  # noqa: E731
+    split = PPOAgent(make, SMALL, seed=0, reward_fn=reward)
+    split.learn(128, seed=1)
+    split.learn(128, seed=None)
+    whole = PPOAgent(make, SMALL, seed=0, reward_fn=reward)
+    whole.learn(256, seed=1)
+    assert split.num_timesteps == whole.num_timesteps == 256
+    for name, weights in _weights(whole).items():
+        np.testing.assert_array_equal(_weights(split)[name], weights, err_msg=name)
+    # … while a second seeded call starts over and trains differently
+    reseeded = PPOAgent(make, SMALL, seed=0, reward_fn=reward)
+    reseeded.learn(128, seed=1)
+    reseeded.learn(128, seed=1)
+    assert any(
+        not np.array_equal(_weights(reseeded)[name], weights)
+        for name, weights in _weights(whole).items()
+    )
+
+
+def test_progress_counts_the_whole_rollouts_that_run_not_the_steps_asked():
+    """PPO trains in whole rollouts (2 × 64 here): 1 step asked runs 128, and the progress
+    says so (issue 23: the page said "PPO 1 / 1 steps" while 2,048 ran)."""
+    agent = PPOAgent(make, SMALL, seed=0)
+    reports: list[tuple[int, int]] = []
+    agent.learn(1, seed=1, report=lambda done, total: reports.append((done, total)))
+    assert agent.num_timesteps == agent.rollout_steps == 128
+    assert reports == [(0, 128), (128, 128)]
+    reports.clear()
+    agent.learn(129, seed=2, report=lambda done, total: reports.append((done, total)))
+    assert reports == [(0, 256), (128, 256), (256, 256)]
+    assert agent.num_timesteps == 128 + 256
