@@ -71,14 +71,23 @@ def test_an_id_the_server_cannot_make_says_why_and_creates_nothing(
     expect(start).to_be_enabled()
     assert own_server.api("GET", "/api/sessions") == before
 
+    # a refused setting is named as the form labels it, not by its place in the body
+    page.get_by_label("Pool size", exact=True).fill("500")
+    form_error = page.locator("#start-form-error")
+    expect(form_error).to_have_text("Pool size: Input should be less than or equal to 200")
+    assert own_server.api("GET", "/api/sessions") == before
+
 
 def test_a_target_env_with_chosen_settings_is_created_as_shown(
     own_server: Server, page: Page, shot: Any
 ) -> None:
     _open_form(page, own_server)
+    # a target's option says in words when its episode succeeds
+    splits = page.locator('#start-env option[value="Walker2d-splits"]')
+    expect(splits).to_have_text("Walker2d-splits · success: a split held ≥ 1 s")
     page.get_by_label("Environment").select_option("Hopper-backflip")
     expect(page.locator("#start-env-about")).to_contain_text("backward turns")
-    expect(page.locator("#start-env-about")).to_contain_text("succeeds at 1")
+    expect(page.locator("#start-env-about")).to_contain_text("success: ≥ 1 backward turn")
     clip = page.get_by_label("Clip seconds")
     expect(clip).to_have_value("1.5")
     expect(page.get_by_label("Fragment length")).to_have_value("188")
