@@ -98,7 +98,7 @@ def test_finish_watch_download_and_continue(
     agent = groupwise.load_agent(path)
     obs, _ = agent.make_env().reset(seed=0)
     assert np.asarray(agent.predict(obs)).shape == ()  # GridWorld: one discrete action
-    assert agent.evaluate(episodes=1).shape == (1,)
+    assert agent.evaluate(episodes=1).returns.shape == (1,)
     assert [r.feedback for r in agent.summary.rounds] == [True, False]
 
     page.get_by_role("spinbutton", name="How many more").fill("64")

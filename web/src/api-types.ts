@@ -559,7 +559,7 @@ export interface components {
             env_steps: number;
             /**
              * Measure
-             * @description what true_return_mean measures: "true return" or a target env's score
+             * @description what true_return_mean measures: "true return", or in a target env the sum of its per-step scores, "per-step score sum (rad/s)"
              */
             measure: string;
             /**
@@ -569,6 +569,15 @@ export interface components {
             round: number;
             /** Rounds */
             rounds: components["schemas"]["AgentRound"][];
+            /** @description null: not a target env */
+            target: components["schemas"]["AgentTarget"] | null;
+            /**
+             * Target Score Mean
+             * @description a target env's episode score after the last round, in target.unit (mean over the evaluation episodes): whether teaching worked
+             */
+            target_score_mean: number | null;
+            /** Target Score Std */
+            target_score_std: number | null;
             /** True Return Mean */
             true_return_mean: number | null;
             /** True Return Std */
@@ -594,6 +603,13 @@ export interface components {
             /** Round */
             round: number;
             /**
+             * Target Score Mean
+             * @description a target env's episode score after the round, in the target's unit; null for other envs, rounds not evaluated and agents published before it was recorded
+             */
+            target_score_mean: number | null;
+            /** Target Score Std */
+            target_score_std: number | null;
+            /**
              * True Return Mean
              * @description null: not evaluated
              */
@@ -602,13 +618,47 @@ export interface components {
             true_return_std: number | null;
         };
         /**
+         * AgentTarget
+         * @description The target a finished session's env scores: its units and levels (`GET /api/envs` has
+         *     its definition).
+         */
+        AgentTarget: {
+            /**
+             * Name
+             * @example hopper-backflip
+             */
+            name: string;
+            /**
+             * Step Unit
+             * @description the unit of a per-step score and of their sum (true_return_mean)
+             * @example rad/s
+             */
+            step_unit: string;
+            /**
+             * Stretch
+             * @description the more ambitious level
+             */
+            stretch: number;
+            /**
+             * Threshold
+             * @description an episode succeeds when its score reaches this
+             */
+            threshold: number;
+            /**
+             * Unit
+             * @description what an episode's score counts
+             * @example backward turns
+             */
+            unit: string;
+        };
+        /**
          * AgentVideo
          * @description The final agent's video (GET …/agent.mp4): one greedy episode, at real speed.
          */
         AgentVideo: {
             /**
              * Episode Return
-             * @description the filmed episode's true return
+             * @description the filmed episode's true return (a target env: its per-step score sum)
              */
             episode_return: number;
             /** Fps */
@@ -619,6 +669,11 @@ export interface components {
             height: number;
             /** Seconds */
             seconds: number;
+            /**
+             * Target Score
+             * @description a target env's score of the filmed episode, in its unit
+             */
+            target_score: number | null;
             /** Width */
             width: number;
         };

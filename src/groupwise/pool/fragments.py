@@ -5,6 +5,7 @@ input covers (SPEC §1, §3.2): the prototype's clips were not aligned with the 
 window, which we do not repeat.
 """
 
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -27,6 +28,10 @@ class Trajectory:
     true_rewards: FloatArray  # (T,) the env's own reward (zeros for reward-free envs)
     reset_seed: int
     episode: int
+    episode_score: float = math.nan
+    """The env's score of the whole episode where it reports one: a target env's
+    ``info["target_total"]`` at the last step, in the target's unit (not the sum of the
+    per-step `true_rewards`); nan for other envs."""
 
     def __post_init__(self) -> None:
         t = self.obs.shape[0]

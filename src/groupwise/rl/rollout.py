@@ -14,6 +14,7 @@ env instances, never the ones PPO trains on.
 
 import math
 from collections.abc import Callable
+from dataclasses import dataclass
 from typing import Any
 
 import gymnasium as gym
@@ -21,9 +22,11 @@ import numpy as np
 
 from groupwise.envs.episodes import GIVE_UP_EPISODES, too_short_message
 from groupwise.envs.spaces import encode_actions
+from groupwise.envs.targets import TARGET_TOTAL_KEY
 from groupwise.envs.true_reward import TRUE_REWARD_KEY
 from groupwise.pool.fragments import Trajectory
 from groupwise.rl.policy import Policy, random_actions
+from groupwise.types import FloatArray
 
 EnvFactory = Callable[[], gym.Env]
 
@@ -150,6 +153,30 @@ def sample_episodes_for_windows(
     return trajectories
 
 
+@dataclass(frozen=True)
+class Evaluation:
+    """Whole episodes of a policy, measured (`evaluate_episodes`)."""
+
+    returns: FloatArray  # (E,) true returns: each episode's per-step true rewards summed
+    scores: FloatArray  # (E,) the env's episode scores (`Trajectory.episode_score`), nan: none
+
+
+def evaluate_episodes(
+    make_env: EnvFactory,
+    policy: Policy,
+    n_episodes: int,
+    rng: np.random.Generator,
+    max_steps: int | None = None,
+) -> Evaluation:
+    """The true return and the episode score (a target env's; nan for other envs) of each of
+    `n_episodes` whole episodes of `policy`, each until its own end (`sample_trajectories`)."""
+    trajectories = sample_trajectories(make_env, policy, n_episodes, rng, max_steps=max_steps)
+    return Evaluation(
+        returns=np.array([t.true_rewards.sum() for t in trajectories]),
+        scores=np.array([t.episode_score for t in trajectories]),
+    )
+
+
 def evaluate(
     make_env: EnvFactory,
     policy: Policy,
@@ -161,8 +188,7 @@ def evaluate(
 
     Each episode's return sums all its steps, until its own end (see `sample_trajectories`).
     """
-    trajectories = sample_trajectories(make_env, policy, n_episodes, rng, max_steps=max_steps)
-    return np.array([t.true_rewards.sum() for t in trajectories])
+    return evaluate_episodes(make_env, policy, n_episodes, rng, max_steps).returns
 
 
 def _sample_batch(
@@ -198,6 +224,7 @@ def _run(
     obs: list[list[np.ndarray]] = [[] for _ in envs]
     actions: list[list[Any]] = [[] for _ in envs]
     rewards: list[list[float]] = [[] for _ in envs]
+    scores = np.full(len(envs), np.nan)  # an env's episode score so far, where it has one
     running = np.arange(len(envs))  # the envs whose episodes have not ended, in order
     for t in range(limit):
         action = np.asarray(policy.act(current.astype(np.float32), rng))
@@ -211,6 +238,7 @@ def _run(
             obs[i].append(before)
             actions[i].append(a)
             rewards[i].append(float(info.get(TRUE_REWARD_KEY, reward)))
+            scores[i] = float(info.get(TARGET_TOTAL_KEY, math.nan))
             if not (terminated or truncated):
                 still.append(i)
                 following.append(after)
@@ -229,6 +257,7 @@ def _run(
                 true_rewards=np.asarray(rewards[i], dtype=np.float64),
                 reset_seed=int(seed),
                 episode=first_episode + i,
+                episode_score=float(scores[i]),
             )
         )
     return trajectories

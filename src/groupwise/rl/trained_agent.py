@@ -1,13 +1,16 @@
 """A trained agent loaded from its ``agent.zip`` (`groupwise.run.agent_package`), for use
 elsewhere (docs/library.md): `load_agent(path)` reads it back as a `TrainedAgent` with
-`predict(obs)` (the saved normaliser applied first) and `evaluate(env, episodes, seed)`.
+`predict(obs)` (the saved normaliser applied first) and `evaluate(env, episodes, seed)`
+(an `AgentEvaluation`: the true returns and, in a target env, the episode scores).
 """
 
 import io
 import json
+import math
 import os
 import zipfile
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -15,7 +18,8 @@ import gymnasium as gym
 import numpy as np
 
 from groupwise.config import RunConfig
-from groupwise.envs import TRUE_REWARD_KEY, make_env
+from groupwise.envs import TARGET_TOTAL_KEY, TRUE_REWARD_KEY, Target, make_env
+from groupwise.envs.targets import TargetScoreInfo
 from groupwise.run.agent_package import (
     SUMMARY_FILE,
     ZIP_CONFIG,
@@ -23,8 +27,44 @@ from groupwise.run.agent_package import (
     ZIP_POLICY,
     ZIP_REWARD,
     AgentSummary,
+    TargetSummary,
+    measure_of,
+    score_text,
 )
 from groupwise.types import FloatArray
+
+
+@dataclass(frozen=True)
+class AgentEvaluation:
+    """What `TrainedAgent.evaluate` measured; ``str()`` says it in words, e.g. "backward
+    turns per episode 0.23 ± 0.05 (threshold 1) · per-step sum 184 ± 2.62 rad/s"."""
+
+    returns: FloatArray  # (E,) each episode's true return: its per-step true rewards summed
+    scores: FloatArray | None  # (E,) a target env's episode scores, in `target.unit`; else None
+    target: Target | None
+    """The target the env scores, where known (a target env made by name, or wrapped in
+    `TargetScoreInfo`)."""
+    measure: str = "true return"
+    """What `returns` measures (`agent_package.measure_of`)."""
+
+    def __str__(self) -> str:
+        target = None if self.target is None else TargetSummary.of(self.target)
+        scores = (None, None) if self.scores is None else _mean_sd(self.scores)
+        return score_text(target, self.measure, _mean_sd(self.returns), scores)
+
+
+def _mean_sd(values: FloatArray) -> tuple[float, float]:
+    return float(np.mean(values)), float(np.std(values))
+
+
+def _target_of_env(env: gym.Env[Any, Any]) -> Target | None:
+    """The target of an env wrapped in `TargetScoreInfo` (any depth), else None."""
+    layer: Any = env
+    while isinstance(layer, gym.Wrapper):
+        if isinstance(layer, TargetScoreInfo):
+            return layer.target
+        layer = layer.env
+    return None
 
 
 class TrainedAgent:
@@ -74,11 +114,13 @@ class TrainedAgent:
         episodes: int = 5,
         seed: int = 0,
         deterministic: bool = True,
-    ) -> FloatArray:
-        """The true return of each of `episodes` whole episodes, (episodes,): an env, a
-        factory, an env name, or None for the env it was trained on; episode i is reset
-        with seed `seed` + i. The return sums ``info["true_reward"]`` where the env reports
-        it (groupwise envs; a target env's score), else the env's reward."""
+    ) -> AgentEvaluation:
+        """`episodes` whole episodes in `env` (an env, a factory, an env name, or None for
+        the env it was trained on), episode i reset with seed `seed` + i: each one's true
+        return, the sum of ``info["true_reward"]`` where the env reports it (groupwise envs;
+        a target env's per-step scores), else of the env's reward; and, where the env
+        reports ``info["target_total"]`` (a target env), each one's episode score, the
+        value at its last step in the target's unit."""
         if episodes < 1:
             raise ValueError(f"need at least one episode, got {episodes}")
         own = not isinstance(env, gym.Env)
@@ -91,19 +133,31 @@ class TrainedAgent:
         else:
             made = env()
         try:
-            return np.array([self._episode(made, seed + i, deterministic) for i in range(episodes)])
+            played = [self._episode(made, seed + i, deterministic) for i in range(episodes)]
+            target = _target_of_env(made)
         finally:
             if own:
                 made.close()
+        scores = np.array([score for _, score in played])
+        return AgentEvaluation(
+            returns=np.array([total for total, _ in played]),
+            scores=None if np.isnan(scores).all() else scores,
+            target=target,
+            measure="true return" if target is None else measure_of(target.env),
+        )
 
-    def _episode(self, env: gym.Env[Any, Any], seed: int, deterministic: bool) -> float:
+    def _episode(
+        self, env: gym.Env[Any, Any], seed: int, deterministic: bool
+    ) -> tuple[float, float]:
+        """The true return and the episode score (nan where the env has none) of one."""
         obs, _ = env.reset(seed=seed)
-        total, done = 0.0, False
+        total, score, done = 0.0, math.nan, False
         while not done:
             obs, reward, terminated, truncated, info = env.step(self.predict(obs, deterministic))
             total += float(info.get(TRUE_REWARD_KEY, reward))
+            score = float(info.get(TARGET_TOTAL_KEY, math.nan))
             done = bool(terminated or truncated)
-        return total
+        return total, score
 
     def reward_model(self) -> Any:
         """The learned reward ensemble (`groupwise.RewardEnsemble`) saved with the policy."""

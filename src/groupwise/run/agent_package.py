@@ -3,8 +3,8 @@
 `write_agent_zip` packs a checkpoint (`groupwise.run.checkpoint`) into ``agent.zip``:
 
     README.md          how to load it, with and without groupwise
-    agent.json         `AgentSummary`: env, round, steps, the true return per round, the
-                       observation normaliser's constants
+    agent.json         `AgentSummary`: env, round, steps, the true return per round (and a
+                       target env's episode score), the observation normaliser's constants
     policy.zip         the Stable-Baselines3 PPO policy (it acts on normalised observations)
     vecnormalize.npz   the observation normaliser's running mean and variance
     reward.pt          the learned reward ensemble (`RewardEnsemble.load`)
@@ -26,7 +26,7 @@ from pathlib import Path
 from typing import Any
 
 from groupwise.config import RunConfig
-from groupwise.envs import TARGETS, resolve_id
+from groupwise.envs import TARGETS, Target, resolve_id
 
 FORMAT = "groupwise.agent/1"
 AGENT_ZIP = "agent.zip"
@@ -58,6 +58,10 @@ class RoundSummary:
     true_return_mean: float | None
     """None when the round was not evaluated (`eval_episodes` = 0)."""
     true_return_std: float | None
+    target_score_mean: float | None = None
+    """A target env's episode score after the round, in `TargetSummary.unit`; None for
+    other envs, rounds not evaluated, and summaries written before it was recorded."""
+    target_score_std: float | None = None
 
 
 @dataclass(frozen=True)
@@ -71,6 +75,34 @@ class VideoSummary:
     width: int
     height: int
     episode_return: float
+    """The filmed episode's true return (a target env: the sum of its per-step scores)."""
+    target_score: float | None = None
+    """A target env's score of the filmed episode, in `TargetSummary.unit`."""
+
+
+@dataclass(frozen=True)
+class TargetSummary:
+    """The target a target env scores (`groupwise.envs.targets.Target`), as the summary
+    states it."""
+
+    name: str
+    unit: str
+    """What the episode score counts, e.g. "backward turns"."""
+    step_unit: str
+    """The unit of a per-step score and of their sum, the true return, e.g. "rad/s"."""
+    threshold: float
+    """An episode succeeds when its score reaches this."""
+    stretch: float
+
+    @classmethod
+    def of(cls, target: Target) -> "TargetSummary":
+        return cls(
+            name=target.name,
+            unit=target.unit,
+            step_unit=target.step_unit,
+            threshold=target.threshold,
+            stretch=target.stretch,
+        )
 
 
 @dataclass(frozen=True)
@@ -83,7 +115,8 @@ class AgentSummary:
     """The round whose checkpoint this is (the last row of ``rounds.csv``)."""
     env_steps: int
     measure: str
-    """What `true_return_mean` measures: "true return", or a target env's score."""
+    """What `true_return_mean` measures (`measure_of`): "true return", or in a target env
+    the sum of the per-step scores, e.g. "per-step score sum (rad/s)"."""
     true_return_mean: float | None
     true_return_std: float | None
     normalize_obs: bool
@@ -91,6 +124,12 @@ class AgentSummary:
     epsilon: float
     rounds: tuple[RoundSummary, ...]
     video: VideoSummary | None = None
+    target: TargetSummary | None = None
+    """The target of a target env (None for other envs)."""
+    target_score_mean: float | None = None
+    """The last round's episode score in the target's unit (mean, sd over the evaluation
+    episodes): whether teaching worked. None where `RoundSummary.target_score_mean` is."""
+    target_score_std: float | None = None
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), indent=1)
@@ -100,24 +139,79 @@ class AgentSummary:
         """Raises ValueError for another format, KeyError/TypeError for a broken one."""
         if data.get("format") != FORMAT:
             raise ValueError(f"not a groupwise agent summary ({data.get('format')!r})")
-        video = data.get("video")
+        video, target = data.get("video"), data.get("target")
+        measure = data["measure"]
+        if measure.startswith(OLD_TARGET_MEASURE):
+            # written before the episode score was recorded: the value was always the sum of
+            # the per-step scores (issue 23)
+            measure = measure_of(data["env"])
         return cls(
-            **{k: v for k, v in data.items() if k not in ("rounds", "video")},
+            **{k: v for k, v in data.items() if k not in ("rounds", "video", "target", "measure")},
+            measure=measure,
             rounds=tuple(RoundSummary(**r) for r in data["rounds"]),
             video=None if video is None else VideoSummary(**video),
+            target=None if target is None else TargetSummary(**target),
         )
 
 
-def measure_of(env: str) -> str:
-    """What an env's true return is: a target env's score names its unit (docs/case-studies.md)."""
+OLD_TARGET_MEASURE = "target score ("
+"""How summaries before issue 23 mislabelled a target env's per-step score sum."""
+
+
+def target_of(env: str) -> Target | None:
+    """The target a target env (short name or Gymnasium id) scores; None for other envs."""
     try:
         wanted = resolve_id(env)
     except ValueError:
-        return "true return"
+        return None
     for target in TARGETS.values():
         if resolve_id(target.env) == wanted:
-            return f"target score ({target.unit})"
-    return "true return"
+            return target
+    return None
+
+
+def measure_of(env: str) -> str:
+    """What an env's true return is: "true return", or in a target env the sum of its
+    per-step scores, in their unit (the episode score is another number:
+    docs/case-studies.md)."""
+    target = target_of(env)
+    return "true return" if target is None else f"per-step score sum ({target.step_unit})"
+
+
+def format_value(value: float) -> str:
+    """A value as the summary texts show it: 3 significant digits, thousands grouped (as the
+    page's `formatValue`)."""
+    rounded = value if abs(value) >= 1000 else float(f"{value:.3g}")
+    return f"{round(rounded):,}" if abs(rounded) >= 1000 else f"{rounded:g}"
+
+
+def score_text(
+    target: TargetSummary | None,
+    measure: str,
+    true_return: tuple[float | None, float | None],
+    target_score: tuple[float | None, float | None] = (None, None),
+) -> str:
+    """The evaluation in words: in a target env the episode score first, in its unit, with
+    the threshold, then the per-step sum, e.g. "backward turns per episode 0.23 ± 0.05
+    (threshold 1) · per-step sum 184 ± 2.62 rad/s"; else "true return 41.5 ± 3.2".
+    `true_return` and `target_score` are (mean, sd); None: not measured."""
+
+    def value(mean: float, sd: float | None) -> str:
+        return format_value(mean) + ("" if sd is None else f" ± {format_value(sd)}")
+
+    mean, sd = true_return
+    if target is None:
+        return "not measured" if mean is None else f"{measure} {value(mean, sd)}"
+    parts = []
+    score, score_sd = target_score
+    if score is not None:
+        parts.append(
+            f"{target.unit} per episode {value(score, score_sd)} "
+            f"(threshold {format_value(target.threshold)})"
+        )
+    if mean is not None:
+        parts.append(f"per-step sum {value(mean, sd)} {target.step_unit}")
+    return " · ".join(parts) or "not measured"
 
 
 def _finite(value: float) -> float | None:
@@ -133,6 +227,7 @@ def summarise(
     """The summary of a run whose rounds are `records` (`loop.RoundRecord`s); `frozen`
     holds the indices of rounds without feedback."""
     last = records[-1]
+    target = target_of(cfg.loop.env)
     return AgentSummary(
         format=FORMAT,
         env=cfg.loop.env,
@@ -141,6 +236,9 @@ def summarise(
         measure=measure_of(cfg.loop.env),
         true_return_mean=_finite(last.true_return_mean),
         true_return_std=_finite(last.true_return_std),
+        target=None if target is None else TargetSummary.of(target),
+        target_score_mean=_finite(last.target_score_mean),
+        target_score_std=_finite(last.target_score_std),
         normalize_obs=cfg.ppo.normalize_obs,
         clip_obs=CLIP_OBS,
         epsilon=EPSILON,
@@ -153,6 +251,8 @@ def summarise(
                 env_steps=int(r.env_steps),
                 true_return_mean=_finite(r.true_return_mean),
                 true_return_std=_finite(r.true_return_std),
+                target_score_mean=_finite(r.target_score_mean),
+                target_score_std=_finite(r.target_score_std),
             )
             for r in records
         ),
@@ -193,16 +293,35 @@ def readme(summary: AgentSummary) -> str:
     """The zip's README.md: what it holds and how to load it."""
     judged = sum(r.judgements for r in summary.rounds)
     feedback = sum(r.feedback for r in summary.rounds)
-    score = (
-        "not measured"
-        if summary.true_return_mean is None
-        else f"{summary.true_return_mean:.4g} ± {summary.true_return_std or 0:.3g}"
+    score = score_text(
+        summary.target,
+        summary.measure,
+        (summary.true_return_mean, summary.true_return_std),
+        (summary.target_score_mean, summary.target_score_std),
     )
+    target = summary.target
+    scored = (
+        f"Its evaluation after round {summary.round} (greedy, over the run's evaluation "
+        f"episodes): {score}."
+    )
+    if target is not None:
+        scored = (
+            f"It is scored by the target {target.name}: {target.unit} per episode, a success "
+            f"from {format_value(target.threshold)} (stretch: {format_value(target.stretch)}). "
+            f"{scored} The per-step sum adds up the target's per-step scores (the true reward "
+            "a simulated teacher perceives); the episode score says whether teaching worked."
+        )
+    evaluated = (
+        f"`{target.unit}` per episode then the per-step sum, with the threshold"
+        if target is not None
+        else "the true return"
+    )
+    per_round = summary.measure + (" and the episode score" if target is not None else "")
     return f"""# groupwise agent: {summary.env}, round {summary.round}
 
 A PPO policy trained by groupwise on a reward model learned from preferences:
 {judged} judgements over {feedback} feedback round(s), {summary.env_steps:,} PPO env steps
-in all. Its {summary.measure} after round {summary.round}: {score}.
+in all. {scored}
 
 ## Load it with groupwise
 
@@ -211,13 +330,17 @@ import groupwise
 
 agent = groupwise.load_agent("agent.zip")
 action = agent.predict(obs)                 # one observation, or a batch (B, obs_dim)
-returns = agent.evaluate("{summary.env}", episodes=5, seed=0)   # or an env, or a factory
+result = agent.evaluate("{summary.env}", episodes=5, seed=0)   # or an env, or a factory
+print(result)                               # {evaluated}, mean ± sd
+result.returns                              # each episode's true return (the per-step sum)
+result.scores                               # a target env's episode scores (None elsewhere)
 reward = agent.reward_model()               # the learned reward ensemble
 ```
 
 `predict` applies the saved observation normaliser before the policy, greedy by default
-(`deterministic=False` samples). `evaluate` returns each episode's true return (a target
-env's score) as an array.
+(`deterministic=False` samples). `evaluate` plays whole episodes and returns each one's true
+return (the sum of ``info["true_reward"]``, a target env's per-step scores) and, in a
+target env, its episode score (``info["target_total"]`` at the end, in the target's unit).
 
 ## Load it without groupwise
 
@@ -242,7 +365,7 @@ def act(obs):
 | `policy.zip` | the Stable-Baselines3 PPO policy (`PPO.load`); it acts on normalised observations |
 | `vecnormalize.npz` | the observation normaliser: `obs_mean`, `obs_var` (and return statistics) |
 | `reward.pt` | the learned reward ensemble (`groupwise.RewardEnsemble.load`) |
-| `agent.json` | env, round, steps, the {summary.measure} per round, the normaliser's constants |
+| `agent.json` | env, round, steps, the {per_round} per round, the normaliser's constants |
 | `config.json` | the run's configuration (`groupwise.RunConfig.load`) |
 | `settings.json` | the app session's settings (sessions of the app only) |
 | `rounds.csv` | one row per round, as `groupwise train` and the app write it |

@@ -76,6 +76,7 @@ def publish_agent(
             width=video.width,
             height=video.height,
             episode_return=float(episode.true_rewards.sum()),
+            target_score=None if math.isnan(episode.episode_score) else episode.episode_score,
         ),
     )
     round_index = run.next_round - 1

@@ -54,6 +54,12 @@ class RoundRecord:
     clock_s: float = math.nan
     """A timed teacher's virtual clock at the round's end, in seconds of the teacher's time
     (`groupwise.run.continuous`); nan for an untimed teacher."""
+    target_score_mean: float = math.nan
+    """In a target env (docs/case-studies.md): the greedy policy's episode score after the
+    round, in the target's unit (e.g. backward turns; `Target.unit`), mean over the
+    evaluation episodes; `true_return_mean` is the sum of its per-step scores. nan for other
+    envs and without evaluation."""
+    target_score_std: float = math.nan
 
     def stats(self) -> dict[str, object]:
         """The record as JSON-ready values (nan and inf as None): the app's round stats."""

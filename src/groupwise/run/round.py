@@ -34,7 +34,7 @@ from groupwise.preferences.judgement import Judgement
 from groupwise.preferences.pairs import Pair, cap_pairs, judgement_pairs
 from groupwise.query.strategies import Query, QueryStrategy
 from groupwise.reward import FitReport, fit
-from groupwise.rl.rollout import evaluate
+from groupwise.rl.rollout import Evaluation, evaluate_episodes
 from groupwise.run.progress import RunCallback, as_callback
 from groupwise.run.records import PhaseTimer, RoundRecord
 from groupwise.run.run import Run
@@ -78,6 +78,7 @@ def begin_round(
     *,
     n_queries: int | None = None,
     streams: RoundStreams | None = None,
+    callback: RunCallback | None = None,
 ) -> Offer:
     """The first half of round `run.next_round`: sample the pool from the current policy
     (the `pool_oversample` × N windows the ensemble is most uncertain about, or a random N,
@@ -85,9 +86,10 @@ def begin_round(
     `budget`) comparisons of it.
 
     `streams` are the round's (`round_streams`); pass them to continue their `feedback`
-    stream with a simulated teacher, as `run_round` does.
+    stream with a simulated teacher, as `run_round` does. `callback` hears the phases
+    "sample" (steps sampled towards the windows) and "dtw" (pairs of behaviours measured).
     """
-    loop = run.cfg.loop
+    loop, callback = run.cfg.loop, as_callback(callback)
     index = run.next_round
     streams = streams or round_streams(loop.seed, index)
     tick = time.perf_counter()
@@ -102,9 +104,13 @@ def begin_round(
         oversample=loop.pool_oversample,
         ensemble=run.ensemble,
         select=loop.pool_selection,
+        progress=lambda done, total: callback.on_phase("sample", done, total),
     )
     sample_s = time.perf_counter() - tick
-    tree = pool.tree(run.cfg.tree) if len(pool) >= 2 else None
+    tree = None
+    if len(pool) >= 2:
+        pool.measure_distances(lambda done, total: callback.on_phase("dtw", done, total))
+        tree = pool.tree(run.cfg.tree)
     wanted = budget if n_queries is None else n_queries
     queries = strategy.propose(pool, wanted, streams.feedback) if wanted > 0 else []
     offered = getattr(strategy, "candidates", None)
@@ -220,11 +226,11 @@ def finish_round(
     """Every feedback round's end, once its pairs are in the dataset and the agent trained:
     the greedy policy's true return, the round's record (`report`: the round's last fit,
     None when there was none), appended and committed."""
-    returns = _evaluate(run, timer, callback)
+    evaluation = _evaluate(run, timer, callback)
     this_round = run.dataset.rounds == run.next_round
     record = _record(
         run,
-        returns,
+        evaluation,
         timer,
         comparisons=offer.budget,
         judgements=len(judgements),
@@ -248,11 +254,11 @@ def train_frozen(run: Run, steps: int, *, callback: RunCallback | None = None) -
     streams = round_streams(run.cfg.loop.seed, run.next_round)
     timer = PhaseTimer({"sample_s": 0.0, "feedback_s": 0.0, "reward_s": 0.0})
     _learn(run, steps, streams, timer, callback)
-    returns = _evaluate(run, timer, callback)
+    evaluation = _evaluate(run, timer, callback)
     timed = run.cfg.teacher.pace_s is not None
     record = _record(
         run,
-        returns,
+        evaluation,
         timer,
         clock_s=clock_before(run) + steps / run.cfg.training.ppo_steps_per_s if timed else math.nan,
         comparisons=0,
@@ -272,7 +278,7 @@ def run_round(
     """One whole round answered by a simulated teacher: `begin_round` → the teacher answers
     the offer's queries (from the round's feedback stream, after the strategy) → `end_round`."""
     streams = round_streams(run.cfg.loop.seed, run.next_round)
-    offer = begin_round(run, feedback.queries, budget, streams=streams)
+    offer = begin_round(run, feedback.queries, budget, streams=streams, callback=callback)
     tick = time.perf_counter()
     judgements: list[Judgement] = []
     if offer.queries:
@@ -308,14 +314,15 @@ def _learn(
         )
 
 
-def _evaluate(run: Run, timer: PhaseTimer, callback: RunCallback) -> np.ndarray:
-    """The greedy policy's true returns over `eval_episodes` (nan when 0)."""
+def _evaluate(run: Run, timer: PhaseTimer, callback: RunCallback) -> Evaluation:
+    """The greedy policy's true returns and, in a target env, its episode scores over
+    `eval_episodes` (nan when 0)."""
     loop = run.cfg.loop
     with timer("eval"):
         if loop.eval_episodes == 0:
-            return np.full(1, np.nan)
+            return Evaluation(returns=np.full(1, np.nan), scores=np.full(1, np.nan))
         callback.on_phase("eval", 0, loop.eval_episodes)
-        return evaluate(
+        return evaluate_episodes(
             run.make_env,
             run.agent.policy(deterministic=True),
             loop.eval_episodes,
@@ -323,7 +330,7 @@ def _evaluate(run: Run, timer: PhaseTimer, callback: RunCallback) -> np.ndarray:
         )
 
 
-def _record(run: Run, returns: np.ndarray, timer: PhaseTimer, **fields: Any) -> RoundRecord:
+def _record(run: Run, evaluation: Evaluation, timer: PhaseTimer, **fields: Any) -> RoundRecord:
     """Round `run.next_round`'s record: `fields` of the round, the rest from the run now."""
     values: dict[str, Any] = {**timer.seconds, **fields}
     return RoundRecord(
@@ -331,8 +338,10 @@ def _record(run: Run, returns: np.ndarray, timer: PhaseTimer, **fields: Any) -> 
         pairs_total=len(run.dataset),
         label_error_rate_total=run.dataset.label_error_rate(),
         env_steps=run.agent.num_timesteps,
-        true_return_mean=float(returns.mean()),
-        true_return_std=float(returns.std()),
+        true_return_mean=float(evaluation.returns.mean()),
+        true_return_std=float(evaluation.returns.std()),
+        target_score_mean=float(evaluation.scores.mean()),
+        target_score_std=float(evaluation.scores.std()),
         **values,
     )
 

@@ -62,6 +62,9 @@ def agent(context: AppContext, session_id: str) -> schemas.AgentOut:
         measure=summary.measure,
         true_return_mean=summary.true_return_mean,
         true_return_std=summary.true_return_std,
+        target=None if summary.target is None else schemas.AgentTarget(**data["target"]),
+        target_score_mean=summary.target_score_mean,
+        target_score_std=summary.target_score_std,
         video=None if summary.video is None else schemas.AgentVideo(**data["video"]),
         rounds=[schemas.AgentRound(**r) for r in data["rounds"]],
     )

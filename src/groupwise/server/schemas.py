@@ -296,6 +296,11 @@ class AgentRound(_Out):
     env_steps: int
     true_return_mean: float | None = Field(description="null: not evaluated")
     true_return_std: float | None
+    target_score_mean: float | None = Field(
+        description="a target env's episode score after the round, in the target's unit; "
+        "null for other envs, rounds not evaluated and agents published before it was recorded"
+    )
+    target_score_std: float | None
 
 
 class AgentVideo(_Out):
@@ -306,7 +311,26 @@ class AgentVideo(_Out):
     frames: int
     width: int
     height: int
-    episode_return: float = Field(description="the filmed episode's true return")
+    episode_return: float = Field(
+        description="the filmed episode's true return (a target env: its per-step score sum)"
+    )
+    target_score: float | None = Field(
+        description="a target env's score of the filmed episode, in its unit"
+    )
+
+
+class AgentTarget(_Out):
+    """The target a finished session's env scores: its units and levels (`GET /api/envs` has
+    its definition)."""
+
+    name: str = Field(examples=["hopper-backflip"])
+    unit: str = Field(description="what an episode's score counts", examples=["backward turns"])
+    step_unit: str = Field(
+        description="the unit of a per-step score and of their sum (true_return_mean)",
+        examples=["rad/s"],
+    )
+    threshold: float = Field(description="an episode succeeds when its score reaches this")
+    stretch: float = Field(description="the more ambitious level")
 
 
 class AgentOut(_Out):
@@ -316,10 +340,17 @@ class AgentOut(_Out):
     round: int = Field(description="the round whose checkpoint the agent is")
     env_steps: int
     measure: str = Field(
-        description='what true_return_mean measures: "true return" or a target env\'s score'
+        description='what true_return_mean measures: "true return", or in a target env the '
+        'sum of its per-step scores, "per-step score sum (rad/s)"'
     )
     true_return_mean: float | None
     true_return_std: float | None
+    target: AgentTarget | None = Field(description="null: not a target env")
+    target_score_mean: float | None = Field(
+        description="a target env's episode score after the last round, in target.unit (mean "
+        "over the evaluation episodes): whether teaching worked"
+    )
+    target_score_std: float | None
     video: AgentVideo | None
     rounds: list[AgentRound]
 

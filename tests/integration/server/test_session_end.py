@@ -68,4 +68,4 @@ def test_final_phase_then_from_session_continues_headless(serve, capsys):
     agent = groupwise.load_agent(directory / "agent.zip")
     assert agent.summary.round == 4
     assert [r.feedback for r in agent.summary.rounds] == [True, False, False, True, False]
-    assert agent.evaluate(episodes=1).shape == (1,)
+    assert agent.evaluate(episodes=1).returns.shape == (1,)

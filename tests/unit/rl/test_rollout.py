@@ -2,10 +2,15 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
-from groupwise.envs import make_env
+from groupwise.envs import TARGET_TOTAL_KEY, make_env
 from groupwise.pool.fragments import tile_fragments
 from groupwise.rl.policy import RandomPolicy
-from groupwise.rl.rollout import evaluate, sample_episodes_for_windows, sample_trajectories
+from groupwise.rl.rollout import (
+    evaluate,
+    evaluate_episodes,
+    sample_episodes_for_windows,
+    sample_trajectories,
+)
 
 
 def make():
@@ -55,6 +60,25 @@ def test_discrete_actions_are_one_hot_encoded():
 def test_evaluate_returns_one_true_return_per_episode():
     returns = evaluate(make, RandomPolicy(make().action_space), 4, np.random.default_rng(1))
     assert returns.shape == (4,) and np.isfinite(returns).all()
+    plain = evaluate_episodes(make, RandomPolicy(make().action_space), 4, np.random.default_rng(1))
+    np.testing.assert_array_equal(plain.returns, returns)
+    assert np.isnan(plain.scores).all()  # MountainCar has no episode score
+
+
+def test_a_target_envs_episode_score_is_its_total_at_the_end_not_the_per_step_sum():
+    def splits():
+        return make_env("Walker2d-splits")
+
+    policy = RandomPolicy(splits().action_space)
+    evaluation = evaluate_episodes(splits, policy, 2, np.random.default_rng(2))
+    episodes = sample_trajectories(splits, policy, 2, np.random.default_rng(2))
+    env = splits()
+    for i, episode in enumerate(episodes):  # replayed by hand
+        env.reset(seed=episode.reset_seed)
+        infos = [env.step(a)[4] for a in episode.actions]
+        assert evaluation.scores[i] == episode.episode_score == infos[-1][TARGET_TOTAL_KEY]
+        assert evaluation.returns[i] == pytest.approx(episode.true_rewards.sum())
+    assert not np.allclose(evaluation.scores, evaluation.returns)
 
 
 # An env that ends on its own: episode length drawn at reset (3-30 steps), time limit 20.

@@ -69,6 +69,7 @@ def test_the_final_phase_trains_on_the_frozen_reward_and_publishes_the_agent(cli
 
     agent = client.get(f"/api/sessions/{sid}/agent").json()
     assert agent["round"] == 1 and agent["measure"] == "true return"
+    assert (agent["target"], agent["target_score_mean"]) == (None, None)  # not a target env
     assert [(r["round"], r["feedback"]) for r in agent["rounds"]] == [(0, True), (1, False)]
     assert agent["rounds"][0]["judgements"] == 1
     assert agent["video"]["frames"] >= 1 and agent["video"]["width"] == 32
@@ -214,10 +215,10 @@ def test_load_agent_predicts_and_evaluates(client, tmp_path):
     assert env.action_space.contains(action.item() if action.ndim == 0 else action)
     batch = agent.predict(np.stack([obs, obs, obs]))
     assert batch.shape[0] == 3
-    returns = agent.evaluate(env, episodes=2, seed=0)
+    returns = agent.evaluate(env, episodes=2, seed=0).returns
     assert returns.shape == (2,) and np.isfinite(returns).all()
-    assert np.array_equal(returns, agent.evaluate("GridWorld", episodes=2, seed=0))
-    assert np.array_equal(returns, agent.evaluate(agent.make_env, episodes=2, seed=0))
+    assert np.array_equal(returns, agent.evaluate("GridWorld", episodes=2, seed=0).returns)
+    assert np.array_equal(returns, agent.evaluate(agent.make_env, episodes=2, seed=0).returns)
     broken = tmp_path / "broken.zip"
     broken.write_text("not a zip")
     with pytest.raises(ValueError, match="not a zip file"):
