@@ -153,3 +153,33 @@ def test_train_continuous_from_the_command_line(tmp_path, capsys):
         main([*args[:-5], "-q", "--teacher-pace", "0", "--out", str(tmp_path / "x")])
     assert refused.value.code == 2
     assert "expected a finite number > 0" in capsys.readouterr().err
+
+
+def test_a_live_round_refits_when_due_and_an_undo_counts(tmp_path):
+    from groupwise.oracles import ORACLES
+    from groupwise.preferences.judgement import LEFT_BETTER, Judgement
+    from groupwise.run.continuous import LiveRound
+    from groupwise.run.round import begin_round, derive_pairs
+    from groupwise.run.streams import round_streams
+
+    cfg = dataclasses.replace(
+        CONTINUOUS,
+        training=dataclasses.replace(CONTINUOUS.training, refit_pairs=4, refit_s=100.0),
+    )
+    with Run.create(cfg, None) as run:
+        streams = round_streams(cfg.loop.seed, 0)
+        offer = begin_round(run, ORACLES["groupwise"](cfg).queries, 8, streams=streams)
+        live = LiveRound(run, offer, streams, clock=0.0)
+        a = Judgement((0, 1, 2), (3, 4), LEFT_BETTER)  # 3 pairs
+        b = Judgement((5,), (6,), LEFT_BETTER)  # 1 pair
+        assert not live.update([(0, a)], clock=1.0)  # 3 new pairs < 4, 1 s < 100 s
+        assert live.update([(0, a), (1, b)], clock=2.0)  # 4 pairs: due
+        assert len(run.dataset) == 4 and live.report is not None
+        assert not live.update([(0, a), (1, b)], clock=500.0)  # nothing changed
+        # b undone (1 pair) and nothing new: due only by time …
+        assert not live.update([(0, a)], clock=3.0)
+        assert live.update([(0, a)], clock=200.0)
+        # … and the dataset is the rounds before plus the pairs of the judgements now
+        assert len(run.dataset) == len(derive_pairs([a], cfg.loop, 0, [0])) == 3
+        assert live.update([(0, a), (2, b)], clock=201.0, final=True)  # final: any change
+        assert run.dataset.rounds.tolist() == [0] * 4

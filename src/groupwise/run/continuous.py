@@ -21,6 +21,7 @@ Nothing here reads a real clock, so a run is the same on any machine for a seed
 another core than PPO, as the app's worker will run them.
 """
 
+import dataclasses
 import time
 from collections.abc import Sequence
 
@@ -53,43 +54,31 @@ def continuous_round(
     pace = cfg.teacher.pace_s
     if pace is None:
         raise ValueError("continuous training needs a timed teacher (TeacherConfig.pace_s)")
-    if cfg.loop.pair_cap is not None:
-        raise ValueError("continuous training adds pairs as they come: pair_cap must be None")
     rollout = run.ppo.rollout_steps
-    index = run.next_round
-    streams = round_streams(cfg.loop.seed, index)
+    streams = round_streams(cfg.loop.seed, run.next_round)
     offer = begin_round(run, feedback.queries, budget, streams=streams)
-    timer = PhaseTimer({"sample_s": offer.sample_s, "feedback_s": 0.0, "reward_s": 0.0})
-    timer.seconds["ppo_s"] = 0.0
     clock = clock_before(run)
-    trainer = _Trainer(run, streams, timer, callback)
+    live = LiveRound(run, offer, streams, clock, callback)
+    timer = live.timer
     judgements: list[Judgement] = []
-    fitted, last_fit = 0, clock  # judgements already in the dataset; when they were fitted
     credit = 0.0
     for query in offer.queries:
         credit += pace * cfg.training.ppo_steps_per_s
         rollouts = int(credit // rollout)
         if rollouts:
-            trainer.learn(rollouts * rollout)
+            live.learn(rollouts * rollout)
             credit -= rollouts * rollout
         clock += pace
         tick = time.perf_counter()
         judgements += feedback.teacher.answer(offer.pool, [query], streams.feedback)
         timer.seconds["feedback_s"] += time.perf_counter() - tick
-        new = judgements[fitted:]
-        if new and (
-            _pair_count(run, new, index, fitted) >= cfg.training.refit_pairs
-            or clock - last_fit >= cfg.training.refit_s
-        ):
-            trainer.refit(offer, judgements, fitted)
-            fitted, last_fit = len(judgements), clock
-    if judgements[fitted:]:
-        trainer.refit(offer, judgements, fitted)
+        live.update(list(enumerate(judgements)), clock)
+    live.update(list(enumerate(judgements)), clock, final=True)
     return finish_round(
         run,
         offer,
         judgements,
-        trainer.report,
+        live.report,
         timer,
         callback,
         asked=len(offer.queries),
@@ -97,13 +86,33 @@ def continuous_round(
     )
 
 
-class _Trainer:
-    """PPO and the reward fit of one continuous round, each timed, each from its stream."""
+class LiveRound:
+    """One round trained while its judgements arrive: PPO in slices (`learn`), the reward
+    ensemble refitted between them (`update`) once `TrainingConfig.refit_pairs` pairs have
+    changed (new ones, or an undone judgement's) or `refit_s` seconds have passed since the
+    last fit with anything changed. Each refit fits on the rounds before plus the pairs of
+    the judgements given now (each keyed by its place in the round, as `end_round` derives
+    them), so the dataset at the round's end is the one `end_round` would build. The
+    headless continuous round and the app's worker (which reads the judgements from the
+    database) drive it alike; `clock` is whatever clock the caller keeps."""
 
     def __init__(
-        self, run: Run, streams: RoundStreams, timer: PhaseTimer, callback: RunCallback
+        self,
+        run: Run,
+        offer: Offer,
+        streams: RoundStreams,
+        clock: float,
+        callback: RunCallback | None = None,
     ) -> None:
-        self.run, self.streams, self.timer, self.callback = run, streams, timer, callback
+        if run.cfg.loop.pair_cap is not None:
+            raise ValueError("continuous training adds pairs as they come: pair_cap must be None")
+        self.run, self.offer, self.streams = run, offer, streams
+        self.callback = as_callback(callback)
+        self.timer = PhaseTimer({"sample_s": offer.sample_s, "feedback_s": 0.0})
+        self.timer.seconds.update(reward_s=0.0, ppo_s=0.0)
+        self.base = dataclasses.replace(run.dataset)  # the rounds before; `add` copies
+        self.fitted: dict[int, int] = {}  # key → pairs, of the judgements in the last fit
+        self.last_fit = clock
         self.report: FitReport | None = None
         self.started = False
 
@@ -120,28 +129,54 @@ class _Trainer:
         )
         self.timer.seconds["ppo_s"] += time.perf_counter() - tick
 
-    def refit(self, offer: Offer, judgements: Sequence[Judgement], fitted: int) -> None:
-        """Add the pairs of `judgements[fitted:]` (keyed by their places in the round) and
-        refit the ensemble on every pair so far."""
-        run, loop = self.run, self.run.cfg.loop
+    def update(
+        self, keyed: Sequence[tuple[int, Judgement]], clock: float, *, final: bool = False
+    ) -> bool:
+        """Refit on `keyed` (the round's judgements now, with their keys) when it is due,
+        or whenever anything changed with `final`; True when it refitted."""
+        loop, training = self.run.cfg.loop, self.run.cfg.training
+        round_index = self.offer.round
+        now = {key: judgement for key, judgement in keyed}
+        added = [key for key in now if key not in self.fitted]
+        removed = [key for key in self.fitted if key not in now]
+        if not added and not removed:
+            return False
+        new = [now[key] for key in added]
+        changed = len(derive_pairs(new, loop, round_index, added)) + sum(
+            self.fitted[key] for key in removed
+        )
+        if (
+            not final
+            and changed < training.refit_pairs
+            and clock - self.last_fit < training.refit_s
+        ):
+            return False
+        self._refit(keyed)
+        self.last_fit = clock
+        return True
+
+    def _refit(self, keyed: Sequence[tuple[int, Judgement]]) -> None:
+        run, loop, round_index = self.run, self.run.cfg.loop, self.offer.round
         tick = time.perf_counter()
-        new = judgements[fitted:]
-        keys = range(fitted, len(judgements))
-        pairs = derive_pairs(new, loop, offer.round, keys)
-        first = len(run.dataset) == 0
-        run.dataset.add(offer.pool.fragments, pairs, offer.round)
-        self.callback.on_phase("reward", 0, len(run.dataset))
-        multiplier = run.cfg.reward.initial_epoch_multiplier if first else 1.0
+        keys = [key for key, _ in keyed]
+        judgements = [judgement for _, judgement in keyed]
+        self.fitted = {
+            key: len(derive_pairs([judgement], loop, round_index, [key]))
+            for key, judgement in keyed
+        }
+        dataset = dataclasses.replace(self.base)
+        dataset.add(
+            self.offer.pool.fragments,
+            derive_pairs(judgements, loop, round_index, keys),
+            round_index,
+        )
+        run.dataset = dataset
+        self.callback.on_phase("reward", 0, len(dataset))
+        multiplier = run.cfg.reward.initial_epoch_multiplier if len(self.base) == 0 else 1.0
         epochs = max(1, round(run.cfg.reward.epochs * multiplier))
-        if len(run.dataset):
-            self.report = fit(run.ensemble, run.dataset, run.cfg.reward, self.streams.fit, epochs)
+        if len(dataset):
+            self.report = fit(run.ensemble, dataset, run.cfg.reward, self.streams.fit, epochs)
         self.timer.seconds["reward_s"] += time.perf_counter() - tick
-
-
-def _pair_count(run: Run, new: Sequence[Judgement], round_index: int, first_key: int) -> int:
-    """How many pairs `new` (keyed from `first_key`) will add: what the refit rule counts."""
-    keys = range(first_key, first_key + len(new))
-    return len(derive_pairs(new, run.cfg.loop, round_index, keys))
 
 
 PAPER_CASES: dict[str, tuple[int, float]] = {
