@@ -11,7 +11,6 @@ import type {
   PairQuery,
   SessionState,
   Settings,
-  Suggestion,
 } from "./api";
 import {
   type ArcClick,
@@ -25,9 +24,11 @@ import {
 } from "./lib/selection";
 import type { Tree } from "./lib/tree";
 import { DEFAULT_BETA } from "./lib/edges";
+import { FRESH_ORIGIN, type GroupChange, type Origin, arcChange, originAfter } from "./lib/origin";
 import type { Schemas } from "./lib/settings-form";
 
-export type Source = "suggested" | "explored";
+export type { Origin, Source } from "./lib/origin";
+export { FRESH_ORIGIN } from "./lib/origin";
 
 export interface Toast {
   id: number;
@@ -44,16 +45,6 @@ export interface RoundData {
   medoids: Record<string, string[]>;
   /** How the round's clips play (null: a pool from before it was recorded). */
   clip?: ClipTiming | null;
-}
-
-/** How the current groups came about: SPEC §8 logs source, time taken and edits. */
-export interface Origin {
-  source: Source;
-  /** Group changes since the groups were last set as a whole (prefill, answer, undo). */
-  edits: number;
-  /** When the groups became non-empty (ms), for `seconds` of the judgement. */
-  startedAt: number | null;
-  suggestion: Suggestion | null;
 }
 
 export interface ViewSettings {
@@ -129,8 +120,6 @@ export interface State {
   agent: { key: string; data: AgentOut | null } | null;
 }
 
-export const FRESH_ORIGIN: Origin = { source: "explored", edits: 0, startedAt: null, suggestion: null };
-
 export const initialState: State = {
   boot: "loading",
   bootError: null,
@@ -200,15 +189,9 @@ export type Action =
 
 let toastId = 0;
 
-function withGroups(state: State, groups: Groups, at: number): State {
-  const empty = groups.A.length === 0 && groups.B.length === 0;
-  if (empty) return { ...state, groups, origin: FRESH_ORIGIN };
-  const o = state.origin;
-  return {
-    ...state,
-    groups,
-    origin: { ...o, edits: o.edits + 1, startedAt: o.startedAt ?? at },
-  };
+/** The groups after a change, and where they now come from (`lib/origin.ts`). */
+function withGroups(state: State, groups: Groups, change: GroupChange, at: number): State {
+  return { ...state, groups, origin: originAfter(state.origin, change, groups, at) };
 }
 
 function toast(state: State, kind: Toast["kind"], text: string, undo = false): State {
@@ -260,16 +243,16 @@ export function reduce(state: State, action: Action): State {
     case "judgement-undone":
       return { ...state, judgements: state.judgements.filter((j) => j.id !== action.id) };
     case "select": {
-      const target = action.other ? otherGroup(state.target) : state.target;
-      const r = clickArc(state.groups, { ...action.click, target });
+      const click = { ...action.click, target: action.other ? otherGroup(state.target) : state.target };
+      const r = clickArc(state.groups, click);
       if (r.message) return toast(state, "info", r.message);
-      return r.changed ? withGroups(state, r.groups, action.at) : state;
+      return r.changed ? withGroups(state, r.groups, arcChange(state.groups, click), action.at) : state;
     }
     case "remove":
     case "move": {
       const r = (action.type === "remove" ? removeLeaf : moveLeaf)(state.groups, action.id);
       if (r.message) return toast(state, "info", r.message);
-      return r.changed ? withGroups(state, r.groups, action.at) : state;
+      return r.changed ? withGroups(state, r.groups, "edit", action.at) : state;
     }
     case "clear":
       return { ...state, groups: EMPTY_GROUPS, origin: FRESH_ORIGIN };

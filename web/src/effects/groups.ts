@@ -3,6 +3,7 @@
  * (a reload restores them) and pre-filled or replaced by the server's suggestions.
  */
 import { STALE } from "../api";
+import { suggestedOrigin } from "../lib/origin";
 import { fromSuggestion } from "../lib/selection";
 import type { Origin, State } from "../state";
 import type { EffectContext } from "./context";
@@ -88,7 +89,7 @@ export function createGroups({ store, api, fail }: EffectContext, storage: Stora
       dispatch({
         type: "set-groups",
         groups: fromSuggestion(sug.left, sug.right),
-        origin: { source: "suggested", edits: 0, startedAt: Date.now(), suggestion: sug },
+        origin: suggestedOrigin(sug, Date.now()),
       });
     } catch (err) {
       dispatch({ type: "suggestion-status", status: "idle" });

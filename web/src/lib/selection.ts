@@ -91,6 +91,14 @@ export interface ArcClick {
   add: boolean;
 }
 
+/** A plain click on a cluster whose behaviours are all in the target group already: it takes
+ * them out again (the toggle). */
+export function takesOut(groups: Groups, click: ArcClick): boolean {
+  if (click.isLeaf || click.add || click.leaves.length === 0) return false;
+  const inTarget = new Set(groups[click.target]);
+  return click.leaves.every((id) => inTarget.has(id));
+}
+
 /** The selection after clicking an arc. */
 export function clickArc(groups: Groups, click: ArcClick): SelectionResult {
   const { leaves, target, add } = click;
@@ -101,8 +109,7 @@ export function clickArc(groups: Groups, click: ArcClick): SelectionResult {
     if (where === target || (where !== null && !add)) return removeLeaf(groups, id);
     return assign(groups, target, [id], true);
   }
-  const inTarget = new Set(groups[target]);
-  if (!add && leaves.length > 0 && leaves.every((id) => inTarget.has(id))) {
+  if (takesOut(groups, click)) {
     const drop = new Set(leaves);
     return result(groups, withGroup(groups, target, groups[target].filter((id) => !drop.has(id))));
   }
