@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { DEFAULT_LAYOUT, midAngle, neighbourArc, polar, radialLayout } from "../src/lib/layout";
+import { DEFAULT_LAYOUT, arcAt, midAngle, neighbourArc, polar, radialLayout } from "../src/lib/layout";
 import { buildTree } from "../src/lib/tree";
 import { FOUR, PADDED } from "./fixtures";
 
@@ -82,5 +82,30 @@ describe("keyboard navigation between arcs", () => {
     expect(go("m1", "ArrowUp")).toBeNull();
     expect(go("b0", "ArrowDown")).toBeNull();
     expect(go("b0", "x")).toBeUndefined();
+  });
+});
+
+describe("arcAt", () => {
+  const layout = radialLayout(buildTree(FOUR), { radius: 100, disc: 0.5, ringGap: 4, leafWeight: 1, arcGap: 2 });
+  const at = (angle: number, r: number) => arcAt(layout, ...polar(angle, r))?.node.id ?? null;
+  const b0 = layout.byId.get("b0")!;
+  const m2 = layout.byId.get("m2")!;
+
+  it("finds the arc under a point of each ring", () => {
+    expect(at(midAngle(b0), (b0.r0 + b0.r1) / 2)).toBe("b0");
+    expect(at(TAU * 0.6, (m2.r0 + m2.r1) / 2)).toBe("m2");
+    expect(at(TAU * 0.99, b0.r1 - 1)).toBe("b3");
+  });
+
+  it("gives the gaps between neighbours and near a ring's edge to an arc", () => {
+    expect(at(b0.end - 1e-6, (b0.r0 + b0.r1) / 2)).toBe("b0"); // inside b0's padding
+    expect(at(b0.end + 1e-6, (b0.r0 + b0.r1) / 2)).toBe("b1");
+    expect(at(midAngle(m2), m2.r1 + 1.5)).toBe("m2");
+  });
+
+  it("finds nothing in the disc or beyond the outer ring", () => {
+    expect(at(1, 10)).toBeNull();
+    expect(at(1, b0.r0 - 3)).toBeNull();
+    expect(at(1, 104)).toBeNull();
   });
 });

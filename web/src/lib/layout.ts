@@ -156,3 +156,22 @@ export function neighbourArc(layout: RadialLayout, arc: Arc, key: string): Arc |
       return undefined;
   }
 }
+
+/**
+ * The arc drawn at the point (x, y) of the layout's coordinates (centred on the disc), or
+ * null in the disc, beyond the outer ring, or between rings farther than `tolerance` from
+ * one. Angles use the arcs' unpadded spans, so the thin gaps between neighbours belong to
+ * an arc too. The chart asks when a click or context menu reaches the SVG rather than an
+ * arc's path (issue 23).
+ */
+export function arcAt(layout: RadialLayout, x: number, y: number, tolerance = 2): Arc | null {
+  const r = Math.hypot(x, y);
+  let angle = Math.atan2(x, -y);
+  if (angle < 0) angle += 2 * Math.PI;
+  for (const ring of layout.rings) {
+    const first = ring[0];
+    if (!first || r < first.r0 - tolerance || r > first.r1 + tolerance) continue;
+    for (const arc of ring) if (angle >= arc.start && angle < arc.end) return arc;
+  }
+  return null;
+}

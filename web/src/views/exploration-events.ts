@@ -3,7 +3,7 @@
  * groups and move the focus; pointer and focus show the hovered node and, after a short
  * delay, its preview (the tooltip with clips).
  */
-import { type Arc, neighbourArc } from "../lib/layout";
+import { type Arc, arcAt, neighbourArc } from "../lib/layout";
 import type { TreeNode } from "../lib/tree";
 import { setFocusable } from "./exploration-arcs";
 import type { CallHandler, Chart } from "./exploration-chart";
@@ -19,19 +19,37 @@ export function attachArcEvents(chart: Chart, call: CallHandler): void {
     const id = el?.getAttribute("data-id");
     return (id && chart.layout?.byId.get(id)) || null;
   };
+  /** The arc drawn under a pointer event, also when the event reached the SVG itself (a
+   * right-click's `contextmenu` did, now and then, right after a load: issue 23). */
+  const arcUnder = (e: MouseEvent): Arc | null => {
+    const hit = arcOf(e.target);
+    const m = svg.getScreenCTM();
+    if (hit || !chart.layout || !m) return hit;
+    const p = new DOMPoint(e.clientX, e.clientY).matrixTransform(m.inverse());
+    return arcAt(chart.layout, p.x, p.y);
+  };
+  /** The arc a right button went down on: the context menu that follows fills with it. */
+  let pressed: Arc | null = null;
   const select = (a: Arc, add: boolean, other: boolean) =>
     call("select", { leaves: [...a.node.leaves], isLeaf: a.node.isLeaf, add }, other);
 
   svg.addEventListener("click", (e) => {
-    const a = arcOf(e.target);
+    const a = arcUnder(e);
     if (!a) return;
     setFocusable(chart, a.node.id);
     select(a, e.shiftKey || e.ctrlKey || e.metaKey, e.altKey);
   });
+  svg.addEventListener("pointerdown", (e) => {
+    pressed = e.button === 2 ? arcUnder(e) : null;
+  });
+  // Right-click fills the other group. The menu comes after the press (Linux, on the press;
+  // Windows, on the release); either way the arc pressed is the one meant.
   svg.addEventListener("contextmenu", (e) => {
-    const a = arcOf(e.target);
+    const a = arcOf(e.target) ?? pressed ?? arcUnder(e);
+    pressed = null;
     if (!a) return;
     e.preventDefault();
+    setFocusable(chart, a.node.id);
     select(a, e.shiftKey || e.ctrlKey || e.metaKey, true);
   });
   svg.addEventListener("pointermove", (e) => {
