@@ -10,13 +10,15 @@ import { createContext } from "./effects/context";
 import { createControls } from "./effects/controls";
 import { createEventStream } from "./effects/events";
 import { createGroups } from "./effects/groups";
+import { createPageSettings } from "./effects/page-settings";
 import { createPairwiseFlow } from "./effects/pairwise-flow";
 import { createRoundSync } from "./effects/round";
 import { createSessions } from "./effects/sessions";
 
 export interface ControllerOptions {
   annotator?: string;
-  /** Where the selected groups survive a reload (sessionStorage by default). */
+  /** Where the selected groups, the playback speed and the group clicks fill survive a
+   * reload (sessionStorage by default). */
   storage?: Pick<Storage, "getItem" | "setItem"> | null;
   /** Puts the session id in the address bar. */
   setUrl?(sid: string | null): void;
@@ -35,7 +37,8 @@ export function createController(store: Store, api: Api, options: ControllerOpti
   const groups = createGroups(ctx, storage);
   const round = createRoundSync(ctx, groups, pairwise, visible);
   const events = createEventStream(ctx, round);
-  const sessions = createSessions(ctx, events, round, setUrl);
+  const pageSettings = createPageSettings(ctx, storage);
+  const sessions = createSessions(ctx, events, round, setUrl, pageSettings);
   const answers = createAnswers(ctx, annotator, groups, pairwise);
   const controls = createControls(ctx, round);
 

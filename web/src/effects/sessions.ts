@@ -1,12 +1,14 @@
 /**
  * Which session the page shows: the one in the URL, the newest, or the start screen; opening
- * one (its state, event stream, round and agent); and the New-session form's checks and
- * creation, with a refusal put beside the env or above the settings.
+ * one (its state, the page's settings of it, event stream, round and agent); and the
+ * New-session form's checks and creation, with a refusal put beside the env or above the
+ * settings.
  */
 import { ApiError, type SessionCreate, type SessionState, STALE } from "../api";
 import type { NewSessionState } from "../state";
 import type { EffectContext } from "./context";
 import type { EventStream } from "./events";
+import type { PageSettingsEffects } from "./page-settings";
 import type { RoundSync } from "./round";
 
 export function createSessions(
@@ -14,6 +16,7 @@ export function createSessions(
   events: EventStream,
   round: RoundSync,
   setUrl: (sid: string | null) => void,
+  pageSettings: PageSettingsEffects,
 ) {
   const dispatch = store.dispatch;
 
@@ -63,6 +66,7 @@ export function createSessions(
     if (session === STALE) return;
     setUrl(sid);
     dispatch({ type: "session", session, at: Date.now() });
+    pageSettings.restore(sid);
     dispatch({ type: "boot", boot: "ready" });
     events.connect(sid);
     void round.syncAgent();

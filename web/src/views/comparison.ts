@@ -5,10 +5,13 @@
  *
  * A clip's element is keyed by behaviour id and reused when it moves between groups, so its
  * video keeps playing; the clips restart together only when the set of behaviours changes.
+ * A clip that leaves a group from its focused button hands the focus on (`lib/focus.ts`).
  */
 import type { Label } from "../api";
 import { question } from "../lib/format";
+import { focusAfterLeaving } from "../lib/focus";
 import { bestGrid } from "../lib/grid";
+import { SPEEDS } from "../lib/page-settings";
 import type { GroupId, Groups } from "../lib/selection";
 import { MAX_GROUP, otherGroup } from "../lib/selection";
 import type { Origin, State } from "../state";
@@ -70,6 +73,15 @@ interface GroupPanel {
   empty: HTMLElement;
 }
 
+/** A clip leaving its group from its own focused button (move or remove). */
+interface Leaving {
+  id: string;
+  tool: "move" | "remove";
+  group: GroupId;
+  index: number;
+  button: HTMLButtonElement;
+}
+
 interface View {
   panels: Record<GroupId, GroupPanel>;
   items: Map<string, ClipItem>;
@@ -84,10 +96,10 @@ interface View {
   handlers: ComparisonHandlers | null;
   data: ComparisonData | null;
   members: string;
+  leaving: Leaving | null;
 }
 
 const views = new WeakMap<Element, View>();
-const SPEEDS = [0.25, 0.5, 1, 1.5, 2];
 
 export function renderComparison(
   element: HTMLElement,
@@ -99,7 +111,10 @@ export function renderComparison(
   const prev = view.data;
   view.data = data;
 
-  if (prev?.groups !== data.groups || prev?.clipOf !== data.clipOf) placeClips(view, data);
+  if (prev?.groups !== data.groups || prev?.clipOf !== data.clipOf) {
+    placeClips(view, data);
+    if (prev?.groups !== data.groups) handFocusOn(view, data);
+  }
   for (const g of ["A", "B"] as const) {
     const p = view.panels[g];
     const n = data.groups[g].length;
@@ -229,6 +244,7 @@ function build(element: HTMLElement): View {
     handlers: null,
     data: null,
     members: "",
+    leaving: null,
   };
   speed.addEventListener("change", () => view.handlers?.speed(Number(speed.value)));
   restart.addEventListener("click", () => view.handlers?.restart());
@@ -254,8 +270,21 @@ function clipItem(view: View, id: string, ref: ClipRef | null): ClipItem {
     h("div", { class: "clip-tools" }, move, remove),
   );
   const item: ClipItem = { li, video, move, remove, group: null };
-  move.addEventListener("click", () => view.handlers?.move(id));
-  remove.addEventListener("click", () => view.handlers?.remove(id));
+  const leave = (tool: Leaving["tool"], button: HTMLButtonElement) => {
+    const group = item.group;
+    view.leaving =
+      group && document.activeElement === button
+        ? { id, tool, group, index: [...view.panels[group].list.children].indexOf(li), button }
+        : null;
+  };
+  move.addEventListener("click", () => {
+    leave("move", move);
+    view.handlers?.move(id);
+  });
+  remove.addEventListener("click", () => {
+    leave("remove", remove);
+    view.handlers?.remove(id);
+  });
   li.addEventListener("pointerenter", () => view.handlers?.hover(id));
   li.addEventListener("pointerleave", () => view.handlers?.hover(null));
   li.addEventListener("focusin", () => view.handlers?.hover(id));
@@ -303,6 +332,29 @@ function placeClips(view: View, data: ComparisonData): void {
       data.speed,
     );
   }
+}
+
+/**
+ * After a clip left its group from its focused button, the focus stays on the same button of
+ * the clip now in its place (or the one before it), so Enter can go on; from an emptied
+ * group it follows a moved clip, or goes to the group's "Fill" button after a removal
+ * (issue 23: it fell to the page's body).
+ */
+function handFocusOn(view: View, data: ComparisonData): void {
+  const leaving = view.leaving;
+  view.leaving = null;
+  if (!leaving || data.groups[leaving.group].includes(leaving.id)) return;
+  const active = document.activeElement;
+  if (active && active !== document.body && active !== leaving.button) return; // the person moved on
+  const group = data.groups[leaving.group];
+  const i = focusAfterLeaving(leaving.index, group.length);
+  const stay = i === null ? undefined : view.items.get(group[i]!);
+  const next = stay
+    ? stay[leaving.tool]
+    : leaving.tool === "move"
+      ? view.items.get(leaving.id)?.move
+      : view.panels[leaving.group].fill;
+  next?.focus();
 }
 
 function fitGrid(panel: GroupPanel): void {

@@ -1,8 +1,11 @@
 /**
  * The guide: a few lines on what to do, shown over the page the first time a mode is opened
- * in this browser and again from the status bar's "?" (or the ? key). A dialog: the answer
- * keys rest while it is open; Escape, "Got it" or a click beside it closes it.
+ * in this browser and again from the status bar's "?" (or the ? key). A modal dialog: the
+ * page behind is inert and Tab cycles through the guide's own buttons while it is open (the
+ * answer keys rest too); Escape, "Got it" or a click beside it closes it, and the focus goes
+ * back where it was.
  */
+import { trapStep } from "../lib/focus";
 import { question } from "../lib/format";
 import { h, kbd, memo } from "./dom";
 
@@ -70,12 +73,28 @@ export function renderGuide(element: HTMLElement, mode: GuideMode | null, open: 
   if (show === view.open) return;
   view.open = show;
   element.hidden = !show;
+  // The page behind can be neither focused nor clicked while the guide is open.
+  for (const sibling of element.parentElement?.children ?? []) {
+    if (sibling !== element) sibling.toggleAttribute("inert", show);
+  }
   if (show) {
     view.before = document.activeElement;
     view.ok.focus();
   } else if (view.before instanceof HTMLElement && view.before.isConnected) {
     view.before.focus();
   }
+}
+
+/** Tab and Shift+Tab go round the guide's controls (issue 23: Tab from "Got it" reached the
+ * page behind). */
+function trapTab(view: View, e: KeyboardEvent): void {
+  if (!view.open || e.key !== "Tab" || e.altKey || e.ctrlKey || e.metaKey) return;
+  const controls = [...view.box.querySelectorAll<HTMLElement>("button, [href], input, select, [tabindex]")].filter(
+    (el) => !el.hasAttribute("disabled") && el.tabIndex >= 0,
+  );
+  const next = controls[trapStep(controls.indexOf(document.activeElement as HTMLElement), controls.length, e.shiftKey)];
+  e.preventDefault();
+  next?.focus();
 }
 
 function build(element: HTMLElement): View {
@@ -103,5 +122,6 @@ function build(element: HTMLElement): View {
   element.addEventListener("click", (e) => {
     if (e.target === element) view.handlers?.close();
   });
+  document.addEventListener("keydown", (e) => trapTab(view, e), true);
   return view;
 }

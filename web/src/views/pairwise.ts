@@ -5,6 +5,7 @@
  */
 import type { Label, PairQuery } from "../api";
 import { question } from "../lib/format";
+import { SPEEDS } from "../lib/page-settings";
 import { clipVideo, startTogether, unloadVideo } from "./clips";
 import { h, kbd, memo, text } from "./dom";
 
@@ -50,7 +51,6 @@ interface View {
 }
 
 const views = new WeakMap<Element, View>();
-const SPEEDS = [0.25, 0.5, 1, 1.5, 2];
 
 export function renderPairwise(element: HTMLElement, data: PairwiseData, handlers: PairwiseHandlers): void {
   const view = memo(views, element, () => build(element));
