@@ -24,11 +24,11 @@ a band of radius r around both the diagonal from (0, 0) and the one ending at
 `window = r + 1`. `window=None` is unconstrained.
 
 Speed. All N (N - 1) / 2 distances are computed by one numba kernel, parallel over rows
-of the matrix. The local costs come from ||x||^2 + ||y||^2 - 2 x.y: the dot products are
-the only O(L^2 D) work per pair and run as dense vectorised loops; every cost whose
-squared value is within a relative `_EXACT_TOL` of cancellation is recomputed directly
-from the differences, so identical steps cost exactly 0 and every cost keeps a relative
-error below about D * 1e-12. The dynamic programme runs on 8 pairs at once (one vector
+of the matrix (launched on about a tenth of the rows at a time, to report progress). The
+local costs come from ||x||^2 + ||y||^2 - 2 x.y: the dot products are the only O(L^2 D)
+work per pair and run as dense vectorised loops; every cost whose squared value is within
+a relative `_EXACT_TOL` of cancellation is recomputed directly from the differences, so
+identical steps cost exactly 0 and every cost keeps a relative error below about D * 1e-12. The dynamic programme runs on 8 pairs at once (one vector
 lane per pair: row a against 8 sequences of equal length). No O((N L)^2) matrix is ever
 held: memory is O(N L D). See `benchmarks/dtw.py` for timings. The first call compiles
 the kernels (or loads them from numba's on-disk cache); `warm_up` does that explicitly.
@@ -42,6 +42,7 @@ GridWorld groupwise cells side by side on two cores took 108 s each instead of 2
 every kernel launch restores the OpenMP limits it found (threadpoolctl).
 """
 
+import math
 import time
 from collections.abc import Sequence
 
@@ -50,7 +51,7 @@ import numpy as np
 from numba import njit, prange
 from threadpoolctl import threadpool_limits
 
-from groupwise.types import FloatArray, IntArray
+from groupwise.types import FloatArray, IntArray, ProgressFn
 
 _LANES = 8
 """Pairs per dynamic-programme step: one AVX-512 register, or two AVX2 registers, of float64."""
@@ -88,13 +89,18 @@ def dtw_distance(x: FloatArray, y: FloatArray, window: int | None = None) -> flo
     return float(_pair_distance(a, b, _check_window(window)))
 
 
-def dtw_matrix(sequences: Sequence[FloatArray], window: int | None = None) -> FloatArray:
+def dtw_matrix(
+    sequences: Sequence[FloatArray],
+    window: int | None = None,
+    progress: ProgressFn | None = None,
+) -> FloatArray:
     """All pairwise DTW distances as a condensed vector.
 
     sequences: N arrays (L_i, D); lengths may differ.
     Returns (N (N - 1) / 2,) float64 in `scipy.spatial.distance.squareform` order:
     entry N i - i (i + 1) / 2 + (j - i - 1) is dtw(sequences[i], sequences[j]) for i < j.
-    N < 2 gives an empty vector.
+    N < 2 gives an empty vector. `progress` hears (pairs done, N (N - 1) / 2) after each
+    launch of the kernel (`_rows_per_launch` rows of the matrix each: about ten a matrix).
     """
     seqs = _as_sequences(sequences)
     w = _check_window(window)
@@ -130,26 +136,44 @@ def dtw_matrix(sequences: Sequence[FloatArray], window: int | None = None) -> Fl
     order = np.empty(n, dtype=np.int64)
     order[0::2] = np.arange((n + 1) // 2)
     order[1::2] = n - 1 - np.arange(n // 2)
+    pairs_of_row = n - 1 - order  # row a computes its pairs with the b > a
+    done, total = 0, n * (n - 1) // 2
+    if progress is not None:
+        progress(done, total)
     # small chunks handed out dynamically: a thread that loses its core to another process
     # does not hold up the whole matrix (static halves did, on a shared 2-core machine)
     with threadpool_limits(limits=None, user_api="openmp"), numba.parallel_chunksize(2):
-        _matrix_kernel(
-            steps,
-            sq,
-            offsets,
-            ln,
-            order,
-            lane_steps_t,
-            lane_sq,
-            batch_col,
-            batch_len,
-            members,
-            first_batch,
-            w,
-            perm,
-            out,
-        )
+        rows = _rows_per_launch(n)  # starts numba's threading layer: inside the limits
+        for first in range(0, n, rows):
+            _matrix_kernel(
+                steps,
+                sq,
+                offsets,
+                ln,
+                order[first : first + rows],
+                lane_steps_t,
+                lane_sq,
+                batch_col,
+                batch_len,
+                members,
+                first_batch,
+                w,
+                perm,
+                out,
+            )
+            done += int(pairs_of_row[first : first + rows].sum())
+            if progress is not None:
+                progress(done, total)
     return out
+
+
+def _rows_per_launch(n: int) -> int:
+    """Rows of the matrix one kernel launch computes: about a tenth of them, so progress is
+    reported about ten times a matrix, but at least 2 per thread, so that every thread has a
+    chunk (`parallel_chunksize(2)`); even, so heavy and light rows (`order`) pair up and
+    every chunk is the same work."""
+    rows = max(2 * numba.get_num_threads(), math.ceil(n / 10))
+    return rows + rows % 2
 
 
 def warm_up() -> float:
@@ -296,7 +320,7 @@ def _matrix_kernel(
     for s in range(n):
         maxlen = max(maxlen, ln[s])
     inf = np.inf
-    for t in prange(n):
+    for t in prange(order.shape[0]):  # the rows of this launch
         a = order[t]
         na = ln[a]
         xa = steps[offsets[a] : offsets[a] + na]

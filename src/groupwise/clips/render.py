@@ -9,15 +9,21 @@ and posters in the clip store (`store.py`) and returns their ids. Workers are st
 children (so a script that prepares pools needs the ``if __name__ == "__main__"`` guard).
 Each worker makes its rendering env once and reuses it, so results do not depend on which
 worker ran which job (tested: clips rendered in-process and by workers have equal ids).
+Workers say over a queue each time a clip's frames are rendered and handed to ffmpeg, so
+`PendingClips.wait` reports clips as they are done, not only jobs (a job is about 1/8 of a
+pool: several seconds).
 """
 
+import itertools
 import logging
 import math
 import multiprocessing
+import queue
 import resource
 import time
-from collections.abc import Mapping, Sequence
-from concurrent.futures import Executor, Future, ProcessPoolExecutor, as_completed
+from collections.abc import Callable, Mapping, Sequence
+from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor
+from concurrent.futures import wait as wait_futures
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -30,6 +36,7 @@ from groupwise.clips.replay import FrameSettings, even_crop, make_render_env, re
 from groupwise.clips.store import ClipStore
 from groupwise.clips.video import DEFAULT_FPS, ClipEncoder, poster_bytes, poster_frame
 from groupwise.pool.fragments import Fragment, Trajectory
+from groupwise.types import ProgressFn
 
 logger = logging.getLogger(__name__)
 
@@ -147,11 +154,17 @@ def plan_jobs(
     return sorted(jobs, key=lambda job: -job.cost)
 
 
-def run_job(job: ClipJob, store: ClipStore, env: gym.Env[Any, Any] | None = None) -> JobReport:
+def run_job(
+    job: ClipJob,
+    store: ClipStore,
+    env: gym.Env[Any, Any] | None = None,
+    on_clip: Callable[[], None] | None = None,
+) -> JobReport:
     """Render, encode and store every window of one job (in whichever process calls it).
 
     All the job's clips go through one ffmpeg process (`ClipEncoder`), which encodes a window
     while the next is rendered. Without `env`, uses this process's cached rendering env.
+    `on_clip` is called as each window's frames and poster are done.
     """
     env = env if env is not None else _cached_env(job.settings)
     timings: dict[str, float] = {}
@@ -184,6 +197,8 @@ def run_job(job: ClipJob, store: ClipStore, env: gym.Env[Any, Any] | None = None
             image = poster_bytes(frames[poster_frame(job.clip_frames)], job.settings.video)
             posters.append(store.put_bytes(image, job.settings.video.poster_format))
             encode_s += time.perf_counter() - tick
+            if on_clip is not None:
+                on_clip()
         tick = time.perf_counter()
         if encoder is not None:
             encoder.close()
@@ -234,8 +249,20 @@ def _warm_up(settings: FrameSettings) -> float:
     return time.perf_counter() - start
 
 
-def _run_job_in_worker(job: ClipJob, root: Path) -> JobReport:
-    return run_job(job, ClipStore(root))
+_CLIPS_DONE: "multiprocessing.Queue[int] | None" = None
+"""This worker's queue to its parent: the batch number of each clip it rendered."""
+
+
+def _start_worker(clips_done: "multiprocessing.Queue[int]") -> None:
+    global _CLIPS_DONE
+    _CLIPS_DONE = clips_done
+    # progress only: a worker that exits must not wait for its parent to read the queue
+    clips_done.cancel_join_thread()
+
+
+def _run_job_in_worker(job: ClipJob, root: Path, batch: int) -> JobReport:
+    done = _CLIPS_DONE
+    return run_job(job, ClipStore(root), on_clip=None if done is None else lambda: done.put(batch))
 
 
 class RenderPool:
@@ -251,9 +278,17 @@ class RenderPool:
         self.workers = workers
         self._executor: Executor | None = None
         self._warming: list[Future[float]] = []
+        self._batches = itertools.count()
+        self._clips_done: multiprocessing.Queue[int] | None = None
         if workers > 0:
             context = multiprocessing.get_context("spawn")
-            self._executor = ProcessPoolExecutor(max_workers=workers, mp_context=context)
+            self._clips_done = context.Queue()
+            self._executor = ProcessPoolExecutor(
+                max_workers=workers,
+                mp_context=context,
+                initializer=_start_worker,
+                initargs=(self._clips_done,),
+            )
 
     def __enter__(self) -> "RenderPool":
         return self
@@ -265,6 +300,9 @@ class RenderPool:
         if self._executor is not None:
             self._executor.shutdown(wait=True, cancel_futures=True)
             self._executor = None
+        if self._clips_done is not None:
+            self._clips_done.close()
+            self._clips_done = None
 
     def warm_up(self, settings: FrameSettings) -> None:
         """Start the workers and make their envs now, without waiting (e.g. while the
@@ -278,17 +316,22 @@ class RenderPool:
         warming, self._warming = self._warming, []
         if self._executor is None:
             return PendingClips(list(jobs), store, warming, {})
+        batch = next(self._batches)
         futures = {
-            self._executor.submit(_run_job_in_worker, job, store.root): i
+            self._executor.submit(_run_job_in_worker, job, store.root, batch): i
             for i, job in enumerate(jobs)
         }
-        return PendingClips(list(jobs), store, warming, futures)
+        return PendingClips(list(jobs), store, warming, futures, self._clips_done, batch)
 
     def render(
-        self, jobs: Sequence[ClipJob], store: ClipStore, show_progress: bool = True
+        self,
+        jobs: Sequence[ClipJob],
+        store: ClipStore,
+        show_progress: bool = True,
+        progress: ProgressFn | None = None,
     ) -> list[JobReport]:
         """`start` then `wait`."""
-        return self.start(jobs, store).wait(show_progress)
+        return self.start(jobs, store).wait(show_progress, progress)
 
 
 class PendingClips:
@@ -300,14 +343,21 @@ class PendingClips:
         store: ClipStore,
         warming: list[Future[float]],
         futures: Mapping[Future[JobReport], int],
+        clips_done: "multiprocessing.Queue[int] | None" = None,
+        batch: int = 0,
     ) -> None:
         self._jobs = jobs
         self._store = store
         self._warming = warming
         self._futures = futures
+        self._clips_done = clips_done
+        self._batch = batch
 
-    def wait(self, show_progress: bool = True) -> list[JobReport]:
-        """Block until every job is done; a tqdm bar counts clips.
+    def wait(
+        self, show_progress: bool = True, progress: ProgressFn | None = None
+    ) -> list[JobReport]:
+        """Block until every job is done; a tqdm bar counts clips, and `progress` hears
+        (clips done, clips) as the workers finish each clip (at most every `POLL_S`).
 
         Raises the first failed job's error (e.g. `ReplayMismatchError`,
         `RenderingUnavailableError`, `VideoEncodingError`); the other jobs are cancelled.
@@ -316,31 +366,76 @@ class PendingClips:
         total = sum(len(job.starts) for job in jobs)
         reports: dict[int, JobReport] = {}
         with tqdm(total=total, unit="clip", desc="clips", disable=not show_progress) as bar:
+            counter = _ClipCounter(total, bar, progress)
             try:
                 for warming in self._warming:
                     warming.result()
                 if not self._futures:
-                    reports = self._run_here(bar)
-                for future in as_completed(self._futures):
-                    i = self._futures[future]
-                    reports[i] = future.result()
-                    bar.update(len(jobs[i].starts))
+                    reports = self._run_here(counter)
+                pending = set(self._futures)
+                while pending:
+                    finished, pending = wait_futures(
+                        pending, timeout=POLL_S, return_when=FIRST_COMPLETED
+                    )
+                    for future in finished:
+                        reports[self._futures[future]] = future.result()
+                    counter.add(self._drain())
+                counter.finish()
             except BaseException:
                 for future in self._futures:
                     future.cancel()
                 raise
         return [reports[i] for i in range(len(jobs))]
 
-    def _run_here(self, bar: Any) -> dict[int, JobReport]:
+    def _drain(self) -> int:
+        """Clips of this batch the workers reported since the last call (earlier batches'
+        late reports, of a batch that failed, are dropped)."""
+        count = 0
+        while self._clips_done is not None:
+            try:
+                count += self._clips_done.get_nowait() == self._batch
+            except queue.Empty:
+                break
+        return count
+
+    def _run_here(self, counter: "_ClipCounter") -> dict[int, JobReport]:
         envs: dict[FrameSettings, gym.Env[Any, Any]] = {}
         reports = {}
         try:
             for i, job in enumerate(self._jobs):
                 if job.settings not in envs:
                     envs[job.settings] = make_render_env(job.settings)
-                reports[i] = run_job(job, self._store, envs[job.settings])
-                bar.update(len(job.starts))
+                reports[i] = run_job(
+                    job, self._store, envs[job.settings], on_clip=lambda: counter.add(1)
+                )
         finally:
             for env in envs.values():
                 env.close()
         return reports
+
+
+POLL_S = 0.25
+"""How often `PendingClips.wait` collects the workers' clip reports."""
+
+
+class _ClipCounter:
+    """Clips done so far, shown on a tqdm bar and told to a `ProgressFn` as they grow."""
+
+    def __init__(self, total: int, bar: Any, progress: ProgressFn | None) -> None:
+        self.total, self.bar, self.progress, self.done = total, bar, progress, 0
+        if progress is not None:
+            progress(0, total)
+
+    def add(self, clips: int) -> None:
+        if clips:
+            self._set(min(self.done + clips, self.total))
+
+    def finish(self) -> None:
+        self._set(self.total)
+
+    def _set(self, done: int) -> None:
+        if done > self.done:
+            self.bar.update(done - self.done)
+            self.done = done
+            if self.progress is not None:
+                self.progress(done, self.total)

@@ -28,7 +28,7 @@ from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
 
 from groupwise.clips.video import VideoConfig
 from groupwise.envs import make_env
-from groupwise.envs.rendering import DEFAULT_FRAME_SIZE
+from groupwise.envs.rendering import DEFAULT_FRAME_SIZE, FrameSize
 from groupwise.pool.fragments import Trajectory
 
 PLANE_GRID_CELLS = 40
@@ -59,7 +59,9 @@ class FrameSettings:
 def make_render_env(settings: FrameSettings) -> gym.Env[Any, Any]:
     """A fresh env that renders `rgb_array` frames of the requested size.
 
-    Gymnasium ids whose constructor takes no width/height are made at their own size.
+    Gymnasium ids whose constructor takes no width/height (classic control: Pendulum-v1
+    draws 500 × 500) are made at their own size and their frames scaled to fit the requested
+    size, keeping their aspect (`envs.rendering.FrameSize`).
 
     Raises:
         RenderingUnavailableError: no offscreen GL backend (names the system packages).
@@ -70,7 +72,9 @@ def make_render_env(settings: FrameSettings) -> gym.Env[Any, Any]:
             settings.env, render_mode="rgb_array", width=settings.width, height=settings.height
         )
     except TypeError:
-        env = make_env(settings.env, render_mode="rgb_array")
+        env = FrameSize(
+            make_env(settings.env, render_mode="rgb_array"), settings.width, settings.height
+        )
     base = env.unwrapped
     if isinstance(base, MujocoEnv):
         apply_clip_quality(base.model)

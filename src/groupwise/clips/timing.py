@@ -133,11 +133,23 @@ def env_step_seconds(env: str) -> float:
         instance.close()
 
 
+GYMNASIUM_CLIP_SECONDS: dict[str, float] = {
+    # Swimmer-v5 (dt 0.04 s): under random actions its joints turn ~0.2 rad and its head
+    # moves 0.1 m in 1 s, nothing to judge; in 4 s 1-1.4 rad and 0.8 m, a few strokes (and a
+    # good policy's ~0.1 m/s, 0.4 m of its 3 m body). Issue 23.
+    "Swimmer": 4.0,
+}
+"""Default clip seconds of Gymnasium envs by family (the id without namespace and version:
+"Swimmer" for ``Swimmer-v5`` and ``Swimmer-v4``) that move too slowly for 1 s clips."""
+
+
 def default_clip_seconds(env: str) -> float:
-    """The simulated seconds a behaviour of `env` covers by default (its `EnvEntry`'s, else
-    `DEFAULT_CLIP_SECONDS`)."""
+    """The simulated seconds a behaviour of `env` covers by default: its `EnvEntry`'s, else
+    its family's in `GYMNASIUM_CLIP_SECONDS`, else `DEFAULT_CLIP_SECONDS`."""
     entry = env_entry(env)
     seconds = entry.clip_seconds if entry is not None else None
+    if seconds is None and entry is None:
+        seconds = GYMNASIUM_CLIP_SECONDS.get(env.split(":")[-1].split("/")[-1].split("-v")[0])
     return float(seconds) if seconds is not None else DEFAULT_CLIP_SECONDS
 
 

@@ -19,6 +19,7 @@ import gymnasium as gym
 import mujoco
 import numpy as np
 from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
+from PIL import Image
 
 logger = logging.getLogger(__name__)
 
@@ -236,3 +237,38 @@ class FastMujocoRendering(gym.Wrapper[Any, Any, Any, Any]):
 def frame_is_blank(frame: np.ndarray) -> bool:
     """Whether an RGB frame is (close to) one flat colour, e.g. from a dead GL context."""
     return bool(np.asarray(frame, dtype=np.float64).std() < 1.0)
+
+
+def fit_size(size: tuple[int, int], box: tuple[int, int]) -> tuple[int, int]:
+    """(width, height) of a `size` (width, height) frame scaled to fit in `box`, keeping its
+    aspect ratio, each side at least 2 pixels: (500, 500) in (240, 240) → (240, 240), (600, 400)
+    → (240, 160)."""
+    scale = min(box[0] / size[0], box[1] / size[1])
+    return max(2, round(size[0] * scale)), max(2, round(size[1] * scale))
+
+
+class FrameSize(gym.Wrapper[Any, Any, Any, Any]):
+    """Scales an env's ``rgb_array`` frames to fit in `width` × `height`, keeping their aspect.
+
+    For envs whose constructor takes no frame size (Gymnasium's classic control draws
+    Pendulum-v1 at 500 × 500, CartPole at 600 × 400), so that a session's frame size holds
+    for every env (issue 23). Frames already of the size pass untouched; smaller ones are
+    enlarged (bicubic), larger ones shrunk by area averaging. Other modes pass through.
+    """
+
+    def __init__(self, env: gym.Env[Any, Any], width: int, height: int) -> None:
+        super().__init__(env)
+        self.box = (width, height)
+
+    def render(self) -> Any:
+        frame = self.env.render()
+        if self.env.render_mode != "rgb_array" or frame is None:
+            return frame
+        frame = np.asarray(frame)
+        height, width = frame.shape[:2]
+        size = fit_size((width, height), self.box)
+        if size == (width, height):
+            return frame
+        shrink = size[0] < width
+        method = Image.Resampling.BOX if shrink else Image.Resampling.BICUBIC
+        return np.asarray(Image.fromarray(frame).resize(size, method))

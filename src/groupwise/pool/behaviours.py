@@ -1,14 +1,13 @@
 """A round's behaviour pool: the fragments on offer and what the ensemble predicts of them
 (behaviour i is named ``b<i>``: `groupwise.pool.ids`)."""
 
-import functools
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from groupwise.pool.fragments import Fragment, Trajectory
-from groupwise.types import FloatArray
+from groupwise.types import FloatArray, ProgressFn
 
 if TYPE_CHECKING:
     from groupwise.behaviour import BehaviourTree
@@ -36,6 +35,9 @@ class BehaviourPool:
     _trees: dict["TreeConfig", "BehaviourTree"] = field(
         default_factory=dict, init=False, repr=False, compare=False
     )
+    _measured: dict[str, FloatArray] = field(
+        default_factory=dict, init=False, repr=False, compare=False
+    )
 
     def __post_init__(self) -> None:
         if self.predicted_returns.shape[0] != len(self.fragments):
@@ -57,12 +59,20 @@ class BehaviourPool:
         """(N,) true return of each behaviour (for simulated users and evaluation only)."""
         return np.array([f.true_return for f in self.fragments])
 
-    @functools.cached_property
+    @property
     def distances(self) -> FloatArray:
         """Condensed exact DTW distances of the pool's behaviours (SPEC §4), computed once."""
+        return self.measure_distances()
+
+    def measure_distances(self, progress: ProgressFn | None = None) -> FloatArray:
+        """`distances`, computed now unless they were before; `progress` hears (pairs done,
+        pairs) while they are computed (`behaviour.dtw.dtw_matrix`)."""
         from groupwise.behaviour import dtw_matrix, pool_features
 
-        return dtw_matrix(pool_features(self.fragments))
+        if "distances" not in self._measured:
+            features = pool_features(self.fragments)
+            self._measured["distances"] = dtw_matrix(features, progress=progress)
+        return self._measured["distances"]
 
     def tree(self, cfg: "TreeConfig | None" = None) -> "BehaviourTree":
         """The pool's behaviour tree cut by `cfg` (SPEC §4), built once per config: the one

@@ -51,6 +51,7 @@ from groupwise.pool.files import (
 from groupwise.pool.sampling import sample_pool
 from groupwise.preferences.judgement import MAX_GROUP
 from groupwise.rl.policy import Policy
+from groupwise.types import ProgressFn
 
 logger = logging.getLogger(__name__)
 
@@ -151,6 +152,7 @@ def publish_pool(
     metadata: Mapping[str, Any] | None = None,
     show_progress: bool = True,
     sample_s: float = 0.0,
+    progress: ProgressFn | None = None,
 ) -> PreparedPool:
     """Render, encode, cluster and write a sampled pool (module docstring).
 
@@ -160,7 +162,8 @@ def publish_pool(
     return. `metadata` (e.g. policy and seed) is written into ``pool.json``, and beside
     `cfg` under "config" how the pool was sampled (N and L, read off `pool`; `oversample` and
     `exploration_fraction` as given to `sample_pool`: only recorded); `sample_s`, the time it
-    took to sample the pool, into the timings.
+    took to sample the pool, into the timings. `progress` hears (clips done, clips) as the
+    workers render them (`clips.render.PendingClips.wait`).
 
     Raises:
         RenderingUnavailableError: the env cannot render offscreen (names the packages).
@@ -201,7 +204,7 @@ def publish_pool(
             if node.kind != "leaf"
         }
         tree_s = time.perf_counter() - mark
-        reports = pending.wait(show_progress)
+        reports = pending.wait(show_progress, progress)
         clips_s = time.perf_counter() - tick
     finally:
         if own_pool:

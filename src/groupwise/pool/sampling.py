@@ -17,7 +17,7 @@ from groupwise.query.groups import step_variance
 from groupwise.reward import RewardEnsemble
 from groupwise.rl.policy import Policy
 from groupwise.rl.rollout import EnvFactory, sample_episodes_for_windows
-from groupwise.types import IntArray
+from groupwise.types import IntArray, ProgressFn
 
 
 def sample_pool(
@@ -32,12 +32,14 @@ def sample_pool(
     oversample: float = 1.0,
     ensemble: RewardEnsemble | None = None,
     select: Literal["uncertain", "random"] = "uncertain",
+    progress: ProgressFn | None = None,
 ) -> BehaviourPool:
     """A pool of (up to) `size` behaviours of `length` steps (module docstring).
 
     With an `ensemble` the pool carries its predicted returns (N, K) and step variance, and
     keeps the windows it is most uncertain about (`select="random"`: a random subset);
-    without one the predicted returns are an empty (N, 0) array.
+    without one the predicted returns are an empty (N, 0) array. `progress` hears the
+    steps sampled towards the windows (`rl.rollout.sample_episodes_for_windows`).
 
     Raises:
         ValueError: `size` < 1 or `oversample` < 1, or episodes too short for a window.
@@ -45,7 +47,13 @@ def sample_pool(
     if size < 1 or oversample < 1.0:
         raise ValueError(f"need size >= 1 and oversample >= 1, got {size} and {oversample}")
     episodes = sample_episodes_for_windows(
-        make_env, policy, math.ceil(size * oversample), length, rng, exploration_fraction
+        make_env,
+        policy,
+        math.ceil(size * oversample),
+        length,
+        rng,
+        exploration_fraction,
+        progress=progress,
     )
     windows = tile_fragments(episodes, length)
     if ensemble is None:

@@ -1,24 +1,43 @@
 """SB3 callbacks: the extension point for progress reporting."""
 
-from collections.abc import Callable
+import math
+from typing import Any
 
 from stable_baselines3.common.callbacks import BaseCallback
+from stable_baselines3.common.on_policy_algorithm import OnPolicyAlgorithm
 
-ProgressFn = Callable[[int, int], None]
-"""(steps done, steps total) -> None: a run's `RunCallback.on_phase("ppo", …)`."""
+from groupwise.types import ProgressFn
+
+__all__ = ["ProgressCallback", "ProgressFn", "planned_steps"]
+
+
+def planned_steps(model: Any, steps: int) -> int:
+    """The env steps `model.learn(total_timesteps=steps)` runs: an on-policy algorithm
+    (PPO, A2C) collects whole rollouts of n_envs × n_steps, so `steps` rounded up to whole
+    rollouts (1 step asked of a 2,048-step rollout runs 2,048); any other model, `steps`."""
+    if isinstance(model, OnPolicyAlgorithm):
+        rollout = model.n_envs * model.n_steps
+        return math.ceil(steps / rollout) * rollout
+    return steps
 
 
 class ProgressCallback(BaseCallback):
-    """Reports PPO progress to a `ProgressFn` once per rollout (and at the start)."""
+    """Reports training progress to a `ProgressFn` once per rollout (and at the start).
+
+    The total reported is what runs (`planned_steps`: whole rollouts for PPO), not the
+    `total` asked, so the count ends at the total (issue 23: "PPO 1 / 1 steps" while 2,048
+    ran)."""
 
     def __init__(self, total: int, report: ProgressFn | None = None) -> None:
         super().__init__()
+        self.asked = total
         self.total = total
         self.report = report
         self._start = 0
 
     def _on_training_start(self) -> None:
         self._start = self.num_timesteps
+        self.total = planned_steps(self.model, self.asked)
         if self.report is not None:
             self.report(0, self.total)
 

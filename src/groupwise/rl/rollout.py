@@ -26,9 +26,13 @@ from groupwise.envs.targets import TARGET_TOTAL_KEY
 from groupwise.envs.true_reward import TRUE_REWARD_KEY
 from groupwise.pool.fragments import Trajectory
 from groupwise.rl.policy import Policy, random_actions
-from groupwise.types import FloatArray
+from groupwise.types import FloatArray, IntArray, ProgressFn
 
 EnvFactory = Callable[[], gym.Env]
+
+StepFn = Callable[[IntArray, IntArray], None]
+"""(steps of each episode of a batch so far, indices of the episodes still running) -> None:
+called after every step of a batch."""
 
 EXPLORATION_SEGMENT = 10
 """Mean length in steps of one random-action stretch (the agent and the random policy take
@@ -94,6 +98,7 @@ def sample_episodes_for_windows(
     batch: int | None = None,
     max_episodes: int | None = None,
     max_steps: int | None = None,
+    progress: ProgressFn | None = None,
 ) -> list[Trajectory]:
     """Sample episodes until tiling them into `length`-step windows gives >= `n_windows`.
 
@@ -106,6 +111,10 @@ def sample_episodes_for_windows(
     side; `max_episodes` caps the episodes sampled in all, and when it stops the sampling the
     episodes may hold fewer than `n_windows` windows. The returned episodes are numbered
     0 … E − 1 across batches (pools key fragments by episode and start step).
+
+    `progress` hears (steps sampled towards the windows, `n_windows` × `length`) as the
+    steps are taken, never decreasing: an ended episode's steps count in whole windows, a
+    running one's all (they may all become windows), at most the total.
 
     Raises:
         ValueError: a non-positive count; the env has no time limit and `max_steps` is not
@@ -132,6 +141,19 @@ def sample_episodes_for_windows(
         )
     trajectories: list[Trajectory] = []
     windows = 0
+    target, reported = n_windows * length, 0
+
+    def on_step(steps: IntArray, running: IntArray) -> None:
+        nonlocal reported
+        whole = steps // length * length
+        whole[running] = steps[running]
+        done = min(windows * length + int(whole.sum()), target)
+        if progress is not None and done > reported:
+            reported = done
+            progress(done, target)
+
+    if progress is not None:
+        progress(0, target)
     wanted = math.ceil(n_windows / (limit // length))
     while windows < n_windows:
         room = math.inf if max_episodes is None else max_episodes - len(trajectories)
@@ -139,7 +161,14 @@ def sample_episodes_for_windows(
             break
         size = int(min(wanted, batch or wanted, room))
         trajectories += _sample_batch(
-            make_env, policy, size, rng, exploration_fraction, max_steps, len(trajectories)
+            make_env,
+            policy,
+            size,
+            rng,
+            exploration_fraction,
+            max_steps,
+            len(trajectories),
+            on_step if progress is not None else None,
         )
         windows = sum(len(t) // length for t in trajectories)
         if windows == 0:
@@ -199,11 +228,12 @@ def _sample_batch(
     exploration_fraction: float,
     max_steps: int | None,
     first_episode: int,
+    on_step: StepFn | None = None,
 ) -> list[Trajectory]:
     envs = [make_env() for _ in range(n_episodes)]
     try:
         limit = _step_limit(envs[0], max_steps)
-        return _run(envs, policy, rng, exploration_fraction, limit, first_episode)
+        return _run(envs, policy, rng, exploration_fraction, limit, first_episode, on_step)
     finally:
         for env in envs:
             env.close()
@@ -216,6 +246,7 @@ def _run(
     exploration_fraction: float,
     limit: int,
     first_episode: int,
+    on_step: StepFn | None = None,
 ) -> list[Trajectory]:
     space = envs[0].action_space
     seeds = rng.integers(0, 2**31 - 1, size=len(envs))
@@ -242,6 +273,8 @@ def _run(
             if not (terminated or truncated):
                 still.append(i)
                 following.append(after)
+        if on_step is not None:
+            on_step(np.array([len(steps) for steps in obs]), np.array(still, dtype=np.int64))
         if not still:
             break
         running, current = np.array(still), np.stack(following)

@@ -20,6 +20,7 @@ import logging
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from functools import partial
 from pathlib import Path
 
 from groupwise.clips.render import RenderPool
@@ -102,12 +103,12 @@ def prepare(
     settings = job.settings
     progress.on_phase("load", 0, 1)
     with open_run(job, data_dir, job.round - 1) as run:
-        progress.on_phase("sample", 0, settings.pool_size)
         offer = begin_round(
             run,
             session_strategy(run.cfg, job.mode),
             settings.comparisons_per_round,
             n_queries=offered_queries(settings),
+            callback=progress,
         )
     publish_offer(
         db,
@@ -157,6 +158,7 @@ def publish_offer(
         metadata={"session": session_id, "round": pool.round},
         show_progress=False,
         sample_s=sample_s,
+        progress=None if progress is None else partial(progress.on_phase, "clips"),
     )
     if progress is not None:
         progress.on_phase("suggestions", 0, 1)

@@ -165,3 +165,15 @@ def test_the_parallel_kernel_leaves_torchs_thread_count_alone():
         [sys.executable, "-c", _THREADS_SCRIPT], capture_output=True, text=True, env=env, check=True
     )
     assert done.stdout.split()[-1] == "1"
+
+
+def test_progress_counts_pairs_up_to_all_of_them_and_changes_nothing():
+    rng = np.random.default_rng(4)
+    seqs = [rng.normal(size=(int(rng.integers(3, 9)), 2)) for _ in range(50)]
+    reports: list[tuple[int, int]] = []
+    with_progress = dtw_matrix(seqs, progress=lambda done, total: reports.append((done, total)))
+    np.testing.assert_array_equal(with_progress, dtw_matrix(seqs))
+    total = 50 * 49 // 2
+    assert reports[0] == (0, total) and reports[-1] == (total, total)
+    done = [d for d, _ in reports]
+    assert len(done) >= 3 and done == sorted(set(done))  # about ten launches: increasing

@@ -2,13 +2,14 @@
 workers turn them into stored clips."""
 
 import dataclasses
+import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 
-from groupwise.clips.render import ClipJob, plan_jobs, run_job
+from groupwise.clips.render import ClipJob, RenderPool, plan_jobs, run_job
 from groupwise.clips.replay import (
     FrameSettings,
     ReplayMismatchError,
@@ -124,6 +125,39 @@ def test_a_job_stores_one_clip_and_poster_per_window(tmp_path: Path) -> None:
     assert np.abs(decoded[0].astype(int) - expected).mean() < 8
 
 
+def test_a_job_tells_each_clip_as_it_is_done(tmp_path: Path) -> None:
+    episode = _episodes(1)[0]
+    told: list[int] = []
+    run_job(
+        _job(episode, (0, 10, 20), 10),
+        ClipStore(tmp_path),
+        make_render_env(SETTINGS),
+        on_clip=lambda: told.append(len(list(ClipStore(tmp_path).root.rglob("*.jpg")))),
+    )
+    assert told == [1, 2, 3]  # each told once its poster is stored
+
+
+def test_render_workers_report_every_clip_and_progress_ends_at_all(tmp_path: Path) -> None:
+    """Workers report clips over a queue as they finish them, not only whole jobs (issue 23:
+    the bar did not move while clips rendered); progress ends at all of them."""
+    episodes = _episodes(2, seed=1)
+    jobs = [_job(episodes[0], (0, 10, 20), 10), _job(episodes[1], (5, 40), 10)]
+    reports: list[tuple[int, int]] = []
+    with RenderPool(1) as pool:
+        pool.warm_up(SETTINGS)
+        pool.render(jobs, ClipStore(tmp_path / "a"), False, lambda *r: reports.append(r))
+        pool.render(jobs, ClipStore(tmp_path / "b"), False)  # its late reports are dropped
+        again = pool.start(jobs, ClipStore(tmp_path / "c"))
+        deadline = time.monotonic() + 60
+        told = 0
+        while told < 5 and time.monotonic() < deadline:
+            told += again._drain()
+            time.sleep(0.05)
+        assert told == 5  # the worker told each of the 5 clips of this batch
+    done = [d for d, _ in reports]
+    assert reports[0] == (0, 5) and reports[-1] == (5, 5) and done == sorted(set(done))
+
+
 def test_same_job_gives_the_same_clip_ids(tmp_path: Path) -> None:
     episode = _episodes(1, seed=3)[0]
     job = _job(episode, (10, 30), 10)
@@ -230,3 +264,33 @@ def test_a_strided_job_stores_clips_of_its_frames_at_its_rate(tmp_path: Path) ->
     obs = episode.obs[10 + 2 * 3]  # frame 2 of the window at 10
     expected = draw_grid(5, obs[:2].astype(int), obs[2:].astype(int), SIZE, SIZE)
     assert np.abs(decoded[2].astype(int) - expected).mean() < 8
+
+
+@pytest.mark.parametrize(
+    ("env", "shape"),
+    [
+        ("Pendulum-v1", (240, 240, 3)),  # drawn 500 × 500 by Gymnasium (issue 23)
+        ("CartPole-v1", (160, 240, 3)),  # 600 × 400: fitted, its aspect kept
+    ],
+)
+def test_envs_that_take_no_frame_size_render_the_requested_one(env: str, shape: tuple) -> None:
+    rendering = make_render_env(FrameSettings(env, width=240, height=240))
+    try:
+        rendering.reset(seed=0)
+        assert np.asarray(rendering.render()).shape == shape
+    finally:
+        rendering.close()
+
+
+def test_a_pendulum_clip_has_the_frame_size(tmp_path: Path) -> None:
+    settings = FrameSettings("Pendulum-v1", width=96, height=96)
+    episode = sample_trajectories(
+        lambda: make_env("Pendulum-v1"),
+        RandomPolicy(make_env("Pendulum-v1").action_space),
+        1,
+        np.random.default_rng(0),
+    )[0]
+    job = dataclasses.replace(_job(episode, (0, 10), 10), settings=settings)
+    report = run_job(job, ClipStore(tmp_path))
+    video = probe(ClipStore(tmp_path).path(report.clips[0].clip))
+    assert (video.width, video.height) == (96, 96)

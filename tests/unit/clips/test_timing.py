@@ -101,3 +101,12 @@ def test_other_envs_get_the_default_duration() -> None:
     timing = env_clip_timing("Pendulum-v1")  # dt 0.05 s
     assert (timing.steps, timing.stride, timing.fps) == (20, 1, pytest.approx(20.0))
     assert env_clip_timing("Hopper", steps=30).steps == 30
+
+
+@pytest.mark.parametrize("env", ["Swimmer-v5", "Swimmer-v4"])
+def test_a_swimmers_clips_last_long_enough_to_see_it_swim(env: str) -> None:
+    """1 s of Swimmer is 25 steps in which it barely moves (issue 23): 4 s, 100 steps."""
+    assert default_clip_seconds(env) == 4.0
+    if env == "Swimmer-v5":
+        timing = env_clip_timing(env)  # dt 0.04 s
+        assert (timing.steps, timing.stride, timing.fps) == (100, 1, pytest.approx(25.0))

@@ -175,3 +175,10 @@ def test_headless_sdl_leaves_the_users_choice(monkeypatch: pytest.MonkeyPatch) -
     rendering.use_headless_sdl()
     assert os.environ["SDL_VIDEODRIVER"] == "x11"
     assert os.environ["SDL_AUDIODRIVER"] == "dummy"
+
+
+def test_frames_are_fitted_into_the_box_keeping_their_aspect():
+    assert rendering.fit_size((500, 500), (240, 240)) == (240, 240)
+    assert rendering.fit_size((600, 400), (240, 240)) == (240, 160)
+    assert rendering.fit_size((64, 32), (240, 240)) == (240, 120)  # enlarged too
+    assert rendering.fit_size((1000, 2), (100, 100)) == (100, 2)  # never thinner than 2 pixels

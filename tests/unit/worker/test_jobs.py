@@ -4,6 +4,10 @@ import json
 
 from tests.unit.server.conftest import context_of, new_session, run_worker_once
 
+from groupwise.clips.render import RenderPool
+from groupwise.worker import jobs
+from groupwise.worker.progress import JobProgress
+
 
 def test_a_round_without_judgements_still_trains(client):
     sid = new_session(client)["id"]
@@ -37,3 +41,33 @@ def test_a_failing_job_fails_its_session_only_and_retry_recovers(client):
     assert client.post(f"/api/sessions/{broken}/retry").json()["phase"] == "preparing"
     run_worker_once(client)
     assert client.get(f"/api/sessions/{broken}").json()["phase"] == "ready"
+
+
+class _Reports:
+    """A `ProgressReporter` that keeps every report instead of writing it."""
+
+    def __init__(self) -> None:
+        self.reports: list[tuple[str, float, str]] = []
+
+    def report(self, phase: str, fraction: float, message: str, *, force: bool = False) -> None:
+        self.reports.append((phase, fraction, message))
+
+
+def test_preparing_a_round_reports_sampling_distances_and_clips_as_they_go(client):
+    """The bar moves through the whole pool phase (issue 23: it sat at 5 % for 17-28 s)."""
+    sid = new_session(client, pool_size=40)["id"]
+    context = context_of(client)
+    job = jobs.job_of(context.db, sid)
+    assert job is not None
+    recorded = _Reports()
+    with RenderPool(0) as render:
+        progress = JobProgress(recorded)  # type: ignore[arg-type]  # a reporter that records
+        jobs.prepare(job, context.db, context.data_dir, render, progress)
+    phases = [phase for phase, _, _ in recorded.reports]
+    assert list(dict.fromkeys(phases)) == ["load", "sample", "dtw", "clips", "suggestions"]
+    fractions = [fraction for _, fraction, _ in recorded.reports]
+    assert fractions == sorted(fractions) and 0 < fractions[0] and fractions[-1] < 1
+    distinct = {p: len({f for q, f, _ in recorded.reports if q == p}) for p in phases}
+    assert distinct["sample"] >= 3 and distinct["clips"] >= 3 and distinct["dtw"] >= 2
+    last = {phase: message for phase, _, message in recorded.reports}
+    assert "780 / 780 pairs" in last["dtw"] and last["clips"] == "rendering clips 40 / 40"
