@@ -192,7 +192,8 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
       dismiss: (id) => dispatch({ type: "dismiss-toast", id }),
       undo: () => void controller.undo(),
     });
-    const hint = mode ? KEYS_HINT[mode] : "";
+    // The finished page answers nothing: no answer keys to hint at.
+    const hint = mode && results.hidden ? KEYS_HINT[mode] : "";
     if (keysHint.textContent !== hint) {
       keysHint.textContent = hint;
       keysHint.title = hint;

@@ -37,7 +37,7 @@ function lines(mode: GuideMode): Line[] {
       ["Two clips play side by side; each is a short behaviour of the agent."],
       [h("strong", {}, question("clip"))],
       [kbd("←", "A"), " left · ", kbd("→", "D"), " right · ", kbd("↑", "W"), " about equal · ", kbd("↓", "S"), " skip this pair"],
-      [kbd("U"), " undoes your last answer. The round ends after its time or its comparisons, or when you press End round; then the agent learns from your answers."],
+      [kbd("U"), " undoes your last answer. The round ends after its time or its comparisons, or when you press End round twice (the second click confirms); then the agent learns from your answers."],
     ];
   }
   return [
@@ -58,7 +58,7 @@ function lines(mode: GuideMode): Line[] {
     [kbd("N"), " shows the next suggested comparison instead of choosing groups yourself."],
     [h("strong", {}, question("group"))],
     [kbd("←", "A"), " group A · ", kbd("→", "D"), " group B · ", kbd("↑", "W"), " about equal · ", kbd("U"), " undo the last answer"],
-    ["The round ends after its time or its comparisons, or when you press End round; then the agent learns from your answers."],
+    ["The round ends after its time or its comparisons, or when you press End round twice (the second click confirms); then the agent learns from your answers."],
   ];
 }
 

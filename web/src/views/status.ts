@@ -1,7 +1,12 @@
 /**
  * The status bar: session, round and phase, the round's timer (pause / resume), counters of
- * comparisons and preference pairs (this round and in total), "end round", and "?" (the
- * guide).
+ * comparisons and preference pairs (this round and in total), "End round" and "Finish now"
+ * (each asks for a second click: "Click again"), and "?" (the guide).
+ *
+ * One line at 1366 px whatever it says (docs/app.md, "Front end"): only the env name gives
+ * way, cut with an ellipsis (the full name in its title), and a two-click button is as wide
+ * in both its texts. Once the session is finishing or finished, the round's timer, counters
+ * and "End round" are gone.
  */
 import type { SessionState } from "../api";
 import { clock, elapsedNow, roundOf } from "../lib/format";
@@ -28,6 +33,8 @@ export interface StatusHandlers {
 
 interface View {
   meta: HTMLElement;
+  timerWrap: HTMLElement;
+  counts: HTMLElement;
   round: HTMLElement;
   phase: HTMLElement;
   timer: HTMLElement;
@@ -46,6 +53,13 @@ interface View {
 
 const views = new WeakMap<Element, View>();
 const CONFIRM_MS = 4000;
+/** What a two-click button reads while it waits for the second click. */
+const AGAIN = "Click again";
+const CONNECTION: Record<State["connection"], string> = {
+  open: "live",
+  connecting: "connecting…",
+  lost: "reconnecting…",
+};
 
 /**
  * "Round 2 of 0–4": numbered from 0, as in the API and the export (`roundOf`); the rounds
@@ -54,6 +68,12 @@ const CONFIRM_MS = 4000;
 export function roundText(s: Pick<SessionState, "round" | "rounds">): string {
   if (s.round >= s.rounds) return `Round ${s.round} · final phase`;
   return `Round ${roundOf(s.round, s.rounds)}`;
+}
+
+/** Whether the session's rounds are over: the final phase runs or ran, so the round's timer,
+ * counters and "End round" no longer apply. */
+export function roundsOver(s: Pick<SessionState, "phase">): boolean {
+  return s.phase === "finishing" || s.phase === "finished";
 }
 
 /** Whether "Finish now" can end the session after its current round. */
@@ -73,7 +93,7 @@ export function renderStatus(element: HTMLElement, data: StatusData, handlers: S
   const s = data.session;
   element.hidden = false;
   text(view.meta, s ? `${s.env} · ${s.mode}` : "");
-  view.meta.title = s ? `session ${s.id}` : "";
+  view.meta.title = s ? `${s.env} · ${s.mode} · session ${s.id}` : "";
   text(view.round, s ? roundText(s) : "");
   text(view.phase, s ? s.phase : "");
   view.phase.className = `phase phase-${s?.phase ?? "none"}`;
@@ -85,6 +105,10 @@ export function renderStatus(element: HTMLElement, data: StatusData, handlers: S
     text(view.pairs, String(c.pairs_round));
     view.pairs.nextElementSibling!.textContent = `${c.pairs_total} total`;
   }
+  const over = !!s && roundsOver(s);
+  view.timerWrap.hidden = over;
+  view.counts.hidden = over;
+  view.end.hidden = over;
   const ready = s?.phase === "ready";
   view.pause.disabled = !ready || data.busy;
   const paused = s?.timer.paused ?? false;
@@ -96,21 +120,42 @@ export function renderStatus(element: HTMLElement, data: StatusData, handlers: S
   view.finish.hidden = !s || s.phase === "finishing" || s.phase === "finished";
   view.finish.disabled = !finishable || data.busy;
   if (!finishable) resetFinishConfirm(view);
-  text(view.conn, data.connection === "open" ? "live" : data.connection === "lost" ? "reconnecting…" : "connecting…");
+  text(view.conn, CONNECTION[data.connection]);
   view.conn.className = `conn conn-${data.connection}`;
   tick(view);
 }
 
+const END = { label: "End round", again: "Click again to end the round" };
+const FINISH = { label: "Finish now", again: "Click again to finish the session" };
+
+/**
+ * A button that asks for a second click: it reads `label`, or "Click again" while it waits
+ * (its accessible name then says what the second click does). Both texts sit in one grid
+ * cell, the hidden one as `data-alt`, so the button is as wide in both states.
+ */
+function twoClick(className: string, words: typeof END, title: string): HTMLButtonElement {
+  return h(
+    "button",
+    { type: "button", class: `${className} two-click`, title, "data-alt": AGAIN, "aria-label": words.label },
+    h("span", {}, words.label),
+  );
+}
+
+function setConfirm(button: HTMLButtonElement, words: typeof END, confirm: boolean): void {
+  button.classList.toggle("confirm", confirm);
+  text(button.firstElementChild as HTMLElement, confirm ? AGAIN : words.label);
+  attr(button, "data-alt", confirm ? words.label : AGAIN);
+  attr(button, "aria-label", confirm ? words.again : words.label);
+}
+
 function resetConfirm(view: View): void {
   view.confirmUntil = 0;
-  view.end.classList.remove("confirm");
-  text(view.end, "End round");
+  setConfirm(view.end, END, false);
 }
 
 function resetFinishConfirm(view: View): void {
   view.finishConfirmUntil = 0;
-  view.finish.classList.remove("confirm");
-  text(view.finish, "Finish now");
+  setConfirm(view.finish, FINISH, false);
 }
 
 function tick(view: View): void {
@@ -137,15 +182,15 @@ function build(element: HTMLElement): View {
   const pause = h("button", { type: "button", class: "ghost small" }, "Pause");
   const comparisons = h("span", { class: "num" });
   const pairs = h("span", { class: "num" });
-  const end = h("button", { type: "button", class: "end-round" }, "End round");
-  const finish = h(
-    "button",
-    {
-      type: "button",
-      class: "finish-now",
-      title: "No more rounds after this one: the agent trains further on your reward model, then you can watch and download it",
-    },
-    "Finish now",
+  const end = twoClick(
+    "end-round",
+    END,
+    "End the round now (click twice): the agent learns from your answers, then the next round opens",
+  );
+  const finish = twoClick(
+    "finish-now",
+    FINISH,
+    "No more rounds after this one (click twice): the agent trains further on your reward model, then you can watch and download it",
   );
   const conn = h("span", { class: "conn", role: "status" });
   const help = h(
@@ -155,6 +200,13 @@ function build(element: HTMLElement): View {
   );
   round.title = ROUND_TITLE;
   const sessions = h("button", { type: "button", class: "brand", title: "Sessions" }, "groupwise");
+  const timerWrap = h("span", { class: "timer-wrap" }, timer, pause);
+  const counts = h(
+    "dl",
+    { class: "counts" },
+    h("div", {}, h("dt", {}, "Comparisons"), h("dd", {}, comparisons, h("span", { class: "total num" }))),
+    h("div", {}, h("dt", {}, "Pairs"), h("dd", {}, pairs, h("span", { class: "total num" }))),
+  );
   element.classList.add("statusbar");
   element.replaceChildren(
     sessions,
@@ -162,13 +214,8 @@ function build(element: HTMLElement): View {
     h("span", { class: "sep", "aria-hidden": "true" }),
     round,
     phase,
-    h("span", { class: "timer-wrap" }, timer, pause),
-    h(
-      "dl",
-      { class: "counts" },
-      h("div", {}, h("dt", {}, "Comparisons"), h("dd", {}, comparisons, h("span", { class: "total num" }))),
-      h("div", {}, h("dt", {}, "Pairs"), h("dd", {}, pairs, h("span", { class: "total num" }))),
-    ),
+    timerWrap,
+    counts,
     conn,
     end,
     finish,
@@ -176,6 +223,8 @@ function build(element: HTMLElement): View {
   );
   const view: View = {
     meta,
+    timerWrap,
+    counts,
     round,
     phase,
     timer,
@@ -202,8 +251,7 @@ function build(element: HTMLElement): View {
       return;
     }
     view.confirmUntil = Date.now() + CONFIRM_MS;
-    end.classList.add("confirm");
-    text(end, "Click again to end the round");
+    setConfirm(end, END, true);
   });
   finish.addEventListener("click", () => {
     if (view.finishConfirmUntil > Date.now()) {
@@ -212,8 +260,7 @@ function build(element: HTMLElement): View {
       return;
     }
     view.finishConfirmUntil = Date.now() + CONFIRM_MS;
-    finish.classList.add("confirm");
-    text(finish, "Click again to finish the session");
+    setConfirm(finish, FINISH, true);
   });
   sessions.addEventListener("click", () => view.handlers?.sessions());
   help.addEventListener("click", () => view.handlers?.guide());
