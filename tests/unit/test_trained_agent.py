@@ -125,7 +125,7 @@ def test_a_target_runs_summary_and_readme_lead_with_its_episode_score():
         "backward turns per episode 0.231 ± 0.05 (threshold 1) · per-step sum 184 ± 2.62 rad/s"
         in text
     )
-    assert "target hopper-backflip: backward turns per episode, a success from 1" in text
+    assert "hopper-backflip counts backward turns per episode; an episode succeeds from 1" in text
     assert "target score" not in text
     again = AgentSummary.from_dict(json.loads(summary.to_json()))
     assert again == summary

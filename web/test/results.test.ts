@@ -3,14 +3,14 @@ import { ApiError, type Api } from "../src/api";
 import { fakeApi } from "../src/bench/fake-api";
 import { syntheticRound } from "../src/bench/synthetic";
 import { createController } from "../src/controller";
-import { chartGeometry, formatValue, niceTicks } from "../src/lib/results";
+import { chartGeometry, chartSeries, formatValue, niceTicks, scoreLines, scoreText } from "../src/lib/results";
 import { createStore } from "../src/state";
 import { canFinish, roundText } from "../src/views/status";
 
 const rounds = [
-  { round: 0, feedback: true, true_return_mean: -10, true_return_std: 1 },
-  { round: 1, feedback: true, true_return_mean: 5, true_return_std: 1 },
-  { round: 2, feedback: false, true_return_mean: 20, true_return_std: 1 },
+  { round: 0, feedback: true, value: -10 },
+  { round: 1, feedback: true, value: 5 },
+  { round: 2, feedback: false, value: 20 },
 ];
 
 describe("the finished page's chart", () => {
@@ -30,7 +30,7 @@ describe("the finished page's chart", () => {
 
   it("leaves unevaluated rounds out of the line", () => {
     const g = chartGeometry(
-      [...rounds.slice(0, 2), { round: 2, feedback: false, true_return_mean: null, true_return_std: null }],
+      [...rounds.slice(0, 2), { round: 2, feedback: false, value: null }],
       200,
       100,
       { top: 0, right: 0, bottom: 0, left: 0 },
@@ -43,6 +43,75 @@ describe("the finished page's chart", () => {
     expect(formatValue(1234.56)).toBe("1,235");
     expect(formatValue(0.123456)).toBe("0.123");
     expect(formatValue(-12.34)).toBe("-12.3");
+    expect(formatValue(0.000912)).toBe("0.000912"); // a small score keeps its digits
+    expect(formatValue(999.6)).toBe("1,000");
+  });
+
+  it("covers a reference value and says where it lies", () => {
+    const small = rounds.slice(0, 2).map((r) => ({ ...r, value: r.value / 100 }));
+    const g = chartGeometry(small, 200, 100, { top: 0, right: 0, bottom: 0, left: 0 }, 1);
+    expect(g.yTicks[g.yTicks.length - 1]!.value).toBe(1); // the axis reaches the threshold
+    expect(g.reference).toEqual({ value: 1, y: 0 });
+    expect(chartGeometry(rounds, 200, 100).reference).toBeNull();
+  });
+});
+
+// issue 23: a Hopper-backflip agent's episode score was 0.23 turns, its per-step sum 184
+function row(round: number, feedback: boolean, perStepSum: number, score: number) {
+  return { round, feedback, judgements: 0, pairs_total: 9, env_steps: 64 * (round + 1),
+    true_return_mean: perStepSum, target_score_mean: score };
+}
+const backflip = {
+  measure: "per-step score sum (rad/s)",
+  true_return_mean: 184.3,
+  true_return_std: 2.62,
+  target: { name: "hopper-backflip", unit: "backward turns", step_unit: "rad/s", threshold: 1, stretch: 2 },
+  target_score_mean: 0.2312,
+  target_score_std: 0.05,
+  rounds: [
+    { ...row(0, true, 150, 0.19), true_return_std: 1, target_score_std: 0.01 },
+    { ...row(1, false, 184.3, 0.2312), true_return_std: 2.62, target_score_std: 0.05 },
+  ],
+};
+
+describe("the finished page's evaluation", () => {
+  it("leads with a target's episode score in its unit, the per-step sum beside it", () => {
+    expect(scoreText(backflip)).toBe(
+      "backward turns per episode 0.231 ± 0.05 (threshold 1) · per-step sum 184 ± 2.62 rad/s",
+    );
+    expect(scoreLines(backflip)).toEqual({
+      label: "Backward turns per episode",
+      value: "0.231 ± 0.05",
+      goal: "threshold 1 · stretch 2",
+      detail: "per-step sum 184 ± 2.62 rad/s",
+    });
+    const series = chartSeries(backflip);
+    expect(series.rounds.map((r) => r.value)).toEqual([0.19, 0.2312]);
+    expect(series.reference).toBe(1);
+    expect(series.name).toBe("backward turns per episode");
+  });
+
+  it("names the true return of other envs, and an old agent's per-step sum as what it is", () => {
+    const plain = {
+      ...backflip,
+      measure: "true return",
+      target: null,
+      target_score_mean: null,
+      target_score_std: null,
+    };
+    expect(scoreText(plain)).toBe("true return 184 ± 2.62");
+    expect(scoreLines(plain)).toEqual({ label: "True return", value: "184 ± 2.62", goal: null, detail: null });
+    expect(chartSeries(plain).rounds.map((r) => r.value)).toEqual([150, 184.3]);
+    // published before episode scores were recorded: the target is known, its score is not
+    const old = {
+      ...backflip,
+      target_score_mean: null,
+      target_score_std: null,
+      rounds: backflip.rounds.map((r) => ({ ...r, target_score_mean: null, target_score_std: null })),
+    };
+    expect(scoreText(old)).toBe("per-step sum 184 ± 2.62 rad/s");
+    expect(chartSeries(old)).toMatchObject({ name: "per-step score sum (rad/s)", reference: null });
+    expect(scoreLines({ ...plain, true_return_mean: null })).toBeNull();
   });
 });
 

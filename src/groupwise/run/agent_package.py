@@ -182,7 +182,8 @@ def format_value(value: float) -> str:
     """A value as the summary texts show it: 3 significant digits, thousands grouped (as the
     page's `formatValue`)."""
     rounded = value if abs(value) >= 1000 else float(f"{value:.3g}")
-    return f"{round(rounded):,}" if abs(rounded) >= 1000 else f"{rounded:g}"
+    # half up, as JavaScript's Math.round (Python's round goes to even)
+    return f"{math.floor(rounded + 0.5):,}" if abs(rounded) >= 1000 else f"{rounded:g}"
 
 
 def score_text(
@@ -301,27 +302,31 @@ def readme(summary: AgentSummary) -> str:
     )
     target = summary.target
     scored = (
-        f"Its evaluation after round {summary.round} (greedy, over the run's evaluation "
-        f"episodes): {score}."
+        f"Evaluated after round {summary.round} (the greedy policy over the run's evaluation "
+        f"episodes): **{score}**."
     )
     if target is not None:
-        scored = (
-            f"It is scored by the target {target.name}: {target.unit} per episode, a success "
-            f"from {format_value(target.threshold)} (stretch: {format_value(target.stretch)}). "
-            f"{scored} The per-step sum adds up the target's per-step scores (the true reward "
-            "a simulated teacher perceives); the episode score says whether teaching worked."
+        scored += (
+            f"\n\nThe target {target.name} counts {target.unit} per episode; an episode "
+            f"succeeds from {format_value(target.threshold)} (stretch: "
+            f"{format_value(target.stretch)}). The per-step sum adds up the target's per-step "
+            "scores (the true reward a simulated teacher perceives); the episode score says "
+            "whether teaching worked."
         )
     evaluated = (
-        f"`{target.unit}` per episode then the per-step sum, with the threshold"
+        f'"{target.unit} per episode … (threshold {format_value(target.threshold)}) · '
+        f'per-step sum … {target.step_unit}"'
         if target is not None
-        else "the true return"
+        else '"true return … ± …"'
     )
     per_round = summary.measure + (" and the episode score" if target is not None else "")
     return f"""# groupwise agent: {summary.env}, round {summary.round}
 
 A PPO policy trained by groupwise on a reward model learned from preferences:
 {judged} judgements over {feedback} feedback round(s), {summary.env_steps:,} PPO env steps
-in all. {scored}
+in all.
+
+{scored}
 
 ## Load it with groupwise
 
@@ -331,7 +336,7 @@ import groupwise
 agent = groupwise.load_agent("agent.zip")
 action = agent.predict(obs)                 # one observation, or a batch (B, obs_dim)
 result = agent.evaluate("{summary.env}", episodes=5, seed=0)   # or an env, or a factory
-print(result)                               # {evaluated}, mean ± sd
+print(result)                               # {evaluated}
 result.returns                              # each episode's true return (the per-step sum)
 result.scores                               # a target env's episode scores (None elsewhere)
 reward = agent.reward_model()               # the learned reward ensemble

@@ -1,16 +1,19 @@
 /**
- * The finished page's chart of the agent's true return (or target score) per round, as
- * pure geometry: points, the line through the evaluated rounds, and nice axis ticks. The
- * view (`views/results.ts`) only draws what this returns.
+ * The finished page's numbers: the agent's evaluation in words (`scoreLines`, `scoreText`:
+ * a target env's episode score in its unit first, the per-step sum beside it) and the chart
+ * of a score per round (`chartSeries`) as pure geometry: points, the line through the
+ * evaluated rounds, nice axis ticks and the target's threshold. The view
+ * (`views/results.ts`) only draws what these return.
  */
 import { line } from "d3-shape";
+import type { AgentOut } from "../api";
 
 export interface RoundResult {
   round: number;
   /** False for a round without feedback: PPO on the frozen learned reward only. */
   feedback: boolean;
-  true_return_mean: number | null;
-  true_return_std: number | null;
+  /** What the chart plots; null for a round that was not evaluated. */
+  value: number | null;
 }
 
 export interface Margin {
@@ -34,6 +37,8 @@ export interface ChartGeometry {
   xTicks: Array<{ round: number; x: number }>;
   /** The plotting area, inside the margins. */
   area: { left: number; top: number; right: number; bottom: number };
+  /** Where the `reference` value (a target's threshold) lies; null without one. */
+  reference: { value: number; y: number } | null;
 }
 
 export const CHART_MARGIN: Margin = { top: 12, right: 14, bottom: 26, left: 52 };
@@ -56,20 +61,117 @@ export function niceTicks(lo: number, hi: number, count = 4): number[] {
   return ticks;
 }
 
-/** A value as an axis or caption shows it: 3 significant digits, thousands grouped. */
+/** A value as an axis or caption shows it: 3 significant digits, thousands grouped (as
+ * `agent_package.format_value` writes it in the zip's README). */
 export function formatValue(value: number): string {
   if (value === 0) return "0";
   const abs = Math.abs(value);
   if (abs >= 1000) return Math.round(value).toLocaleString("en");
-  return Number(value.toPrecision(3)).toLocaleString("en", { maximumFractionDigits: 3 });
+  return Number(value.toPrecision(3)).toLocaleString("en", { maximumSignificantDigits: 3 });
 }
 
-/** Where every round's point goes in a `width` × `height` chart (rounds in index order). */
+/** "mean ± sd" (the sd left out when unknown). */
+export function meanSd(mean: number, sd: number | null | undefined): string {
+  return sd === null || sd === undefined ? formatValue(mean) : `${formatValue(mean)} ± ${formatValue(sd)}`;
+}
+
+export function capitalise(words: string): string {
+  return words.charAt(0).toUpperCase() + words.slice(1);
+}
+
+type Agent = Pick<
+  AgentOut,
+  "measure" | "true_return_mean" | "true_return_std" | "target" | "target_score_mean" | "target_score_std" | "rounds"
+>;
+
+/** The evaluation as the page shows it: `label` `value` (`goal`), then `detail` below. */
+export interface ScoreLines {
+  /** "Backward turns per episode", or "True return". */
+  label: string;
+  /** "0.23 ± 0.05" */
+  value: string;
+  /** "threshold 1 · stretch 2" for a target; null otherwise. */
+  goal: string | null;
+  /** A target's per-step sum, "per-step sum 184 ± 2.62 rad/s"; null otherwise. */
+  detail: string | null;
+}
+
+/** The agent's last evaluation, or null when it was not evaluated. A target env's episode
+ * score leads; an agent published before episode scores were recorded shows its per-step
+ * sum under its `measure`. */
+export function scoreLines(agent: Agent): ScoreLines | null {
+  const t = agent.target;
+  const perStep =
+    agent.true_return_mean === null ? null : meanSd(agent.true_return_mean, agent.true_return_std);
+  if (t && agent.target_score_mean !== null) {
+    return {
+      label: `${capitalise(t.unit)} per episode`,
+      value: meanSd(agent.target_score_mean, agent.target_score_std),
+      goal: `threshold ${formatValue(t.threshold)} · stretch ${formatValue(t.stretch)}`,
+      detail: perStep === null ? null : `per-step sum ${perStep} ${t.step_unit}`,
+    };
+  }
+  if (perStep === null) return null;
+  return { label: capitalise(agent.measure), value: perStep, goal: null, detail: null };
+}
+
+/** The evaluation in one line, as the zip's README and `agent.evaluate` say it:
+ * "backward turns per episode 0.23 ± 0.05 (threshold 1) · per-step sum 184 ± 2.62 rad/s",
+ * or "true return 41.5 ± 3.2". */
+export function scoreText(agent: Agent): string {
+  const t = agent.target;
+  const perStep =
+    agent.true_return_mean === null ? null : meanSd(agent.true_return_mean, agent.true_return_std);
+  if (!t) return perStep === null ? "not measured" : `${agent.measure} ${perStep}`;
+  const parts = [];
+  if (agent.target_score_mean !== null) {
+    parts.push(
+      `${t.unit} per episode ${meanSd(agent.target_score_mean, agent.target_score_std)} ` +
+        `(threshold ${formatValue(t.threshold)})`,
+    );
+  }
+  if (perStep !== null) parts.push(`per-step sum ${perStep} ${t.step_unit}`);
+  return parts.join(" · ") || "not measured";
+}
+
+/** What the chart plots: a target env's episode score per round (with its threshold) when
+ * the rounds recorded it, else the true return (`measure`). */
+export interface ChartSeries {
+  rounds: RoundResult[];
+  /** What a value is, lower case: "backward turns per episode", "true return". */
+  name: string;
+  /** The target's threshold, drawn as a line; null for other envs. */
+  reference: number | null;
+}
+
+export function chartSeries(agent: Agent): ChartSeries {
+  const t = agent.target;
+  if (t && agent.rounds.some((r) => r.target_score_mean !== null)) {
+    return {
+      rounds: agent.rounds.map((r) => ({ round: r.round, feedback: r.feedback, value: r.target_score_mean })),
+      name: `${t.unit} per episode`,
+      reference: t.threshold,
+    };
+  }
+  return {
+    rounds: agent.rounds.map((r) => ({
+      round: r.round,
+      feedback: r.feedback,
+      value: r.true_return_mean,
+    })),
+    name: agent.measure,
+    reference: null,
+  };
+}
+
+/** Where every round's point goes in a `width` × `height` chart (rounds in index order);
+ * the axis also covers `reference` when given. */
 export function chartGeometry(
   rounds: readonly RoundResult[],
   width: number,
   height: number,
   margin: Margin = CHART_MARGIN,
+  reference: number | null = null,
 ): ChartGeometry {
   const area = {
     left: margin.left,
@@ -78,8 +180,9 @@ export function chartGeometry(
     bottom: Math.max(margin.top + 1, height - margin.bottom),
   };
   const sorted = [...rounds].sort((a, b) => a.round - b.round);
-  const values = sorted.flatMap((r) => (r.true_return_mean === null ? [] : [r.true_return_mean]));
-  const ticks = values.length ? niceTicks(Math.min(...values), Math.max(...values)) : [];
+  const values = sorted.flatMap((r) => (r.value === null ? [] : [r.value]));
+  const domain = values.length && reference !== null ? [...values, reference] : values;
+  const ticks = domain.length ? niceTicks(Math.min(...domain), Math.max(...domain)) : [];
   const lo = ticks[0] ?? 0;
   const hi = ticks[ticks.length - 1] ?? 1;
   const y = (v: number) => area.bottom - ((v - lo) / (hi - lo || 1)) * (area.bottom - area.top);
@@ -90,7 +193,7 @@ export function chartGeometry(
   const points = sorted.map((r) => ({
     ...r,
     x: x(r.round),
-    y: r.true_return_mean === null ? null : y(r.true_return_mean),
+    y: r.value === null ? null : y(r.value),
   }));
   const evaluated = points.filter((p): p is ChartPoint & { y: number } => p.y !== null);
   const path =
@@ -104,5 +207,6 @@ export function chartGeometry(
     yTicks: ticks.map((value) => ({ value, y: y(value), label: formatValue(value) })),
     xTicks: sorted.filter((_, i) => i % every === 0).map((r) => ({ round: r.round, x: x(r.round) })),
     area,
+    reference: reference === null || !ticks.length ? null : { value: reference, y: y(reference) },
   };
 }

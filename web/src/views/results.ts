@@ -1,11 +1,21 @@
 /**
- * The finished session: the final agent's video, its true return (or target score) per
- * round as a small chart, the downloads (the agent as one zip, the judgements), and
- * "Continue training" (more PPO steps on the frozen reward model, or more rounds).
+ * The finished session: the final agent's video, its evaluation (a target env's episode
+ * score in the target's unit, with its threshold, and the per-step sum beside it; else the
+ * true return) and that score per round as a small chart, the downloads (the agent as one
+ * zip, the judgements), and "Continue training" (more PPO steps on the frozen reward model,
+ * or more rounds).
  */
 import type { AgentOut, ContinueIn, SessionState } from "../api";
 import { plural } from "../lib/format";
-import { type ChartGeometry, chartGeometry, formatValue } from "../lib/results";
+import {
+  type ChartGeometry,
+  capitalise,
+  chartGeometry,
+  chartSeries,
+  formatValue,
+  scoreLines,
+  scoreText,
+} from "../lib/results";
 import { h, memo, s, text } from "./dom";
 
 export interface ResultsData {
@@ -24,6 +34,11 @@ export interface ResultsHandlers {
 interface View {
   title: HTMLElement;
   summary: HTMLElement;
+  score: HTMLElement;
+  scoreLabel: HTMLElement;
+  scoreValue: HTMLElement;
+  scoreGoal: HTMLElement;
+  scoreDetail: HTMLElement;
   video: HTMLVideoElement;
   caption: HTMLElement;
   chartTitle: HTMLElement;
@@ -69,32 +84,45 @@ export function renderResults(element: HTMLElement, data: ResultsData, handlers:
       `${agent.env_steps.toLocaleString("en")} PPO steps in all.`,
   );
   const v = agent.video;
-  const measured = agent.true_return_mean;
+  const t = agent.target;
   text(
     view.caption,
     [
       `Round ${agent.round} · one greedy episode`,
       v ? `${formatValue(v.seconds)} s at real speed` : null,
-      v ? `${agent.measure} ${formatValue(v.episode_return)}` : null,
-      measured === null
-        ? null
-        : `evaluated: ${formatValue(measured)} ± ${formatValue(agent.true_return_std ?? 0)}`,
+      v && t && v.target_score !== null ? `${t.unit} ${formatValue(v.target_score)}` : null,
+      v && t ? `per-step sum ${formatValue(v.episode_return)} ${t.step_unit}` : null,
+      v && !t ? `${agent.measure} ${formatValue(v.episode_return)}` : null,
     ]
       .filter(Boolean)
       .join(" · "),
   );
-  text(view.chartTitle, `${capitalise(agent.measure)} per round`);
+  const lines = scoreLines(agent);
+  const episodes = st.settings.eval_episodes;
+  view.score.hidden = lines === null;
+  view.score.setAttribute("aria-label", `Evaluation: ${scoreText(agent)}`);
+  text(view.scoreLabel, lines?.label ?? "");
+  text(view.scoreValue, lines?.value ?? "");
+  text(view.scoreGoal, lines?.goal ? `(${lines.goal})` : "");
+  text(
+    view.scoreDetail,
+    [
+      lines?.detail ? capitalise(lines.detail) : null,
+      `the greedy policy over ${plural(episodes, "evaluation episode")} after round ${agent.round}`,
+    ]
+      .filter(Boolean)
+      .join(" · "),
+  );
+  const series = chartSeries(agent);
+  text(view.chartTitle, `${capitalise(series.name)}, per round`);
   text(
     view.chartNote,
-    agent.rounds.some((r) => r.true_return_mean === null)
+    series.rounds.some((r) => r.value === null)
       ? "Rounds without a point were not evaluated (eval_episodes = 0)."
-      : "Filled: after a round of feedback; hollow: PPO on the frozen reward model only.",
+      : "Filled: after a round of feedback; hollow: PPO on the frozen reward model only." +
+          (series.reference === null ? "" : " Dashed: the threshold of success."),
   );
   view.submit.disabled = data.busy;
-}
-
-function capitalise(words: string): string {
-  return words.charAt(0).toUpperCase() + words.slice(1);
 }
 
 /** The steps "Continue training" offers first: as many as the session's final phase. */
@@ -104,12 +132,20 @@ function defaultSteps(session: SessionState): number {
 }
 
 function drawChart(svg: SVGSVGElement, agent: AgentOut): void {
-  const g: ChartGeometry = chartGeometry(agent.rounds, CHART.width, CHART.height);
+  const series = chartSeries(agent);
+  const g: ChartGeometry = chartGeometry(series.rounds, CHART.width, CHART.height, undefined, series.reference);
   const a = g.area;
   const children: SVGElement[] = [];
   for (const t of g.yTicks) {
     children.push(s("line", { class: "grid", x1: a.left, x2: a.right, y1: t.y, y2: t.y }));
     children.push(s("text", { class: "tick y", x: a.left - 6, y: t.y, dy: "0.32em" }, t.label));
+  }
+  if (g.reference) {
+    const y = g.reference.y;
+    children.push(s("line", { class: "threshold", x1: a.left, x2: a.right, y1: y, y2: y }));
+    children.push(
+      s("text", { class: "threshold-label", x: a.right - 4, y: y - 4 }, `threshold ${formatValue(g.reference.value)}`),
+    );
   }
   for (const t of g.xTicks) {
     children.push(s("text", { class: "tick x", x: t.x, y: a.bottom + 16 }, String(t.round)));
@@ -119,8 +155,7 @@ function drawChart(svg: SVGSVGElement, agent: AgentOut): void {
   for (const p of g.points) {
     if (p.y === null) continue;
     const label =
-      `round ${p.round}${p.feedback ? "" : " (PPO only)"}: ${agent.measure} ` +
-      `${formatValue(p.true_return_mean ?? 0)}`;
+      `round ${p.round}${p.feedback ? "" : " (PPO only)"}: ${series.name} ` + `${formatValue(p.value ?? 0)}`;
     children.push(
       s(
         "circle",
@@ -133,16 +168,27 @@ function drawChart(svg: SVGSVGElement, agent: AgentOut): void {
   svg.replaceChildren(...children);
   svg.setAttribute(
     "aria-label",
-    `${agent.measure} per round: ` +
-      agent.rounds
-        .map((r) => `round ${r.round} ${r.true_return_mean === null ? "not evaluated" : formatValue(r.true_return_mean)}`)
-        .join(", "),
+    `${series.name} per round: ` +
+      series.rounds
+        .map((r) => `round ${r.round} ${r.value === null ? "not evaluated" : formatValue(r.value)}`)
+        .join(", ") +
+      (series.reference === null ? "" : `; threshold ${formatValue(series.reference)}`),
   );
 }
 
 function build(element: HTMLElement): View {
   const title = h("h2", { class: "results-title" });
   const summary = h("p", { class: "results-summary" });
+  const scoreLabel = h("span", { class: "score-label" });
+  const scoreValue = h("strong", { class: "score-value num" });
+  const scoreGoal = h("span", { class: "score-goal num" });
+  const scoreDetail = h("p", { class: "score-detail muted num" });
+  const score = h(
+    "section",
+    { class: "results-score" },
+    h("p", { class: "score-main" }, scoreLabel, " ", scoreValue, " ", scoreGoal),
+    scoreDetail,
+  );
   const video = h("video", {
     class: "agent-video",
     controls: true,
@@ -206,6 +252,7 @@ function build(element: HTMLElement): View {
         { class: "results-body" },
         title,
         summary,
+        score,
         h("section", { class: "results-chart" }, chartTitle, chart, chartNote),
         h("div", { class: "results-actions" }, download, exportLink),
         h(
@@ -222,6 +269,11 @@ function build(element: HTMLElement): View {
   const view: View = {
     title,
     summary,
+    score,
+    scoreLabel,
+    scoreValue,
+    scoreGoal,
+    scoreDetail,
     video,
     caption,
     chartTitle,
