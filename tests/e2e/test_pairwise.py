@@ -61,3 +61,50 @@ def test_pairwise_round_trip(server: Server, page: Page, ui: Any, shot: Any) -> 
     assert [x["label"] for x in server.judgements(sid, 0)] == ["left"]
     assert ui.pair() == third
     expect(page.locator(".statusbar .counts")).to_contain_text("Comparisons1")
+
+
+WATCH_SWAPS = """() => {
+    // every clip frame put into the pair: was its poster there, and its video hidden?
+    window.__swaps = [];
+    new MutationObserver((changes) => {
+        for (const change of changes) for (const node of change.addedNodes) {
+            if (!(node instanceof HTMLElement) || !node.matches('.clip-frame')) continue;
+            const poster = node.querySelector('.clip-poster');
+            window.__swaps.push({
+                poster: poster.complete && poster.naturalWidth > 0,
+                hidden: node.dataset.playing !== undefined
+                    || getComputedStyle(node.querySelector('video')).opacity === '0',
+            });
+        }
+    }).observe(document.querySelector('.pair'), {childList: true, subtree: true});
+}"""
+
+
+def test_a_new_clip_shows_its_poster_until_it_plays(server: Server, page: Page, ui: Any) -> None:
+    """Issue 23: a new pair's clip could appear as an empty box before its first frame."""
+    sid = server.new_session("pairwise", frame_size=96)
+    page.goto(f"{server.url}/?session={sid}")
+    first = ui.pair()
+    frames = page.locator(".pair .clip-frame")
+    expect(frames).to_have_count(2)
+    expect(page.locator(".pair .clip-frame[data-playing]")).to_have_count(2)
+    # the following pair's new clips (one or two: a behaviour may come again) wait in the
+    # prefetch slot, their posters loaded
+    page.wait_for_function(
+        "() => { const p = [...document.querySelectorAll('.prefetch .clip-poster')];"
+        " return p.length > 0 && p.every((i) => i.complete && i.naturalWidth > 0); }"
+    )
+    page.evaluate(WATCH_SWAPS)
+    page.keyboard.press("ArrowLeft")
+    expect(page.locator(".pair")).not_to_have_attribute("data-pair", f"{first[0]}:{first[1]}")
+    expect(page.locator(".pair .clip-frame[data-playing]")).to_have_count(2)
+    swaps = page.evaluate("() => window.__swaps")
+    assert len(swaps) == 2 and all(s == {"poster": True, "hidden": True} for s in swaps), swaps
+    # playing: the video shows, the poster only holds the frame's size
+    shown = page.eval_on_selector_all(
+        ".pair .clip-frame",
+        "fs => fs.map((f) => [getComputedStyle(f.querySelector('video')).opacity,"
+        " getComputedStyle(f.querySelector('.clip-poster')).visibility,"
+        " f.querySelector('video').clientWidth])",
+    )
+    assert shown == [["1", "hidden", 96], ["1", "hidden", 96]], shown

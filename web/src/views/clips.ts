@@ -15,6 +15,28 @@ export function clipVideo(src: string, poster: string | undefined, label: string
   return video;
 }
 
+/** A clip in a frame that shows its poster until the clip plays (`posterClip`). */
+export interface PosterClip {
+  frame: HTMLElement;
+  video: HTMLVideoElement;
+}
+
+/**
+ * A clip that shows its poster until it plays: the poster image lies in the flow and sizes
+ * the frame (a poster is a frame of the clip, so the clip's own size), the video lies over it,
+ * transparent until its first "playing" (issue 23: a new pairwise clip showed an empty box
+ * before its first frame, while the video element's own poster was not loaded yet). The
+ * image loads as soon as the element exists, so a prefetched clip has its poster ready.
+ */
+export function posterClip(src: string, poster: string, label: string): PosterClip {
+  const video = clipVideo(src, poster, label);
+  const frame = h("div", { class: "clip-frame" }, h("img", { class: "clip-poster", src: poster, alt: "" }), video);
+  video.addEventListener("playing", () => {
+    frame.dataset.playing = "";
+  });
+  return { frame, video };
+}
+
 const READY_TIMEOUT_MS = 2500;
 
 function whenReady(video: HTMLVideoElement): Promise<void> {

@@ -6,7 +6,7 @@
 import type { Label, PairQuery } from "../api";
 import { question } from "../lib/format";
 import { SPEEDS } from "../lib/page-settings";
-import { clipVideo, startTogether, unloadVideo } from "./clips";
+import { posterClip, startTogether, unloadVideo, type PosterClip } from "./clips";
 import { h, kbd, memo, text } from "./dom";
 
 export interface PairwiseData {
@@ -44,8 +44,8 @@ interface View {
   hint: HTMLElement;
   speed: HTMLSelectElement;
   timing: HTMLElement;
-  /** Loaded videos by source URL: visible, prefetching, or about to be dropped. */
-  videos: Map<string, HTMLVideoElement>;
+  /** Loaded clips by source URL: visible, prefetching, or about to be dropped. */
+  videos: Map<string, PosterClip>;
   shownKey: string;
   handlers: PairwiseHandlers | null;
 }
@@ -71,13 +71,13 @@ export function renderPairwise(element: HTMLElement, data: PairwiseData, handler
     posters.set(data.clipUrl(p.right_clip), data.clipUrl(p.right_poster));
   }
   const take = (src: string, label: string) => {
-    let v = view.videos.get(src);
-    if (!v) {
-      v = clipVideo(src, posters.get(src), label);
-      view.videos.set(src, v);
+    let clip = view.videos.get(src);
+    if (!clip) {
+      clip = posterClip(src, posters.get(src) ?? "", label);
+      view.videos.set(src, clip);
     }
-    v.setAttribute("aria-label", label);
-    return v;
+    clip.video.setAttribute("aria-label", label);
+    return clip;
   };
   const keep = new Set<string>();
   if (key !== view.shownKey) {
@@ -87,9 +87,9 @@ export function renderPairwise(element: HTMLElement, data: PairwiseData, handler
     if (cur && srcs.left && srcs.right) {
       const l = take(srcs.left, `left clip, behaviour ${cur.left}`);
       const r = take(srcs.right, `right clip, behaviour ${cur.right}`);
-      view.left.replaceChildren(l);
-      view.right.replaceChildren(r);
-      shown.push(l, r);
+      view.left.replaceChildren(l.frame);
+      view.right.replaceChildren(r.frame);
+      shown.push(l.video, r.video);
     } else {
       view.left.replaceChildren();
       view.right.replaceChildren();
@@ -98,20 +98,20 @@ export function renderPairwise(element: HTMLElement, data: PairwiseData, handler
   }
   if (srcs.left) keep.add(srcs.left);
   if (srcs.right) keep.add(srcs.right);
-  const pre: HTMLVideoElement[] = [];
+  const pre: HTMLElement[] = [];
   for (const src of srcs.next) {
     keep.add(src);
-    if (src !== srcs.left && src !== srcs.right) pre.push(take(src, "next clip (loading)"));
+    if (src !== srcs.left && src !== srcs.right) pre.push(take(src, "next clip (loading)").frame);
   }
   view.prefetch.replaceChildren(...pre);
-  for (const [src, v] of view.videos) {
+  for (const [src, clip] of view.videos) {
     if (!keep.has(src)) {
-      unloadVideo(v);
-      v.remove();
+      unloadVideo(clip.video);
+      clip.frame.remove();
       view.videos.delete(src);
     }
   }
-  for (const v of view.videos.values()) if (v.playbackRate !== data.speed) v.playbackRate = data.speed;
+  for (const { video } of view.videos.values()) if (video.playbackRate !== data.speed) video.playbackRate = data.speed;
   view.speed.value = String(data.speed);
   text(view.timing, data.clipCaption);
   text(view.leftCaption, cur ? `Left · ${cur.left}` : "Left");
