@@ -1417,6 +1417,11 @@ export interface components {
             env: string;
             /** Error */
             error: string | null;
+            /**
+             * Failed Phase
+             * @description while failed: the step that failed (preparing, training or finishing), what POST /retry runs again
+             */
+            failed_phase?: ("preparing" | "ready" | "training" | "finishing" | "finished" | "failed") | null;
             /** Id */
             id: string;
             /**

@@ -126,6 +126,11 @@ class SessionState(_Out):
     phase: Phase
     progress: Progress
     error: str | None
+    failed_phase: Phase | None = Field(
+        default=None,
+        description="while failed: the step that failed (preparing, training or finishing), "
+        "what POST /retry runs again",
+    )
     timer: Timer
     counts: Counts
     created_at: datetime

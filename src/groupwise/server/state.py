@@ -41,6 +41,7 @@ def state_of(
             message=session.progress_message,
         ),
         error=session.error,
+        failed_phase=session.failed_phase if session.phase == "failed" else None,  # type: ignore[arg-type]  # one of WORK_PHASES
         timer=schemas.Timer(
             elapsed_s=round(timer.elapsed(session, now), 3),
             budget_s=settings.round_seconds,

@@ -34,11 +34,13 @@ def test_a_failing_job_fails_its_session_only_and_retry_recovers(client):
     failed = client.get(f"/api/sessions/{broken}").json()
     assert failed["phase"] == "failed"
     assert failed["error"].startswith("preparing round 0 failed: FileExistsError")
+    assert failed["failed_phase"] == "preparing"  # the page's heading: could not be prepared
     run_worker_once(client)  # the worker goes on with the others
     assert client.get(f"/api/sessions/{healthy}").json()["phase"] == "ready"
 
     blocker.unlink()
-    assert client.post(f"/api/sessions/{broken}/retry").json()["phase"] == "preparing"
+    retried = client.post(f"/api/sessions/{broken}/retry").json()
+    assert (retried["phase"], retried["failed_phase"]) == ("preparing", None)
     run_worker_once(client)
     assert client.get(f"/api/sessions/{broken}").json()["phase"] == "ready"
 

@@ -77,7 +77,7 @@ export function renderProgress(element: HTMLElement, data: ProgressData, handler
       );
       break;
     case "failed":
-      text(view.title, "The training worker stopped");
+      text(view.title, failedTitle(s.failed_phase ?? null, round, s.rounds));
       text(view.note, s.error ?? "The worker failed without a message; see the server log.");
       break;
   }
@@ -88,6 +88,24 @@ export function renderProgress(element: HTMLElement, data: ProgressData, handler
   view.fill.style.width = `${pct}%`;
   view.bar.setAttribute("aria-valuenow", String(pct));
   view.bar.setAttribute("aria-valuetext", `${p ? phaseName(p.phase) : "working"}: ${pct}%`);
+}
+
+/**
+ * What failed, in the words of the step (issue 23: every failure read "The training worker
+ * stopped", also when the worker raised and went on); the note under it gives the error,
+ * "the training worker stopped (exit code …)" when its process died.
+ */
+export function failedTitle(step: string | null, round: number, rounds: number): string {
+  switch (step) {
+    case "preparing":
+      return `Round ${roundOf(round, rounds)} could not be prepared`;
+    case "training":
+      return `Training after round ${round} failed`;
+    case "finishing":
+      return "The final training failed";
+    default:
+      return "The training worker stopped";
+  }
 }
 
 function build(element: HTMLElement): View {
