@@ -28,10 +28,11 @@ of the matrix (launched on about a tenth of the rows at a time, to report progre
 local costs come from ||x||^2 + ||y||^2 - 2 x.y: the dot products are the only O(L^2 D)
 work per pair and run as dense vectorised loops; every cost whose squared value is within
 a relative `_EXACT_TOL` of cancellation is recomputed directly from the differences, so
-identical steps cost exactly 0 and every cost keeps a relative error below about D * 1e-12. The dynamic programme runs on 8 pairs at once (one vector
-lane per pair: row a against 8 sequences of equal length). No O((N L)^2) matrix is ever
-held: memory is O(N L D). See `benchmarks/dtw.py` for timings. The first call compiles
-the kernels (or loads them from numba's on-disk cache); `warm_up` does that explicitly.
+identical steps cost exactly 0 and every cost keeps a relative error below about D * 1e-12.
+The dynamic programme runs on 8 pairs at once (one vector lane per pair: row a against 8
+sequences of equal length). No O((N L)^2) matrix is ever held: memory is O(N L D). See
+`benchmarks/dtw.py` for timings. The first call compiles the kernels (or loads them from
+numba's on-disk cache); `warm_up` does that explicitly.
 
 Processes. The kernel runs on numba's threading layer, OpenMP where available. numba
 terminates a child forked from a process that has used the OpenMP layer, so a process
