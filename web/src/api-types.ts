@@ -1279,7 +1279,8 @@ export interface components {
              *       "round_seconds": 600,
              *       "rounds": 5,
              *       "seed": 0,
-             *       "suggestions": 100
+             *       "suggestions": 100,
+             *       "training": "rounds"
              *     }
              */
             settings: components["schemas"]["SessionSettings"];
@@ -1399,6 +1400,13 @@ export interface components {
              * @default 100
              */
             suggestions: number;
+            /**
+             * Training
+             * @description rounds: PPO trains after each round; continuous: PPO trains while you compare, the reward model refitting as your answers arrive
+             * @default rounds
+             * @enum {string}
+             */
+            training: "rounds" | "continuous";
         };
         /**
          * SessionState

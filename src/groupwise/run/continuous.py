@@ -90,11 +90,12 @@ class LiveRound:
     """One round trained while its judgements arrive: PPO in slices (`learn`), the reward
     ensemble refitted between them (`update`) once `TrainingConfig.refit_pairs` pairs have
     changed (new ones, or an undone judgement's) or `refit_s` seconds have passed since the
-    last fit with anything changed. Each refit fits on the rounds before plus the pairs of
-    the judgements given now (each keyed by its place in the round, as `end_round` derives
-    them), so the dataset at the round's end is the one `end_round` would build. The
-    headless continuous round and the app's worker (which reads the judgements from the
-    database) drive it alike; `clock` is whatever clock the caller keeps."""
+    last fit with anything changed, and at once for a run's very first pairs. Each refit
+    fits on the rounds before plus the pairs of the judgements given now (each keyed by its
+    place in the round, as `end_round` derives them), so the dataset at the round's end is
+    the one `end_round` would build. The headless continuous round and the app's worker
+    (which reads the judgements from the database) drive it alike; `clock` is whatever
+    clock the caller keeps."""
 
     def __init__(
         self,
@@ -145,11 +146,9 @@ class LiveRound:
         changed = len(derive_pairs(new, loop, round_index, added)) + sum(
             self.fitted[key] for key in removed
         )
-        if (
-            not final
-            and changed < training.refit_pairs
-            and clock - self.last_fit < training.refit_s
-        ):
+        due = changed >= training.refit_pairs or clock - self.last_fit >= training.refit_s
+        first = len(self.run.dataset) == 0  # nothing fitted yet: PPO waits for this fit
+        if not (due or final or first):
             return False
         self._refit(keyed)
         self.last_fit = clock

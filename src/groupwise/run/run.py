@@ -17,6 +17,8 @@ A user's own env factory and agent come in through `Run.of` (the library,
 import dataclasses
 import json
 import logging
+import os
+import shutil
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -29,6 +31,7 @@ from groupwise.rl.agents import Agent
 from groupwise.rl.ppo import PPOAgent
 from groupwise.rl.rollout import EnvFactory
 from groupwise.run.checkpoint import (
+    CHECKPOINTS,
     DATASET_FILE,
     REWARD_FILE,
     STATE_FILE,
@@ -44,6 +47,8 @@ log = logging.getLogger(__name__)
 CONFIG_FILE = "config.json"
 RESULTS_FILE = "rounds.csv"
 TENSORBOARD_DIR = "tb"
+LIVE_DIR = "live"
+"""``checkpoints/live``: a continuous round's policy and reward model mid-round."""
 
 
 class ConfigMismatchError(ValueError):
@@ -167,6 +172,44 @@ class Run:
         path = write_checkpoint(out, self.next_round - 1, state, files)
         write_records(out / RESULTS_FILE, self.records)
         return path
+
+    def save_live(self, round_index: int) -> Path:
+        """Write the policy and the reward ensemble as they are in the middle of round
+        `round_index` (continuous training) into ``checkpoints/live``, atomically; the
+        dataset is not saved: the round's judgements are the database's."""
+        out = self.directory
+        final = out / CHECKPOINTS / LIVE_DIR
+        tmp = final.with_name(final.name + ".tmp")
+        shutil.rmtree(tmp, ignore_errors=True)
+        tmp.mkdir(parents=True)
+        self.ppo.save(tmp)
+        self.ensemble.save(tmp / REWARD_FILE)
+        state = {"round": round_index, "env_steps": self.agent.num_timesteps}
+        (tmp / STATE_FILE).write_text(json.dumps(state))
+        shutil.rmtree(final, ignore_errors=True)
+        os.replace(tmp, final)
+        return final
+
+    def restore_live(self, round_index: int) -> bool:
+        """Load the live checkpoint of round `round_index` over the restored run (policy and
+        reward ensemble); False when there is none of that round."""
+        directory = self.directory / CHECKPOINTS / LIVE_DIR
+        try:
+            state = _read_state(directory)
+        except FileNotFoundError:
+            return False
+        if state.get("round") != round_index:
+            return False
+        self.ppo.load(directory)
+        self.ensemble.load_state(directory / REWARD_FILE)
+        log.info(
+            "%s resumed round %d at %d PPO steps", self.directory, round_index, state["env_steps"]
+        )
+        return True
+
+    def drop_live(self) -> None:
+        """Remove the live checkpoint (its round ended and was committed)."""
+        shutil.rmtree(self.directory / CHECKPOINTS / LIVE_DIR, ignore_errors=True)
 
     def close(self) -> None:
         """Release the agent's envs and loggers."""

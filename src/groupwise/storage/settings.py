@@ -30,6 +30,7 @@ from groupwise.config import (
     RewardConfig,
     RunConfig,
     Seed,
+    TrainingConfig,
 )
 from groupwise.preferences.judgement import MAX_GROUP
 
@@ -110,6 +111,11 @@ class SessionSettings(BaseModel):
     pair_derivation: PairDerivation = "cover"
     pair_cap: PairCap = None
     pair_oversample: PairOversample = 1.0
+    training: Literal["rounds", "continuous"] = Field(
+        default="rounds",
+        description="rounds: PPO trains after each round; continuous: PPO trains while you "
+        "compare, the reward model refitting as your answers arrive",
+    )
     # -- advanced knobs (the New-session page's "Advanced") ------------------------------
     driver: Literal["app", "library"] = Field(
         default="app",
@@ -212,4 +218,5 @@ class SessionSettings(BaseModel):
             pool_size=self.pool_size,
             seed=self.seed,
         )
-        return RunConfig(loop=loop, reward=self.reward, ppo=self.ppo)
+        training = TrainingConfig(mode=self.training)
+        return RunConfig(loop=loop, reward=self.reward, ppo=self.ppo, training=training)

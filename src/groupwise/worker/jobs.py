@@ -22,6 +22,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from groupwise.clips.render import RenderPool
 from groupwise.clips.store import ClipStore
@@ -50,6 +51,9 @@ from groupwise.storage.sessions import (
 from groupwise.storage.timer import elapsed
 from groupwise.worker.offers import prepared_round
 from groupwise.worker.progress import JobProgress
+
+if TYPE_CHECKING:
+    from groupwise.worker.live import LiveTraining
 
 log = logging.getLogger(__name__)
 
@@ -177,8 +181,16 @@ def publish_config(cfg: RunConfig, frame_size: int, workers: int) -> PublishConf
     )
 
 
-def train(job: Job, db: Database, data_dir: Path, progress: JobProgress) -> None:
-    """End round `job.round` on its stored judgements (module docstring)."""
+def train(
+    job: Job,
+    db: Database,
+    data_dir: Path,
+    progress: JobProgress,
+    live: "LiveTraining | None" = None,
+) -> None:
+    """End round `job.round` on its stored judgements (module docstring). With `live` (a
+    continuous session's round, `worker.live`) the round's run is the one that trained
+    while the person compared, and the round adds no PPO steps of its own."""
     settings, r = job.settings, job.round
     progress.on_phase("load", 0, 1)
     with db.read() as s:
@@ -186,16 +198,24 @@ def train(job: Job, db: Database, data_dir: Path, progress: JobProgress) -> None
         keyed = round_judgements(s, job.session_id, r)
     if pool_dir is None:
         raise FileNotFoundError(f"round {r} has no pool directory")
-    with open_run(job, data_dir, r - 1) as run:
+    offer = published_offer(data_dir / pool_dir, r, settings.comparisons_per_round, job.mode)
+    steps = settings.ppo_steps_per_round
+    if live is not None:
+        run, steps = live.run, 0
+        run.dataset = live.live.base  # end_round adds the round's pairs once more
+    else:
+        run = open_run(job, data_dir, r - 1)
+    with run:
         record = end_round(
             run,
-            published_offer(data_dir / pool_dir, r, settings.comparisons_per_round, job.mode),
+            offer,
             [judgement for _, judgement in keyed],
-            settings.ppo_steps_per_round,
+            steps,
             keys=[key for key, _ in keyed],
             feedback_s=job.elapsed_s,
             callback=progress,
         )
+        run.drop_live()
     checkpoint = checkpoint_dir(Path(session_directory(job.session_id)), r)
     with db.write() as s:
         if not finish_training(s, job.session_id, r, str(checkpoint), record.stats()):

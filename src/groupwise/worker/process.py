@@ -34,6 +34,7 @@ from groupwise.worker.progress import JobProgress, ProgressReporter
 if TYPE_CHECKING:  # the server imports this module; only the worker process needs these
     from groupwise.clips.render import RenderPool
     from groupwise.worker.jobs import Job
+    from groupwise.worker.live import LiveSessions
 
 log = logging.getLogger(__name__)
 
@@ -89,15 +90,28 @@ class Worker:
         self.data_dir = data_dir
         self.poll_s = poll_s
         self._render: dict[int, RenderPool] = {}
+        self._live: LiveSessions | None = None
+
+    @property
+    def live(self) -> "LiveSessions":
+        """The continuous rounds this worker trains (`worker.live`; loaded on first use, as
+        the server imports this module)."""
+        if self._live is None:
+            from groupwise.worker.live import LiveSessions
+
+            self._live = LiveSessions(self.db, self.data_dir)
+        return self._live
 
     def run(self) -> None:
         log.info("training worker %d started", os.getpid())
         try:
             while _parent_alive():
-                if not self.run_next():
+                if not self.run_next() and not self.train_live():
                     time.sleep(self.poll_s)
         finally:
             self._close_render_pools()
+            if self._live is not None:
+                self._live.close()
         _exit_if_orphaned()
 
     def run_next(self) -> bool:
@@ -113,6 +127,10 @@ class Worker:
                 return True
         return False
 
+    def train_live(self) -> bool:
+        """One slice of continuous training (`worker.live`); True when one ran."""
+        return self.live.step()
+
     def run_job(self, job: "Job") -> None:
         """Run one job; an exception marks the session failed with its message."""
         from groupwise.worker import finishing, jobs
@@ -127,6 +145,9 @@ class Worker:
                     jobs.prepare(job, self.db, self.data_dir, render, progress)
                 elif job.phase == "finishing":
                     finishing.finish(job, self.db, self.data_dir, progress)
+                elif job.settings.training == "continuous":
+                    live = self.live.take(job)
+                    jobs.train(job, self.db, self.data_dir, progress, live=live)
                 else:
                     jobs.train(job, self.db, self.data_dir, progress)
         except Exception as error:

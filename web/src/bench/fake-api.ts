@@ -145,6 +145,7 @@ export function fakeApi(
       driver: "app",
       pair_derivation: "cover",
       pair_oversample: 1,
+      training: "rounds",
     },
     round: 1,
     rounds: 5,

@@ -1,0 +1,166 @@
+"""Continuous training in the app (issue 24): the worker trains an open round's policy while
+the person compares, instead of idling until the round ends.
+
+Whenever no phase job waits (`process.Worker`), `LiveSessions.step` gives one open
+session with ``training: "continuous"`` one slice, the sessions taking turns: its
+judgements read from the database (`round_judgements`: undone ones left out, each keyed by
+its place in the round), the reward ensemble refitted when due (`run.continuous.LiveRound`:
+20 changed pairs or 60 s), then one PPO rollout on the latest fit — so the reward PPO sees
+changes only between rollouts. Every `CHECKPOINT_S` seconds the policy and the ensemble
+go to ``checkpoints/live`` (`Run.save_live`). The database holds every acknowledged
+judgement, so a killed worker loses none: the next one resumes the round from its live
+checkpoint and refits on all of them.
+
+When the person ends the round, the training job ends it through `end_round` on the live
+run (`take`), with no PPO steps of its own: the policy trained all along. The next round's
+pool is then sampled from that policy, as in rounds mode.
+"""
+
+import logging
+import time
+from dataclasses import dataclass
+from pathlib import Path
+
+from groupwise.run.continuous import LiveRound
+from groupwise.run.run import Run
+from groupwise.run.streams import round_streams
+from groupwise.storage import Database
+from groupwise.storage.judgements import round_judgements
+from groupwise.storage.phases import READY, TRAINING
+from groupwise.storage.sessions import get_round, sessions_in, settings_of
+from groupwise.worker.jobs import Job, open_run, published_offer
+
+log = logging.getLogger(__name__)
+
+CHECKPOINT_S = 30.0
+"""Seconds between a continuous round's live checkpoints."""
+CONTINUOUS = "continuous"
+
+
+@dataclass
+class LiveTraining:
+    """One session's round being trained continuously in this worker."""
+
+    session_id: str
+    round: int
+    run: Run
+    live: LiveRound
+    checkpointed: float
+    """`time.monotonic()` of the last live checkpoint."""
+
+
+class LiveSessions:
+    """The worker's continuous rounds, one `LiveTraining` per open session (module
+    docstring)."""
+
+    def __init__(self, db: Database, data_dir: Path) -> None:
+        self.db = db
+        self.data_dir = data_dir
+        self._live: dict[str, LiveTraining] = {}
+        self._turns: dict[str, int] = {}
+        self._turn = 0
+        self._broken: dict[str, int] = {}
+        """Sessions whose continuous training failed, and the round: left alone until the
+        round ends (its training job then tries once more and fails visibly if it must)."""
+
+    def step(self) -> bool:
+        """One slice of the open continuous session whose turn it is; False when none is
+        open (the worker then sleeps)."""
+        jobs = [job for job in self._open_jobs() if self._broken.get(job.session_id) != job.round]
+        with self.db.read() as s:  # a round just ended keeps its run for the training job
+            ending = {row.id for row in sessions_in(s, (TRAINING,))}
+        for stale in set(self._live) - {job.session_id for job in jobs} - ending:
+            self._live.pop(stale).run.close()
+        if not jobs:
+            return False
+        job = min(jobs, key=lambda j: self._turns.get(j.session_id, -1))
+        self._turn += 1
+        self._turns[job.session_id] = self._turn
+        try:
+            self._slice(job)
+        except Exception:
+            log.exception(
+                "session %s: continuous training of round %d failed", job.session_id, job.round
+            )
+            self._broken[job.session_id] = job.round
+            if (training := self._live.pop(job.session_id, None)) is not None:
+                training.run.close()
+        return True
+
+    def _slice(self, job: Job) -> None:
+        training = self._training(job)
+        with self.db.read() as s:
+            keyed = round_judgements(s, job.session_id, job.round)
+        training.live.update(keyed, time.monotonic())
+        run = training.run
+        if len(run.dataset):  # PPO starts with the round's first pairs
+            training.live.learn(run.ppo.rollout_steps)
+            if time.monotonic() - training.checkpointed >= CHECKPOINT_S:
+                run.save_live(job.round)
+                training.checkpointed = time.monotonic()
+
+    def take(self, job: Job) -> LiveTraining:
+        """The live training of `job`'s round, to end it (the training job): this worker's,
+        or resumed from the live checkpoint and the database after a restart."""
+        training = self._live.pop(job.session_id, None)
+        if training is not None and training.round == job.round:
+            return training
+        if training is not None:
+            training.run.close()
+        return self._resume(job)
+
+    def close(self) -> None:
+        for training in self._live.values():
+            training.run.close()
+        self._live.clear()
+
+    def _training(self, job: Job) -> LiveTraining:
+        training = self._live.get(job.session_id)
+        if training is None or training.round != job.round:
+            if training is not None:
+                training.run.close()
+            training = self._live[job.session_id] = self._resume(job)
+        return training
+
+    def _resume(self, job: Job) -> LiveTraining:
+        """The round as the last checkpoint (the round before, or this round's live one)
+        left it, refitted on the round's judgements so far."""
+        run = open_run(job, self.data_dir, job.round - 1)
+        resumed = run.restore_live(job.round)
+        with self.db.read() as s:
+            pool_dir = get_round(s, job.session_id, job.round).pool_dir
+            keyed = round_judgements(s, job.session_id, job.round)
+        if pool_dir is None:
+            raise FileNotFoundError(f"round {job.round} has no pool directory")
+        budget, mode = job.settings.comparisons_per_round, job.mode
+        offer = published_offer(self.data_dir / pool_dir, job.round, budget, mode)
+        streams = round_streams(run.cfg.loop.seed, job.round)
+        now = time.monotonic()
+        live = LiveRound(run, offer, streams, now)
+        live.update(keyed, now, final=True)
+        log.info(
+            "session %s: round %d trains continuously%s",
+            job.session_id,
+            job.round,
+            f" (resumed at {run.agent.num_timesteps:,} PPO steps)" if resumed else "",
+        )
+        return LiveTraining(job.session_id, job.round, run, live, now)
+
+    def _open_jobs(self) -> list[Job]:
+        """The open rounds of continuous sessions, as jobs."""
+        with self.db.read() as s:
+            rows = [row for row in sessions_in(s, (READY,))]
+            return [
+                Job(
+                    session_id=row.id,
+                    env=row.env,
+                    mode=row.mode,
+                    phase=row.phase,
+                    round=row.round,
+                    settings=settings,
+                    elapsed_s=0.0,
+                )
+                for row in rows
+                if (settings := settings_of(row)).training == CONTINUOUS
+                and settings.driver == "app"
+            ]

@@ -1,0 +1,85 @@
+"""Continuous training in the app's worker (`worker.live`), in-process on a real database:
+PPO trains while the round is open, the reward refits on the stored judgements, the round
+ends on the run that trained, and a restarted worker resumes from the live checkpoint."""
+
+import json
+import uuid
+
+import pytest
+from tests.unit.server.conftest import context_of, new_session, run_worker_once
+
+from groupwise.worker import live as live_module
+from groupwise.worker.process import Worker
+
+ROLLOUT = 32  # TINY's PPO: 1 env × 32 steps
+
+
+def _judge(client, sid, left, right, round_index=0):
+    body = {
+        "client_id": str(uuid.uuid4()),
+        "round": round_index,
+        "left": left,
+        "right": right,
+        "label": "left",
+        "source": "explored",
+    }
+    response = client.post(f"/api/sessions/{sid}/judgements", json=body)
+    assert response.status_code == 201, response.text
+    return response.json()
+
+
+def _worker(client) -> Worker:
+    context = context_of(client)
+    return Worker(context.db, context.data_dir, poll_s=0.1)
+
+
+def test_the_worker_trains_while_the_round_is_open_and_ends_it_on_that_run(client):
+    sid = new_session(client, training="continuous")["id"]
+    run_worker_once(client)  # round 0 ready
+    worker = _worker(client)
+    assert worker.train_live()  # an open continuous round: a slice, but no pairs yet …
+    training = worker.live._live[sid]
+    assert training.run.agent.num_timesteps == 0  # … so no PPO
+    _judge(client, sid, ["b0", "b1"], ["b2"])
+    for _ in range(3):
+        assert worker.train_live()
+    assert len(training.run.dataset) == 2  # the first pairs were fitted at once
+    assert training.run.agent.num_timesteps == 3 * ROLLOUT
+    _judge(client, sid, ["b3"], ["b4", "b5", "b6"])  # arrives between two slices …
+    assert worker.train_live()
+    assert training.run.agent.num_timesteps == 4 * ROLLOUT  # 3 new pairs: no refit yet
+    assert client.post(f"/api/sessions/{sid}/end-round").json()["phase"] == "training"
+    assert not worker.train_live()  # the round is no longer open
+    assert worker.run_next()  # the training job ends the round on the live run
+    state = client.get(f"/api/sessions/{sid}").json()
+    assert (state["phase"], state["round"], state["error"]) == ("preparing", 1, None)
+    checkpoint = context_of(client).data_dir / "sessions" / sid / "checkpoints" / "round-0000"
+    record = json.loads((checkpoint / "state.json").read_text())["records"][0]
+    # … and is in the round's dataset; PPO's steps are those of the open round, no more
+    assert record["pairs_total"] == 2 + 3
+    assert record["env_steps"] == 4 * ROLLOUT
+
+
+def test_a_restarted_worker_resumes_the_round_from_its_live_checkpoint(client, monkeypatch):
+    monkeypatch.setattr(live_module, "CHECKPOINT_S", 0.0)
+    sid = new_session(client, training="continuous")["id"]
+    run_worker_once(client)
+    _judge(client, sid, ["b0", "b1"], ["b2"])
+    first = _worker(client)
+    for _ in range(2):
+        first.train_live()
+    assert first.live._live[sid].run.agent.num_timesteps == 2 * ROLLOUT
+    _judge(client, sid, ["b7"], ["b8"])  # acknowledged, then the worker is killed
+    second = _worker(client)  # a new worker: nothing in memory
+    second.train_live()
+    resumed = second.live._live[sid]
+    assert resumed.run.agent.num_timesteps == 3 * ROLLOUT  # the checkpoint's 2, then 1 more
+    assert len(resumed.run.dataset) == 2 + 1  # every acknowledged judgement's pairs
+
+
+@pytest.mark.parametrize("training", ["rounds"])
+def test_a_rounds_session_is_left_alone_while_open(client, training):
+    sid = new_session(client, training=training)["id"]
+    run_worker_once(client)
+    _judge(client, sid, ["b0"], ["b1"])
+    assert not _worker(client).train_live()
