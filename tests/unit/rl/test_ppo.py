@@ -66,7 +66,9 @@ def test_learning_without_tensorboard_writes_nothing_to_the_temp_dir(tmp_path, m
     agent = PPOAgent(make, SMALL, seed=0)
     agent.learn(128, seed=1)
     agent.learn(128, seed=2)
-    assert list(tmp_path.iterdir()) == []
+    # SB3 makes an empty SB3-<time> folder per learn call without a logger (torch's own
+    # caches, e.g. torchinductor_<user>, may appear here too and are not this test's matter)
+    assert not list(tmp_path.glob("SB3-*"))
 
 
 def test_learning_with_tensorboard_logs_under_the_run_dir(tmp_path):
