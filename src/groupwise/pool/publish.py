@@ -33,7 +33,8 @@ from groupwise.behaviour import (
     group_candidates,
     medoids,
 )
-from groupwise.clips.render import RenderPool, plan_jobs
+from groupwise.clips.render import RenderPool
+from groupwise.clips.render_jobs import plan_jobs
 from groupwise.clips.replay import FrameSettings, make_render_env
 from groupwise.clips.store import ClipStore
 from groupwise.clips.timing import clip_timing, step_seconds

@@ -9,7 +9,8 @@ from typing import Any
 import numpy as np
 import pytest
 
-from groupwise.clips.render import ClipJob, RenderPool, plan_jobs, run_job
+from groupwise.clips.render import RenderPool
+from groupwise.clips.render_jobs import ClipJob, plan_jobs, run_job
 from groupwise.clips.replay import (
     FrameSettings,
     ReplayMismatchError,
