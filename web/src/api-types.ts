@@ -221,7 +221,8 @@ export interface paths {
         };
         /**
          * Events
-         * @description Server-sent events: `state`, `judgement`, `round`, and keep-alive comments.
+         * @description Server-sent events: `state`, `judgement`, `round`, `training`, and keep-alive
+         *     comments.
          */
         get: operations["events_api_sessions__session_id__events_get"];
         put?: never;
@@ -491,6 +492,27 @@ export interface paths {
          * @description The behaviour tree of the round, with clips, medoids and the compared behaviours.
          */
         get: operations["tree_api_sessions__session_id__rounds__round_index__tree_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/sessions/{session_id}/training": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Training
+         * @description The points of the session's learning curve (PPO steps, true return, last refit, the
+         *     pool's age) in the order the worker wrote them, and the newest as a summary.
+         */
+        get: operations["training_api_sessions__session_id__training_get"];
         put?: never;
         post?: never;
         delete?: never;
@@ -1549,6 +1571,91 @@ export interface components {
              * @description when a page first showed the current round; its timer runs from then (null: not shown yet, POST …/rounds/{r}/shown)
              */
             shown_at?: string | null;
+        };
+        /**
+         * TrainingCurve
+         * @description `GET /api/sessions/{id}/training`: the points in the order written, and the newest
+         *     as a summary (null before the first).
+         */
+        TrainingCurve: {
+            /** Points */
+            points: components["schemas"]["TrainingPointOut"][];
+            summary: components["schemas"]["TrainingSummary"] | null;
+        };
+        /**
+         * TrainingPointOut
+         * @description A point of the session's learning curve (`groupwise.storage.training`).
+         */
+        TrainingPointOut: {
+            /**
+             * At
+             * Format: date-time
+             * @description when it was measured (UTC)
+             */
+            at: string;
+            /**
+             * Pairs
+             * @description preference pairs the reward model was last fitted on
+             */
+            pairs: number;
+            /**
+             * Pool Steps
+             * @description PPO env steps of the policy that sampled the pool
+             */
+            pool_steps: number;
+            /**
+             * Ppo Steps
+             * @description the agent's PPO env steps so far
+             */
+            ppo_steps: number;
+            /**
+             * Reward Val Accuracy
+             * @description the last fit's held-out accuracy; null without a validation split
+             */
+            reward_val_accuracy: number | null;
+            /**
+             * Round
+             * @description the round the agent was training in (or after)
+             */
+            round: number;
+            /**
+             * True Return
+             * @description the greedy policy's mean true return; null for a refit without evaluation
+             */
+            true_return: number | null;
+        };
+        /**
+         * TrainingSummary
+         * @description The newest point in words the page shows.
+         */
+        TrainingSummary: {
+            /**
+             * Pairs
+             * @description pairs of the last refit
+             */
+            pairs: number;
+            /**
+             * Pool Age
+             * @description PPO env steps since the round's pool was sampled
+             */
+            pool_age: number;
+            /**
+             * Ppo Steps
+             * @description PPO env steps so far
+             */
+            ppo_steps: number;
+            /**
+             * Reward Val Accuracy
+             * @description the last refit's held-out accuracy
+             */
+            reward_val_accuracy: number | null;
+            /** Round */
+            round: number;
+            /**
+             * True Return
+             * @description the newest evaluated true return
+             */
+            true_return: number | null;
         };
         /**
          * TreeNodeOut
@@ -3805,6 +3912,83 @@ export interface operations {
                 };
                 content: {
                     "application/json": components["schemas"]["RoundTree"];
+                };
+            };
+            /** @description bad request */
+            400: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description missing or wrong token */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description unknown session, round or judgement */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not possible in the session's current phase */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description body too large */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description invalid input */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+        };
+    };
+    training_api_sessions__session_id__training_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description a session id */
+                session_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["TrainingCurve"];
                 };
             };
             /** @description bad request */

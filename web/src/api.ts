@@ -35,6 +35,8 @@ export type Pair = Schemas["PairOut"];
 export type PairQuery = Schemas["PairQuery"];
 export type PairwiseNext = Schemas["PairwiseNext"];
 export type AgentOut = Schemas["AgentOut"];
+export type TrainingPoint = Schemas["TrainingPointOut"];
+export type TrainingCurve = Schemas["TrainingCurve"];
 export type EnvInfo = Schemas["EnvOut"];
 /** The server's OpenAPI document, as far as the New-session form reads it. */
 export interface OpenApiDocument {
@@ -116,6 +118,8 @@ export interface EventHandlers {
   state?(state: SessionState): void;
   judgement?(judgement: JudgementOut): void;
   round?(event: { round: number }): void;
+  /** A point of the agent's learning curve the worker wrote. */
+  training?(point: TrainingPoint): void;
   open?(): void;
   /** The stream dropped; EventSource reconnects by itself. */
   error?(): void;
@@ -264,6 +268,9 @@ export function createApi(options: ApiOptions = {}) {
     /** The finished session's agent (409 before it is finished, 404 when it has none). */
     agent: (sid: string) => read<AgentOut>("agent", "GET", `${s(sid)}/agent`),
 
+    /** The session's learning curve: PPO steps, true returns, refits, the pool's age. */
+    training: (sid: string) => read<TrainingCurve>("training", "GET", `${s(sid)}/training`),
+
     /** The page shows the open round `round` (its timer starts the first time). */
     async shown(sid: string, round: number) {
       const state = await request<SessionState>("POST", `${s(sid)}/rounds/${round}/shown`);
@@ -299,6 +306,7 @@ export function createApi(options: ApiOptions = {}) {
       });
       on("judgement", handlers.judgement);
       on("round", handlers.round);
+      on("training", handlers.training);
       source.onopen = () => handlers.open?.();
       source.onerror = () => handlers.error?.();
       return () => source.close();

@@ -17,6 +17,7 @@ import { renderGuide } from "./views/guide";
 import { renderPairwise } from "./views/pairwise";
 import { renderProgress } from "./views/progress";
 import { renderResults } from "./views/results";
+import { renderTraining } from "./views/training";
 import { renderStart } from "./views/start";
 import { renderStatus } from "./views/status";
 import { renderToast } from "./views/toast";
@@ -95,13 +96,21 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
   const progressA = h("div", { class: "progress-overlay", hidden: true });
   const pairwise = h("section", {});
   const progressB = h("div", { class: "progress-overlay", hidden: true });
+  // The agent learning (a continuous session): under the behaviours, or under the pair.
+  const trainingA = h("section", { hidden: true });
+  const trainingB = h("section", { hidden: true });
   const groupWorkspace = h(
     "div",
     { class: "workspace groupwise", hidden: true },
-    exploration,
+    h("div", { class: "left" }, exploration, trainingA),
     h("div", { class: "right" }, comparison, progressA),
   );
-  const pairWorkspace = h("div", { class: "workspace pairwise-mode", hidden: true }, h("div", { class: "right" }, pairwise, progressB));
+  const pairWorkspace = h(
+    "div",
+    { class: "workspace pairwise-mode", hidden: true },
+    h("div", { class: "right" }, pairwise, progressB),
+    trainingB,
+  );
   // The finished session's agent: its video, chart, downloads (in place of the workspace).
   const results = h("section", { hidden: true, "aria-label": "Session results" });
   // The message bar: the key hint, and the toasts (confirmations, errors) in a strip of
@@ -175,11 +184,14 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
             downloadUrl: api.agentZipUrl(s.id, agent.round),
             exportUrl: progress.exportUrl,
             busy: st.busy,
+            training: st.training?.sid === s.id ? st.training.points : [],
           },
           { continueTraining: (body) => void controller.continueTraining(body) },
         );
       }
       const retry = { retry: () => void controller.control("retry") };
+      const points = st.training?.sid === s.id ? st.training.points : [];
+      renderTraining(mode === "groupwise" ? trainingA : trainingB, { session: s, points });
       if (mode === "groupwise") {
         renderGroupwise(st);
         renderProgress(progressA, progress, retry);

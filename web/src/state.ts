@@ -11,6 +11,7 @@ import type {
   PairQuery,
   SessionState,
   Settings,
+  TrainingPoint,
 } from "./api";
 import {
   type ArcClick,
@@ -26,6 +27,7 @@ import type { Tree } from "./lib/tree";
 import { DEFAULT_BETA } from "./lib/edges";
 import { FRESH_ORIGIN, type GroupChange, type Origin, arcChange, originAfter } from "./lib/origin";
 import type { Schemas } from "./lib/settings-form";
+import { mergePoints } from "./lib/training";
 
 export type { Origin, Source } from "./lib/origin";
 export { FRESH_ORIGIN } from "./lib/origin";
@@ -118,6 +120,8 @@ export interface State {
    * null when the session has none (imported, or driven by a program).
    */
   agent: { key: string; data: AgentOut | null } | null;
+  /** The session `sid`'s learning curve so far, in time order (`lib/training.ts`). */
+  training: { sid: string; points: TrainingPoint[] } | null;
 }
 
 export const initialState: State = {
@@ -153,6 +157,7 @@ export const initialState: State = {
   },
   guide: false,
   agent: null,
+  training: null,
 };
 
 export type Action =
@@ -185,7 +190,8 @@ export type Action =
   | { type: "connection"; value: State["connection"] }
   | { type: "pairwise"; patch: Partial<PairwiseState> }
   | { type: "guide"; open: boolean }
-  | { type: "agent"; key: string; agent: AgentOut | null };
+  | { type: "agent"; key: string; agent: AgentOut | null }
+  | { type: "training"; sid: string; points: TrainingPoint[] };
 
 let toastId = 0;
 
@@ -304,6 +310,10 @@ export function reduce(state: State, action: Action): State {
       return state.guide === action.open ? state : { ...state, guide: action.open };
     case "agent":
       return { ...state, agent: { key: action.key, data: action.agent } };
+    case "training": {
+      const before = state.training?.sid === action.sid ? state.training.points : [];
+      return { ...state, training: { sid: action.sid, points: mergePoints(before, action.points) } };
+    }
   }
 }
 

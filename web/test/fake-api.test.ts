@@ -160,6 +160,7 @@ async function exercise(mode: "groupwise" | "pairwise") {
   await call("finish", sid);
   await call("continueTraining", sid, { steps: 1000 });
   await call("agent", sid);
+  await call("training", sid);
   await call("clipUrl", "b1.mp4");
   await call("exportUrl", sid);
   await call("agentVideoUrl", sid, 1);

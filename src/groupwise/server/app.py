@@ -36,6 +36,7 @@ from groupwise.server.routes import (
     pairwise,
     rounds,
     sessions,
+    training,
 )
 from groupwise.server.routes import settings as settings_routes
 from groupwise.server.routes import transfer as transfer_routes
@@ -96,6 +97,7 @@ def create_app(config: AppConfig) -> FastAPI:
         judgements,
         pairwise,
         events,
+        training,
         clips,
         agent,
     ):

@@ -8,11 +8,14 @@ when it moved, sends:
   (`JudgementOut`, with ``"undone": true`` for an undo);
 - ``state``: the `SessionState`, when phase, round, progress, counts, error or the timer's
   pause changed (not for the timer's ticking: the page counts seconds itself);
-- ``round``: ``{"round": r}`` when round r has become ready (the page re-fetches).
+- ``round``: ``{"round": r}`` when round r has become ready (the page re-fetches);
+- ``training``: each point of the learning curve the worker wrote since
+  (`TrainingPointOut`, `groupwise.storage.training`).
 
 Each event's ``id`` is the revision it reflects; a reconnecting EventSource sends it back
-as ``Last-Event-ID`` and gets the judgements it missed. On connect the stream sends the
-state at once; a quiet stream sends a keep-alive comment every `keepalive_s`.
+as ``Last-Event-ID`` and gets the judgements and training points it missed (in revision
+order). On connect the stream sends the state at once; a quiet stream sends a keep-alive
+comment every `keepalive_s`.
 """
 
 import json
@@ -25,8 +28,10 @@ from pydantic import BaseModel
 
 from groupwise.server.schemas import RoundEvent, SessionState
 from groupwise.server.state import close_if_due, judgement_out, read_state
+from groupwise.server.training_views import point_out
 from groupwise.storage import Database
 from groupwise.storage.judgements import list_judgements
+from groupwise.storage.training import list_points
 
 RETRY_MS = 2000
 """How long a disconnected EventSource waits before it reconnects."""
@@ -64,9 +69,11 @@ async def session_events(
     yield f"retry: {RETRY_MS}\n\n".encode()
     yield format_event("state", state, revision)
     sent_judgements = last_event_id if last_event_id is not None else revision
+    sent_points = sent_judgements
     if last_event_id is not None:
         chunks, sent_judgements = await _judgements(db, session_id, sent_judgements)
-        for chunk in chunks:
+        points, sent_points = await _points(db, session_id, sent_points)
+        for _, chunk in sorted(chunks + points, key=lambda c: c[0]):
             yield chunk
     key = _key(state)
     ready_round = state.round if state.phase == "ready" else None
@@ -80,7 +87,8 @@ async def session_events(
                 yield b": keep-alive\n\n"
             continue
         chunks, sent_judgements = await _judgements(db, session_id, sent_judgements)
-        for chunk in chunks:
+        points, sent_points = await _points(db, session_id, sent_points)
+        for _, chunk in sorted(chunks + points, key=lambda c: c[0]):
             yield chunk
         revision = now_revision
         state = await anyio.to_thread.run_sync(read_state, db, session_id)
@@ -93,14 +101,33 @@ async def session_events(
         quiet_since = time.monotonic()
 
 
-async def _judgements(db: Database, session_id: str, after: int) -> tuple[list[bytes], int]:
+Chunks = list[tuple[int, bytes]]
+"""Events with their revisions."""
+
+
+async def _judgements(db: Database, session_id: str, after: int) -> tuple[Chunks, int]:
     """The events of judgements changed after revision `after`, and the newest revision
     among them (`after` when none)."""
 
-    def read() -> tuple[list[bytes], int]:
+    def read() -> tuple[Chunks, int]:
         with db.read() as s:
             records = list_judgements(s, session_id, include_undone=True, after_revision=after)
-        chunks = [format_event("judgement", judgement_out(r), r.revision) for r in records]
+        chunks = [
+            (r.revision, format_event("judgement", judgement_out(r), r.revision)) for r in records
+        ]
         return chunks, max([after, *(r.revision for r in records)])
+
+    return await anyio.to_thread.run_sync(read)
+
+
+async def _points(db: Database, session_id: str, after: int) -> tuple[Chunks, int]:
+    """The events of training points written after revision `after`, and the newest
+    revision among them (`after` when none)."""
+
+    def read() -> tuple[Chunks, int]:
+        with db.read() as s:
+            points = list_points(s, session_id, after_revision=after)
+        chunks = [(p.revision, format_event("training", point_out(p), p.revision)) for p in points]
+        return chunks, max([after, *(p.revision for p in points)])
 
     return await anyio.to_thread.run_sync(read)

@@ -29,6 +29,7 @@ from groupwise.storage.progress import write_progress
 from groupwise.storage.sessions import get_round, get_session, new_round, settings_of, touch
 from groupwise.storage.settings import LIBRARY
 from groupwise.storage.timer import round_due, stop_timer
+from groupwise.storage.training import round_point
 
 
 def open_round(s: DbSession, session: SessionRow, now: datetime | None = None) -> RoundRow:
@@ -105,6 +106,7 @@ def finish_training(
     current = get_round(s, session.id, session.round)
     current.stats = dict(stats)
     s.add(CheckpointRow(round_id=current.id, path=checkpoint, created_at=now))
+    round_point(s, session.id, round_index, current.stats, now)
     rounds = int(session.settings.get("rounds", 1))
     if session.round + 1 < rounds:
         session.round += 1
@@ -167,6 +169,7 @@ def finish_final(
         row = get_round(s, session.id, round_index)
         row.stats = dict(stats or {})
         s.add(CheckpointRow(round_id=row.id, path=checkpoint, created_at=now))
+        round_point(s, session.id, round_index, row.stats, now)
     session.phase = FINISHED
     session.failed_phase = None
     session.error = None

@@ -16,6 +16,7 @@ Tables (one session owns everything below it; deleting a session cascades):
     suggestions       the round's ranked group suggestions (SPEC §5), used or not
     suggestion_edges  the round's top-k pairwise suggestion edges for the view
     pairwise_queue    the round's pairs for the pairwise baseline, best first
+    training_points   the agent's learning as it happens: PPO steps, true return, last refit
 """
 
 from datetime import UTC, datetime
@@ -269,3 +270,29 @@ class PairQueueRow(Base):
     b: Mapped[str] = mapped_column(String(16))
     score: Mapped[float] = mapped_column(Float)
     skipped: Mapped[bool] = mapped_column(default=False)
+
+
+class TrainingPointRow(Base):
+    """One point of a session's learning curve (`groupwise.storage.training`): the worker
+    writes one after each refit and evaluation of a continuous round, and one per trained
+    round."""
+
+    __tablename__ = "training_points"
+    __table_args__ = (Index("ix_training_points_session_revision", "session_id", "revision"),)
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    session_id: Mapped[str] = mapped_column(ForeignKey("sessions.id", ondelete="CASCADE"))
+    round: Mapped[int] = mapped_column(Integer)
+    at: Mapped[datetime] = mapped_column(default=utcnow)
+    ppo_steps: Mapped[int] = mapped_column(Integer)
+    """The agent's PPO env steps so far."""
+    true_return: Mapped[float | None] = mapped_column(Float, default=None)
+    """The greedy policy's mean true return now; null when the point is a refit only."""
+    pairs: Mapped[int] = mapped_column(Integer)
+    """Preference pairs the reward model was last fitted on (all rounds)."""
+    reward_val_accuracy: Mapped[float | None] = mapped_column(Float, default=None)
+    """The last fit's held-out accuracy; null without a validation split."""
+    pool_steps: Mapped[int] = mapped_column(Integer)
+    """PPO env steps of the policy that sampled round `round`'s pool."""
+    revision: Mapped[int] = mapped_column(Integer, default=0)
+    """The session revision the point was written at (the event stream's cursor)."""

@@ -11,6 +11,11 @@ go to ``checkpoints/live`` (`Run.save_live`). The database holds every acknowled
 judgement, so a killed worker loses none: the next one resumes the round from its live
 checkpoint and refits on all of them.
 
+The page sees the agent learn (`worker.curve`): each refit stores a point of the session's
+learning curve (PPO steps, pairs, validation accuracy), and so does each evaluation of the
+greedy policy's true return, the first before the round's first rollout, then whenever the
+slices have trained long enough (`curve.EVAL_MIN_S`, `curve.EVAL_COST`).
+
 When the person ends the round, the training job ends it through `end_round` on the live
 run (`take`), with no PPO steps of its own: the policy trained all along. The next round's
 pool is then sampled from that policy, as in rounds mode.
@@ -28,6 +33,8 @@ from groupwise.storage import Database
 from groupwise.storage.judgements import round_judgements
 from groupwise.storage.phases import READY, TRAINING
 from groupwise.storage.sessions import get_round, sessions_in, settings_of
+from groupwise.storage.training import add_point
+from groupwise.worker import curve
 from groupwise.worker.jobs import Job, open_run, published_offer
 
 log = logging.getLogger(__name__)
@@ -47,6 +54,14 @@ class LiveTraining:
     live: LiveRound
     checkpointed: float
     """`time.monotonic()` of the last live checkpoint."""
+    pool_steps: int
+    """PPO steps of the policy that sampled the round's pool."""
+    trained_s: float = 0.0
+    """Seconds this worker's PPO slices of the round took."""
+    evaluated_s: float | None = None
+    """`trained_s` at the last evaluation; None before the first."""
+    eval_s: float = 0.0
+    """Seconds the last evaluation took."""
 
 
 class LiveSessions:
@@ -91,13 +106,43 @@ class LiveSessions:
         training = self._training(job)
         with self.db.read() as s:
             keyed = round_judgements(s, job.session_id, job.round)
-        training.live.update(keyed, time.monotonic())
+        refitted = training.live.update(keyed, time.monotonic())
         run = training.run
-        if len(run.dataset):  # PPO starts with the round's first pairs
-            training.live.learn(run.ppo.rollout_steps)
-            if time.monotonic() - training.checkpointed >= CHECKPOINT_S:
-                run.save_live(job.round)
-                training.checkpointed = time.monotonic()
+        if not len(run.dataset):  # PPO starts with the round's first pairs
+            return
+        if refitted or training.evaluated_s is None:
+            self._point(training, evaluate=training.evaluated_s is None)
+        tick = time.perf_counter()
+        training.live.learn(run.ppo.rollout_steps)
+        training.trained_s += time.perf_counter() - tick
+        since = training.trained_s - (training.evaluated_s or 0.0)
+        if since >= max(curve.EVAL_MIN_S, curve.EVAL_COST * training.eval_s):
+            self._point(training, evaluate=True)
+        if time.monotonic() - training.checkpointed >= CHECKPOINT_S:
+            run.save_live(job.round)
+            training.checkpointed = time.monotonic()
+
+    def _point(self, training: LiveTraining, *, evaluate: bool) -> None:
+        """Store a point of the learning curve: the steps and last fit now, and the greedy
+        policy's true return with `evaluate`."""
+        run, report = training.run, training.live.report
+        value = None
+        if evaluate:
+            tick = time.perf_counter()
+            value = curve.true_return(run)
+            training.eval_s = time.perf_counter() - tick
+            training.evaluated_s = training.trained_s
+        with self.db.write() as s:
+            add_point(
+                s,
+                training.session_id,
+                round_index=training.round,
+                ppo_steps=run.agent.num_timesteps,
+                true_return=value,
+                pairs=len(run.dataset),
+                reward_val_accuracy=None if report is None else report.validation_accuracy,
+                pool_steps=training.pool_steps,
+            )
 
     def take(self, job: Job) -> LiveTraining:
         """The live training of `job`'s round, to end it (the training job): this worker's,
@@ -144,7 +189,7 @@ class LiveSessions:
             job.round,
             f" (resumed at {run.agent.num_timesteps:,} PPO steps)" if resumed else "",
         )
-        return LiveTraining(job.session_id, job.round, run, live, now)
+        return LiveTraining(job.session_id, job.round, run, live, now, curve.pool_steps(run))
 
     def _open_jobs(self) -> list[Job]:
         """The open rounds of continuous sessions, as jobs."""

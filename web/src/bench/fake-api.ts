@@ -60,6 +60,7 @@ export const FAKE_ROUTES = [
   "post /api/sessions/{session_id}/finish",
   "post /api/sessions/{session_id}/continue",
   "get /api/sessions/{session_id}/agent",
+  "get /api/sessions/{session_id}/training",
 ] as const satisfies readonly Route[];
 export type FakeRoute = (typeof FAKE_ROUTES)[number];
 
@@ -280,6 +281,30 @@ export function fakeApi(
     exportUrl: () => "#",
     agentVideoUrl: () => "",
     agentZipUrl: () => "#",
+    training: async () => {
+      const start = Date.parse(session.created_at);
+      const points = [-40, -31, -22, -18, -9, -4].map((value, i) => ({
+        round: session.round,
+        at: new Date(start + 20_000 * i).toISOString(),
+        ppo_steps: 2048 * 3 * i,
+        true_return: value,
+        pairs: 20 + 9 * i,
+        reward_val_accuracy: 0.7 + 0.02 * i,
+        pool_steps: 0,
+      }));
+      const last = points[points.length - 1]!;
+      return answer("get /api/sessions/{session_id}/training", {
+        points,
+        summary: {
+          round: last.round,
+          ppo_steps: last.ppo_steps,
+          pairs: last.pairs,
+          reward_val_accuracy: last.reward_val_accuracy,
+          pool_age: last.ppo_steps - last.pool_steps,
+          true_return: last.true_return,
+        },
+      });
+    },
     events: (_sid, handlers) => {
       setTimeout(() => handlers.open?.(), 0);
       return () => undefined;

@@ -1,7 +1,7 @@
 /**
  * The open session's event stream (SSE): state changes, judgements stored or undone
- * elsewhere, and new rounds reach the store; after a drop the state is read again, since
- * events were missed meanwhile.
+ * elsewhere, new rounds and the agent's learning curve reach the store; after a drop the
+ * state and the curve are read again, since events were missed meanwhile.
  */
 import { STALE } from "../api";
 import type { EffectContext } from "./context";
@@ -15,6 +15,7 @@ export function createEventStream({ store, api, fail }: EffectContext, round: Ro
   /** Listens to session `sid` (the caller closed any earlier stream). */
   function connect(sid: string): void {
     dispatch({ type: "connection", value: "connecting" });
+    void loadTraining(sid);
     let dropped = false;
     closeEvents = api.events(sid, {
       open() {
@@ -40,6 +41,9 @@ export function createEventStream({ store, api, fail }: EffectContext, round: Ro
       round() {
         void resync(sid);
       },
+      training(point) {
+        if (get().session?.id === sid) dispatch({ type: "training", sid, points: [point] });
+      },
     });
   }
 
@@ -48,7 +52,17 @@ export function createEventStream({ store, api, fail }: EffectContext, round: Ro
       const session = await api.session(sid);
       if (session === STALE || get().session?.id !== sid) return;
       dispatch({ type: "session", session, at: Date.now() });
-      await round.sync();
+      await Promise.all([round.sync(), loadTraining(sid)]);
+    } catch (err) {
+      fail(err);
+    }
+  }
+
+  async function loadTraining(sid: string): Promise<void> {
+    try {
+      const curve = await api.training(sid);
+      if (curve === STALE || get().session?.id !== sid) return;
+      dispatch({ type: "training", sid, points: curve.points });
     } catch (err) {
       fail(err);
     }

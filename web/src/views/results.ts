@@ -5,7 +5,7 @@
  * zip, the judgements), and "Continue training" (more PPO steps on the frozen reward model,
  * or more rounds).
  */
-import type { AgentOut, ContinueIn, SessionState } from "../api";
+import type { AgentOut, ContinueIn, SessionState, TrainingPoint } from "../api";
 import { plural } from "../lib/format";
 import {
   type ChartGeometry,
@@ -17,6 +17,7 @@ import {
   scoreText,
 } from "../lib/results";
 import { h, memo, s, text } from "./dom";
+import { drawCurve } from "./training";
 
 export interface ResultsData {
   session: SessionState;
@@ -25,6 +26,8 @@ export interface ResultsData {
   downloadUrl: string;
   exportUrl: string;
   busy: boolean;
+  /** The session's learning curve (`lib/training.ts`), drawn under the rounds' chart. */
+  training: readonly TrainingPoint[];
 }
 
 export interface ResultsHandlers {
@@ -44,6 +47,10 @@ interface View {
   chartTitle: HTMLElement;
   chart: SVGSVGElement;
   chartNote: HTMLElement;
+  learning: HTMLElement;
+  learningChart: SVGSVGElement;
+  /** The points the learning chart shows (redrawn when they change). */
+  learned: readonly TrainingPoint[] | null;
   download: HTMLAnchorElement;
   exportLink: HTMLAnchorElement;
   kind: HTMLSelectElement;
@@ -56,6 +63,7 @@ interface View {
 
 const views = new WeakMap<Element, View>();
 const CHART = { width: 460, height: 190 };
+const LEARNING_CHART = { width: 460, height: 130 };
 
 export function renderResults(element: HTMLElement, data: ResultsData, handlers: ResultsHandlers): void {
   const view = memo(views, element, () => build(element));
@@ -72,6 +80,11 @@ export function renderResults(element: HTMLElement, data: ResultsData, handlers:
     drawChart(view.chart, agent);
   }
   view.exportLink.href = data.exportUrl;
+  view.learning.hidden = !data.training.some((p) => p.true_return !== null);
+  if (!view.learning.hidden && view.learned !== data.training) {
+    view.learned = data.training;
+    drawCurve(view.learningChart, data.training, LEARNING_CHART);
+  }
   const c = st.counts;
   const frozen = agent.rounds.filter((r) => !r.feedback);
   const feedback = agent.rounds.filter((r) => r.feedback);
@@ -208,6 +221,14 @@ function build(element: HTMLElement): View {
     role: "img",
   });
   const chartNote = h("p", { class: "chart-note muted" });
+  const learningChart = s("svg", { class: "return-chart", role: "img" });
+  const learning = h(
+    "section",
+    { class: "results-chart results-learning", hidden: true },
+    h("h3", { class: "chart-title" }, "True return over the session"),
+    learningChart,
+    h("p", { class: "chart-note muted" }, "The greedy policy, measured while it trained (minutes:seconds since the first point)."),
+  );
   const download = h("a", { class: "button primary", download: "" }, "Download agent (.zip)");
   const exportLink = h("a", { class: "button", download: "" }, "Download judgements (JSONL)");
   const kind = h(
@@ -254,6 +275,7 @@ function build(element: HTMLElement): View {
         summary,
         score,
         h("section", { class: "results-chart" }, chartTitle, chart, chartNote),
+        learning,
         h("div", { class: "results-actions" }, download, exportLink),
         h(
           "p",
@@ -279,6 +301,9 @@ function build(element: HTMLElement): View {
     chartTitle,
     chart,
     chartNote,
+    learning,
+    learningChart,
+    learned: null,
     download,
     exportLink,
     kind,

@@ -23,7 +23,8 @@ def events(
     context: Context,
     last_event_id: Annotated[int | None, Header(ge=0, le=2**62)] = None,
 ) -> StreamingResponse:
-    """Server-sent events: `state`, `judgement`, `round`, and keep-alive comments."""
+    """Server-sent events: `state`, `judgement`, `round`, `training`, and keep-alive
+    comments."""
     read_state(context.db, session_id)  # 404 before the stream starts
     config = context.config
     stream = session_events(

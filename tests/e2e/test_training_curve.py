@@ -1,0 +1,64 @@
+"""The page shows the agent learning (issue 24): in a continuous GridWorld session, two
+answers start PPO while the round stays open, and the panel under the behaviours shows the
+PPO steps growing, the last refit, the pool's age and the true return's chart gaining
+points from the event stream. Screenshot: training-curve.png (1366 × 768)."""
+
+import re
+from typing import Any
+
+import pytest
+
+expect = pytest.importorskip("playwright.sync_api").expect
+Page = Any  # playwright.sync_api.Page
+Server = Any  # conftest.Server
+
+CONTINUOUS = {
+    "training": "continuous",
+    "eval_episodes": 2,
+    "ppo": {"n_envs": 1, "n_steps": 64, "batch_size": 32, "n_epochs": 1},
+}
+"""A rollout of 64 steps takes a few milliseconds; every evaluation two GridWorld episodes."""
+
+
+def _steps(page: Page) -> int:
+    words = page.locator(".training-steps").inner_text()
+    return int(words.split(" ")[0].replace(",", ""))
+
+
+def test_a_continuous_round_shows_ppo_steps_and_the_true_return_growing(
+    server: Server, page: Page, shot: Any
+) -> None:
+    sid = server.new_session("groupwise", **CONTINUOUS)
+    server.wait_phase(sid, "ready", round_index=0)
+    page.goto(f"{server.url}/?session={sid}")
+    expect(page.locator(".arc.leaf")).to_have_count(16)
+    panel = page.get_by_role("region", name="The agent learning")
+    expect(panel).to_be_visible()
+    expect(panel).to_contain_text("PPO starts with your first answer.")
+    for _ in range(2):  # the suggestion the page pre-filled, answered
+        button = page.get_by_role("button", name="Group A (left) is better")
+        expect(button).to_be_enabled()
+        button.click()
+        expect(page.locator(".toast")).to_contain_text("Saved")
+    expect(panel.locator(".training-steps")).to_have_text(re.compile(r"^[\d,]+ PPO steps$"))
+    expect(panel).to_contain_text(re.compile(r"Last refit: \d+ pairs?"))
+    expect(panel).to_contain_text(re.compile(r"Pool sampled [\d,]+ PPO steps? ago"))
+    expect(panel.locator("circle.point").first).to_be_attached()  # the policy before PPO
+    first = _steps(page)
+    # the worker evaluates again after a few seconds of training: more steps, more points
+    page.wait_for_function(
+        "(n) => Number(document.querySelector('.training-steps').textContent"
+        ".split(' ')[0].replaceAll(',', '')) > n",
+        arg=first,
+        timeout=60_000,
+    )
+    expect(panel.locator("circle.point")).not_to_have_count(1, timeout=30_000)
+    steps = _steps(page)
+    assert steps > first
+    curve = server.api("GET", f"/api/sessions/{sid}/training")
+    assert curve["summary"]["ppo_steps"] >= steps
+    assert curve["summary"]["pool_age"] == curve["summary"]["ppo_steps"]  # round 0: from 0
+    # the header still holds one line beside the panel
+    bar = page.locator(".statusbar").bounding_box()
+    assert bar is not None and bar["height"] < 60, bar
+    shot(page, "training-curve")

@@ -1,0 +1,104 @@
+"""`GET /api/sessions/{id}/training` and the ``training`` event: the worker's learning curve
+of a continuous round (driven in-process, `Worker.train_live`) and of trained rounds."""
+
+import json
+import uuid
+
+import anyio
+import pytest
+from tests.unit.server.conftest import context_of, new_session, run_worker_once
+
+from groupwise.server.events import session_events
+from groupwise.worker import curve
+from groupwise.worker.process import Worker
+
+ROLLOUT = 32  # TINY's PPO: 1 env × 32 steps
+
+
+def _judge(client, sid, left, right, round_index=0):
+    body = {
+        "client_id": str(uuid.uuid4()),
+        "round": round_index,
+        "left": left,
+        "right": right,
+        "label": "left",
+        "source": "explored",
+    }
+    assert client.post(f"/api/sessions/{sid}/judgements", json=body).status_code == 201
+
+
+def _events(client, sid, last_event_id, count):
+    """The first `count` events of the session's stream, as (event, data)."""
+
+    async def read():
+        context = context_of(client)
+        stream = session_events(context.db, sid, 0.01, 60.0, last_event_id)
+        events = []
+        async for chunk in stream:
+            text = chunk.decode()
+            if text.startswith("event:"):
+                head, data = text.strip().split("\ndata: ")
+                events.append((head.split("\n")[0].removeprefix("event: "), json.loads(data)))
+            if len(events) == count:
+                return events
+        return events
+
+    return anyio.run(read)
+
+
+def test_a_continuous_round_shows_its_steps_fits_and_true_returns(client, monkeypatch):
+    monkeypatch.setattr(curve, "EVAL_MIN_S", 0.0)  # evaluate after every slice
+    monkeypatch.setattr(curve, "EVAL_COST", 0.0)
+    sid = new_session(client, training="continuous")["id"]
+    run_worker_once(client)  # round 0 open
+    assert client.get(f"/api/sessions/{sid}/training").json() == {"points": [], "summary": None}
+    worker = Worker(context_of(client).db, context_of(client).data_dir, poll_s=0.1)
+    worker.train_live()  # no pairs yet: no PPO, no point
+    assert client.get(f"/api/sessions/{sid}/training").json()["points"] == []
+    _judge(client, sid, ["b0", "b1"], ["b2"])
+    worker.train_live()
+    worker.train_live()
+    curve_ = client.get(f"/api/sessions/{sid}/training").json()
+    points = curve_["points"]
+    # the first fit and the policy before any PPO, then one evaluation per rollout
+    assert [p["ppo_steps"] for p in points] == [0, ROLLOUT, 2 * ROLLOUT]
+    assert all(p["true_return"] is not None for p in points)
+    assert {(p["round"], p["pairs"], p["pool_steps"]) for p in points} == {(0, 2, 0)}
+    assert curve_["summary"] == {
+        "round": 0,
+        "ppo_steps": 2 * ROLLOUT,
+        "pairs": 2,
+        "reward_val_accuracy": points[-1]["reward_val_accuracy"],
+        "pool_age": 2 * ROLLOUT,
+        "true_return": points[-1]["true_return"],
+    }
+    # the stream sends the points written after the revision a page last saw
+    revision = client.get(f"/api/sessions/{sid}").json()  # (no revision in the state)
+    assert revision["phase"] == "ready"
+    events = _events(client, sid, 0, 1 + 1 + len(points))  # state, judgement, points
+    assert [name for name, _ in events] == [
+        "state",
+        "judgement",
+        "training",
+        "training",
+        "training",
+    ]
+    assert [data["ppo_steps"] for _, data in events[2:]] == [0, ROLLOUT, 2 * ROLLOUT]
+
+
+@pytest.mark.parametrize("training", ["rounds", "continuous"])
+def test_every_trained_round_adds_a_point_from_its_record(client, training):
+    sid = new_session(client, training=training)["id"]
+    run_worker_once(client)
+    _judge(client, sid, ["b0"], ["b1"])
+    assert client.post(f"/api/sessions/{sid}/end-round").status_code == 200
+    run_worker_once(client)  # round 0 trained
+    points = client.get(f"/api/sessions/{sid}/training").json()["points"]
+    steps = 64 if training == "rounds" else 0  # TINY's ppo_steps_per_round; live: none
+    record = points[-1]
+    assert (record["round"], record["ppo_steps"], record["pairs"]) == (0, steps, 1)
+    assert record["true_return"] is not None
+
+
+def test_an_unknown_session_has_no_curve(client):
+    assert client.get("/api/sessions/s-nope/training").status_code == 404
