@@ -1,7 +1,8 @@
 """The page shows the agent learning (issue 24): in a continuous GridWorld session, two
 answers start PPO while the round stays open, and the panel under the behaviours shows the
 PPO steps growing, the last refit, the pool's age and the true return's chart gaining
-points from the event stream. Screenshot: training-curve.png (1366 × 768)."""
+points from the event stream; the finished page draws the same curve. Screenshots:
+training-curve.png, training-curve-finished.png (1366 × 768)."""
 
 import re
 from typing import Any
@@ -43,7 +44,7 @@ def test_a_continuous_round_shows_ppo_steps_and_the_true_return_growing(
     expect(panel.locator(".training-steps")).to_have_text(re.compile(r"^[\d,]+ PPO steps$"))
     expect(panel).to_contain_text(re.compile(r"Last refit: \d+ pairs?"))
     expect(panel).to_contain_text(re.compile(r"Pool sampled [\d,]+ PPO steps? ago"))
-    expect(panel.locator("circle.point").first).to_be_attached()  # the policy before PPO
+    expect(panel.locator("circle.curve-point").first).to_be_attached()  # the policy before PPO
     first = _steps(page)
     # the worker evaluates again after a few seconds of training: more steps, more points
     page.wait_for_function(
@@ -52,7 +53,7 @@ def test_a_continuous_round_shows_ppo_steps_and_the_true_return_growing(
         arg=first,
         timeout=60_000,
     )
-    expect(panel.locator("circle.point")).not_to_have_count(1, timeout=30_000)
+    expect(panel.locator("circle.curve-point")).not_to_have_count(1, timeout=30_000)
     steps = _steps(page)
     assert steps > first
     curve = server.api("GET", f"/api/sessions/{sid}/training")
@@ -62,3 +63,16 @@ def test_a_continuous_round_shows_ppo_steps_and_the_true_return_growing(
     bar = page.locator(".statusbar").bounding_box()
     assert bar is not None and bar["height"] < 60, bar
     shot(page, "training-curve")
+
+    # the finished page draws the same curve, the round's own point added
+    page.get_by_role("button", name="Finish now").click()
+    page.get_by_role("button", name="Click again to finish the session").click()
+    results = page.get_by_role("region", name="Session results")
+    expect(results).to_be_visible(timeout=120_000)
+    learning = results.locator(".results-learning")
+    expect(learning).to_contain_text("True return over the session")
+    points = server.api("GET", f"/api/sessions/{sid}/training")["points"]
+    evaluated = [p for p in points if p["true_return"] is not None]
+    assert points[-1]["round"] == 0 and points[-1]["ppo_steps"] >= steps  # the round's record
+    expect(learning.locator("circle.curve-point")).to_have_count(len(evaluated))
+    shot(page, "training-curve-finished")

@@ -69,7 +69,7 @@ export function drawCurve(
       `${p.point.ppo_steps.toLocaleString("en")} PPO steps (round ${p.point.round}): ` +
       `true return ${formatValue(p.point.true_return ?? 0)}`;
     children.push(
-      s("circle", { class: "point", cx: p.x, cy: p.y, r: 3, "data-steps": p.point.ppo_steps }, s("title", {}, label)),
+      s("circle", { class: "curve-point", cx: p.x, cy: p.y, r: 3, "data-steps": p.point.ppo_steps }, s("title", {}, label)),
     );
   }
   svg.replaceChildren(...children);
