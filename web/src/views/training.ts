@@ -24,7 +24,7 @@ interface View {
 }
 
 const views = new WeakMap<Element, View>();
-/** The open page's chart, in SVG units (it scales with its box). */
+/** The open page's chart, in SVG units (before the page knows its width). */
 export const PANEL_CHART = { width: 360, height: 92 };
 
 const SHOWN: ReadonlySet<SessionState["phase"]> = new Set(["ready", "training", "preparing"]);
@@ -43,7 +43,9 @@ export function renderTraining(element: HTMLElement, data: TrainingData): void {
     text(view.refit, lines.refit);
     text(view.pool, lines.pool);
   }
-  drawCurve(view.chart, data.points, PANEL_CHART);
+  // Drawn at the width it is shown (the panel is wider in pairwise mode), text unscaled.
+  const shown = Math.round(view.chart.getBoundingClientRect().width);
+  drawCurve(view.chart, data.points, { ...PANEL_CHART, width: shown > 0 ? shown : PANEL_CHART.width });
 }
 
 /** Draw the true return over session time into `svg` (`width` × `height` SVG units). */
