@@ -4,10 +4,11 @@ import importlib
 import sys
 
 BENCHMARKS = ["ppo_throughput", "render_fps", "dtw", "pool_prep", "submit_latency", "web_render"]
-ON_DEMAND = ["peer", "faults", "fuzz"]
+ON_DEMAND = ["peer", "faults", "fuzz", "continuous"]
 """Run only when named: `peer` (groupwise against imitation) takes about 45 minutes,
 `faults` (100 kills of server or worker under load, then `fuzz`) about 25, `fuzz`
-(schemathesis, 10,000 requests to the live API) about 5."""
+(schemathesis, 10,000 requests to the live API) about 5, `continuous` (a person's pace on a
+continuous session, then PPO's one-core throughput) about 5."""
 
 
 def main(names: list[str]) -> None:

@@ -79,8 +79,11 @@ def begin_round(
     n_queries: int | None = None,
     streams: RoundStreams | None = None,
     callback: RunCallback | None = None,
+    round_index: int | None = None,
 ) -> Offer:
-    """The first half of round `run.next_round`: sample the pool from the current policy
+    """The first half of round `run.next_round` (or of `round_index`: the next round's
+    offer, prepared while round `run.next_round` is still open, as continuous training
+    does): sample the pool from the current policy
     (the `pool_oversample` × N windows the ensemble is most uncertain about, or a random N,
     `loop.pool_selection`), build its tree, and let `strategy` propose `n_queries` (default
     `budget`) comparisons of it.
@@ -90,7 +93,7 @@ def begin_round(
     "sample" (steps sampled towards the windows) and "dtw" (pairs of behaviours measured).
     """
     loop, callback = run.cfg.loop, as_callback(callback)
-    index = run.next_round
+    index = run.next_round if round_index is None else round_index
     streams = streams or round_streams(loop.seed, index)
     tick = time.perf_counter()
     pool = sample_pool(

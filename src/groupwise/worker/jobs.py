@@ -39,8 +39,8 @@ from groupwise.run.run import Run
 from groupwise.storage import Database, SessionSettings
 from groupwise.storage.judgements import round_judgements
 from groupwise.storage.lifecycle import finish_training
-from groupwise.storage.phases import WORK_PHASES
-from groupwise.storage.rounds import store_prepared_round
+from groupwise.storage.phases import PREPARING, WORK_PHASES
+from groupwise.storage.rounds import PreparedRound, store_prepared_round
 from groupwise.storage.sessions import (
     get_round,
     get_session,
@@ -49,7 +49,7 @@ from groupwise.storage.sessions import (
     settings_of,
 )
 from groupwise.storage.timer import elapsed
-from groupwise.worker.offers import prepared_round
+from groupwise.worker.offers import drop_staged, prepared_round, read_staged, write_staged
 from groupwise.worker.progress import JobProgress
 
 if TYPE_CHECKING:
@@ -114,6 +114,7 @@ def prepare(
             n_queries=offered_queries(settings),
             callback=progress,
         )
+        steps = run.agent.num_timesteps
     publish_offer(
         db,
         data_dir,
@@ -125,6 +126,7 @@ def prepare(
         render,
         progress=progress,
         sample_s=offer.sample_s,
+        ppo_steps=steps,
     )
     log.info(
         "session %s: round %d ready (%d behaviours)", job.session_id, job.round, len(offer.pool)
@@ -143,11 +145,37 @@ def publish_offer(
     *,
     progress: JobProgress | None = None,
     sample_s: float = 0.0,
+    ppo_steps: int | None = None,
 ) -> bool:
     """Publish `pool` as round `pool.round` of a session and open the round: clips, tree
     and candidates (`pool.publish.publish_pool`), then `queries` as the page's suggestions
     and pairwise queue, stored in one transaction. False (nothing opened) when the session
     moved on meanwhile."""
+    prepared = published_round(
+        data_dir, session_id, env, settings, pool, queries, render, progress, sample_s, ppo_steps
+    )
+    with db.write() as s:
+        if not store_prepared_round(s, session_id, pool.round, prepared):
+            log.warning("session %s moved on while round %d was prepared", session_id, pool.round)
+            return False
+    return True
+
+
+def published_round(
+    data_dir: Path,
+    session_id: str,
+    env: str,
+    settings: SessionSettings,
+    pool: BehaviourPool,
+    queries: Sequence[Query],
+    render: RenderPool,
+    progress: JobProgress | None = None,
+    sample_s: float = 0.0,
+    ppo_steps: int | None = None,
+) -> PreparedRound:
+    """`pool` published as round `pool.round` (clips, tree, candidates in its directory)
+    and what the database stores to open it; `ppo_steps`, the PPO steps of the policy that
+    sampled it, goes into ``pool.json``'s metadata (`sampled_at`)."""
     if progress is not None:
         progress.on_phase("clips", 0, len(pool))
     run_config = settings.run_config(env)
@@ -159,19 +187,44 @@ def publish_offer(
         exploration_fraction=run_config.loop.exploration_fraction,
         store=ClipStore(data_dir / "clips"),
         render_pool=render,
-        metadata={"session": session_id, "round": pool.round},
+        metadata={"session": session_id, "round": pool.round, "ppo_steps": ppo_steps},
         show_progress=False,
         sample_s=sample_s,
         progress=None if progress is None else partial(progress.on_phase, "clips"),
     )
     if progress is not None:
         progress.on_phase("suggestions", 0, 1)
-    prepared = prepared_round(pool, published, queries, settings.suggestions)
-    with db.write() as s:
-        if not store_prepared_round(s, session_id, pool.round, prepared):
-            log.warning("session %s moved on while round %d was prepared", session_id, pool.round)
-            return False
-    return True
+    return prepared_round(pool, published, queries, settings.suggestions)
+
+
+def stage_next(job: Job, run: Run, data_dir: Path, render: RenderPool) -> None:
+    """Prepare round `job.round + 1`'s offer ahead, from the policy as it is now, while
+    round `job.round` is still open (continuous training): published into its directory
+    and kept there (`offers.write_staged`) until round `job.round` ends (`train`)."""
+    settings = job.settings
+    offer = begin_round(
+        run,
+        session_strategy(run.cfg, job.mode),
+        settings.comparisons_per_round,
+        n_queries=offered_queries(settings),
+        round_index=job.round + 1,
+    )
+    prepared = published_round(
+        data_dir, job.session_id, job.env, settings, offer.pool, offer.queries, render,
+        sample_s=offer.sample_s, ppo_steps=run.agent.num_timesteps,
+    )  # fmt: skip
+    write_staged(data_dir / round_directory(job.session_id, job.round + 1), prepared)
+    log.info("session %s: round %d staged", job.session_id, job.round + 1)
+
+
+def sampled_at(directory: Path) -> int | None:
+    """PPO steps of the policy that sampled the pool published in `directory` (None when
+    its ``pool.json`` does not say)."""
+    try:
+        steps = json.loads((directory / "pool.json").read_text())["metadata"]["ppo_steps"]
+    except (OSError, ValueError, KeyError):
+        return None
+    return int(steps) if steps is not None else None
 
 
 def publish_config(cfg: RunConfig, frame_size: int, workers: int) -> PublishConfig:
@@ -220,6 +273,11 @@ def train(
     with db.write() as s:
         if not finish_training(s, job.session_id, r, str(checkpoint), record.stats()):
             log.warning("session %s moved on while round %d trained", job.session_id, r)
+        elif (staged := read_staged(data_dir / round_directory(job.session_id, r + 1))) and (
+            get_session(s, job.session_id).phase == PREPARING
+        ):  # prepared ahead while round r was open: the next round opens now
+            store_prepared_round(s, job.session_id, r + 1, staged)
+            drop_staged(data_dir / round_directory(job.session_id, r + 1))
     log.info(
         "session %s: round %d trained on %d pairs (reward acc %.2f, true return %.1f)",
         job.session_id,

@@ -18,13 +18,17 @@ slices have trained long enough (`curve.EVAL_MIN_S`, `curve.EVAL_COST`).
 
 When the person ends the round, the training job ends it through `end_round` on the live
 run (`take`), with no PPO steps of its own: the policy trained all along. The next round's
-pool is then sampled from that policy, as in rounds mode.
+offer was prepared ahead, after `STAGE_AFTER_S` seconds of the round, from the policy as it
+was then (`jobs.stage_next`), so it opens as soon as the round is committed; a round ended
+sooner has its next pool sampled then, as in rounds mode.
 """
 
 import logging
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from groupwise.run.continuous import LiveRound
 from groupwise.run.run import Run
@@ -35,12 +39,19 @@ from groupwise.storage.phases import READY, TRAINING
 from groupwise.storage.sessions import get_round, sessions_in, settings_of
 from groupwise.storage.training import add_point
 from groupwise.worker import curve
-from groupwise.worker.jobs import Job, open_run, published_offer
+from groupwise.worker.jobs import Job, open_run, published_offer, sampled_at, stage_next
+
+if TYPE_CHECKING:
+    from groupwise.clips.render import RenderPool
 
 log = logging.getLogger(__name__)
 
 CHECKPOINT_S = 30.0
 """Seconds between a continuous round's live checkpoints."""
+STAGE_AFTER_S = 60.0
+"""Seconds of a round's continuous training before the next round's offer is prepared
+ahead from the policy as it is then (`jobs.stage_next`), so that "End round" opens it
+at once; the worker trains nothing while it renders the clips."""
 CONTINUOUS = "continuous"
 
 
@@ -54,8 +65,12 @@ class LiveTraining:
     live: LiveRound
     checkpointed: float
     """`time.monotonic()` of the last live checkpoint."""
+    started: float
+    """`time.monotonic()` when this worker took the round up."""
     pool_steps: int
     """PPO steps of the policy that sampled the round's pool."""
+    staged: bool = False
+    """Whether the next round's offer was prepared ahead."""
     trained_s: float = 0.0
     """Seconds this worker's PPO slices of the round took."""
     evaluated_s: float | None = None
@@ -68,9 +83,10 @@ class LiveSessions:
     """The worker's continuous rounds, one `LiveTraining` per open session (module
     docstring)."""
 
-    def __init__(self, db: Database, data_dir: Path) -> None:
+    def __init__(self, db: Database, data_dir: Path, render: "Callable[[int], RenderPool]") -> None:
         self.db = db
         self.data_dir = data_dir
+        self.render = render
         self._live: dict[str, LiveTraining] = {}
         self._turns: dict[str, int] = {}
         self._turn = 0
@@ -121,6 +137,15 @@ class LiveSessions:
         if time.monotonic() - training.checkpointed >= CHECKPOINT_S:
             run.save_live(job.round)
             training.checkpointed = time.monotonic()
+        self._stage(job, training)
+
+    def _stage(self, job: Job, training: LiveTraining) -> None:
+        """Prepare the next round's offer ahead once the round trained `STAGE_AFTER_S`."""
+        last = job.round + 1 >= job.settings.rounds
+        if training.staged or last or time.monotonic() - training.started < STAGE_AFTER_S:
+            return
+        stage_next(job, training.run, self.data_dir, self.render(job.settings.render_workers))
+        training.staged = True
 
     def _point(self, training: LiveTraining, *, evaluate: bool) -> None:
         """Store a point of the learning curve: the steps and last fit now, and the greedy
@@ -182,6 +207,8 @@ class LiveSessions:
         streams = round_streams(run.cfg.loop.seed, job.round)
         now = time.monotonic()
         live = LiveRound(run, offer, streams, now)
+        sampled = sampled_at(self.data_dir / pool_dir)
+        pool_steps = curve.pool_steps(run) if sampled is None else sampled
         live.update(keyed, now, final=True)
         log.info(
             "session %s: round %d trains continuously%s",
@@ -189,7 +216,7 @@ class LiveSessions:
             job.round,
             f" (resumed at {run.agent.num_timesteps:,} PPO steps)" if resumed else "",
         )
-        return LiveTraining(job.session_id, job.round, run, live, now, curve.pool_steps(run))
+        return LiveTraining(job.session_id, job.round, run, live, now, now, pool_steps=pool_steps)
 
     def _open_jobs(self) -> list[Job]:
         """The open rounds of continuous sessions, as jobs."""

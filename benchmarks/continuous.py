@@ -1,0 +1,137 @@
+"""Benchmark: continuous training in the app (issue 24), against PPO's one-core throughput.
+
+Starts a real server (`groupwise serve`: uvicorn, SQLite, the training worker process) with
+one session of `--env` whose settings say ``training: "continuous"``, and plays a person:
+one comparison every `--pace` seconds for `--minutes` minutes. Meanwhile it reads the
+worker's live checkpoint (``checkpoints/live/state.json``: PPO steps, written every 30 s) to
+measure PPO steps per minute of session time, and times each judgement's answer. Then it
+ends the round and times the wait until the next round is open. It measures PPO's
+single-core throughput the same way as `ppo_throughput` (CPU time, learned reward) and
+prints a Markdown table.
+
+    python -m benchmarks continuous [--env Hopper] [--minutes 3] [--pace 5]
+"""
+
+import argparse
+import json
+import os
+import statistics
+import sys
+import tempfile
+import threading
+import time
+import uuid
+from collections.abc import Sequence
+from pathlib import Path
+
+import httpx
+import numpy as np
+import torch
+
+from benchmarks.ppo_throughput import steps_per_second
+from benchmarks.submit_latency import start_server, wait_for
+
+SETTINGS = {
+    "pool_size": 100,
+    "round_seconds": 0,
+    "comparisons_per_round": 0,
+    "rounds": 3,
+    "frame_size": 96,
+    "training": "continuous",
+}
+
+
+def _live_steps(data: Path, session: str) -> int | None:
+    state = data / "sessions" / session / "checkpoints" / "live" / "state.json"
+    try:
+        return int(json.loads(state.read_text())["env_steps"])
+    except (OSError, ValueError, KeyError):
+        return None
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
+    parser.add_argument("--env", default="Hopper")
+    parser.add_argument("--minutes", type=float, default=3.0)
+    parser.add_argument("--pace", type=float, default=5.0, help="seconds per comparison")
+    args = parser.parse_args([] if argv is None else list(argv))
+    rng = np.random.default_rng(0)
+    latencies: list[float] = []
+    samples: list[tuple[float, int]] = []
+    with tempfile.TemporaryDirectory() as tmp:
+        data = Path(tmp) / "data"
+        process, url, first = start_server(data, args.env)
+        try:
+            with httpx.Client(base_url=url, timeout=60) as http:
+                wait_for(http, first, "ready")  # the server is up (its CLI session ready)
+                session = http.post(
+                    "/api/sessions", json={"env": args.env, "settings": SETTINGS}
+                ).json()["id"]
+                wait_for(http, session, "ready")
+                pool = SETTINGS["pool_size"]
+                done = threading.Event()
+
+                def watch() -> None:
+                    while not done.wait(1.0):
+                        steps = _live_steps(data, session)
+                        if steps is not None and (not samples or samples[-1][1] != steps):
+                            samples.append((time.monotonic(), steps))
+
+                watcher = threading.Thread(target=watch, daemon=True)
+                watcher.start()
+                end = time.monotonic() + 60 * args.minutes
+                while time.monotonic() < end:
+                    a, b, c = (f"b{i}" for i in rng.choice(pool, size=3, replace=False))
+                    body = {
+                        "client_id": str(uuid.uuid4()),
+                        "round": 0,
+                        "left": [a, b],
+                        "right": [c],
+                        "label": "left",
+                        "source": "explored",
+                    }
+                    tick = time.perf_counter()
+                    answer = http.post(f"/api/sessions/{session}/judgements", json=body)
+                    latencies.append(time.perf_counter() - tick)
+                    answer.raise_for_status()
+                    time.sleep(args.pace)
+                done.set()
+                watcher.join()
+                tick = time.perf_counter()
+                http.post(f"/api/sessions/{session}/end-round").raise_for_status()
+                deadline = time.monotonic() + 600
+                while time.monotonic() < deadline:
+                    state = http.get(f"/api/sessions/{session}").json()
+                    if state["phase"] == "ready" and state["round"] == 1:
+                        break
+                    time.sleep(0.1)
+                wait_s = time.perf_counter() - tick
+        finally:
+            process.terminate()
+            process.wait(timeout=30)
+    torch.set_num_threads(1)
+    single = steps_per_second(args.env, learned=True)
+    if len(samples) >= 2:
+        (t0, s0), (t1, s1) = samples[0], samples[-1]
+        per_minute = (s1 - s0) / (t1 - t0) * 60
+    else:
+        per_minute = float("nan")
+    print(
+        f"{args.env}, one continuous session, a comparison every {args.pace:g} s for "
+        f"{args.minutes:g} min, {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}\n"
+    )
+    print("| measure | value |")
+    print("|---|---:|")
+    print(f"| PPO steps per minute of session time (live checkpoints) | {per_minute:,.0f} |")
+    print(f"| PPO one core, learned reward (steps per minute of CPU time) | {single * 60:,.0f} |")
+    print(f"| ratio | {per_minute / (single * 60):.2f} |")
+    p50, p99 = np.percentile(latencies, [50, 99]) * 1000
+    print(f"| judgement answer, median / p99 (ms, n={len(latencies)}) | {p50:.0f} / {p99:.0f} |")
+    print(f"| End round → next round open (s) | {wait_s:.1f} |")
+    print(
+        f"\n{len(samples)} live checkpoints read; {statistics.mean(latencies) * 1000:.0f} ms mean"
+    )
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
