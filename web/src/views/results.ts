@@ -81,6 +81,8 @@ export function renderResults(element: HTMLElement, data: ResultsData, handlers:
   }
   view.exportLink.href = data.exportUrl;
   view.learning.hidden = !data.training.some((p) => p.true_return !== null);
+  // a target env's return is the sum of its per-step scores (agent.measure says so)
+  text(view.learning.querySelector(".learning-title")!, `${capitalise(agent.measure)} over the session`);
   if (!view.learning.hidden && view.learned !== data.training) {
     view.learned = data.training;
     drawCurve(view.learningChart, data.training, LEARNING_CHART);
@@ -225,7 +227,7 @@ function build(element: HTMLElement): View {
   const learning = h(
     "section",
     { class: "results-chart results-learning", hidden: true },
-    h("h3", { class: "chart-title" }, "True return over the session"),
+    h("h3", { class: "chart-title learning-title" }, "True return over the session"),
     learningChart,
     h("p", { class: "chart-note muted" }, "The greedy policy, measured while it trained (minutes:seconds since the first point)."),
   );
