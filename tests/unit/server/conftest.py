@@ -4,6 +4,7 @@
 session, so the round's endpoints have a real pool, tree, clips and suggestions to serve.
 """
 
+import uuid
 import warnings
 from pathlib import Path
 
@@ -51,6 +52,23 @@ def new_session(client: TestClient, mode: str = "groupwise", **settings: object)
     response = client.post(
         "/api/sessions", json={"env": "GridWorld", "mode": mode, "settings": {**TINY, **settings}}
     )
+    assert response.status_code == 201, response.text
+    return response.json()
+
+
+def post_judgement(
+    client: TestClient, sid: str, left: list[str], right: list[str], round_index: int = 0
+) -> dict:
+    """A person's answer "left is better" to a comparison they built in the chart."""
+    body = {
+        "client_id": str(uuid.uuid4()),
+        "round": round_index,
+        "left": left,
+        "right": right,
+        "label": "left",
+        "source": "explored",
+    }
+    response = client.post(f"/api/sessions/{sid}/judgements", json=body)
     assert response.status_code == 201, response.text
     return response.json()
 

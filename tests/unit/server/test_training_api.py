@@ -2,29 +2,16 @@
 of a continuous round (driven in-process, `Worker.train_live`) and of trained rounds."""
 
 import json
-import uuid
 
 import anyio
 import pytest
-from tests.unit.server.conftest import context_of, new_session, run_worker_once
+from tests.unit.server.conftest import context_of, new_session, post_judgement, run_worker_once
 
 from groupwise.server.events import session_events
 from groupwise.worker import curve
 from groupwise.worker.process import Worker
 
 ROLLOUT = 32  # TINY's PPO: 1 env × 32 steps
-
-
-def _judge(client, sid, left, right, round_index=0):
-    body = {
-        "client_id": str(uuid.uuid4()),
-        "round": round_index,
-        "left": left,
-        "right": right,
-        "label": "left",
-        "source": "explored",
-    }
-    assert client.post(f"/api/sessions/{sid}/judgements", json=body).status_code == 201
 
 
 def _events(client, sid, last_event_id, count):
@@ -55,7 +42,7 @@ def test_a_continuous_round_shows_its_steps_fits_and_true_returns(client, monkey
     worker = Worker(context_of(client).db, context_of(client).data_dir, poll_s=0.1)
     worker.train_live()  # no pairs yet: no PPO, no point
     assert client.get(f"/api/sessions/{sid}/training").json()["points"] == []
-    _judge(client, sid, ["b0", "b1"], ["b2"])
+    post_judgement(client, sid, ["b0", "b1"], ["b2"])
     worker.train_live()
     worker.train_live()
     curve_ = client.get(f"/api/sessions/{sid}/training").json()
@@ -90,7 +77,7 @@ def test_a_continuous_round_shows_its_steps_fits_and_true_returns(client, monkey
 def test_every_trained_round_adds_a_point_from_its_record(client, training):
     sid = new_session(client, training=training)["id"]
     run_worker_once(client)
-    _judge(client, sid, ["b0"], ["b1"])
+    post_judgement(client, sid, ["b0"], ["b1"])
     assert client.post(f"/api/sessions/{sid}/end-round").status_code == 200
     run_worker_once(client)  # round 0 trained
     points = client.get(f"/api/sessions/{sid}/training").json()["points"]

@@ -3,29 +3,14 @@ PPO trains while the round is open, the reward refits on the stored judgements, 
 ends on the run that trained, and a restarted worker resumes from the live checkpoint."""
 
 import json
-import uuid
 
 import pytest
-from tests.unit.server.conftest import context_of, new_session, run_worker_once
+from tests.unit.server.conftest import context_of, new_session, post_judgement, run_worker_once
 
 from groupwise.worker import live as live_module
 from groupwise.worker.process import Worker
 
 ROLLOUT = 32  # TINY's PPO: 1 env × 32 steps
-
-
-def _judge(client, sid, left, right, round_index=0):
-    body = {
-        "client_id": str(uuid.uuid4()),
-        "round": round_index,
-        "left": left,
-        "right": right,
-        "label": "left",
-        "source": "explored",
-    }
-    response = client.post(f"/api/sessions/{sid}/judgements", json=body)
-    assert response.status_code == 201, response.text
-    return response.json()
 
 
 def _worker(client) -> Worker:
@@ -40,12 +25,12 @@ def test_the_worker_trains_while_the_round_is_open_and_ends_it_on_that_run(clien
     assert worker.train_live()  # an open continuous round: a slice, but no pairs yet …
     training = worker.live._live[sid]
     assert training.run.agent.num_timesteps == 0  # … so no PPO
-    _judge(client, sid, ["b0", "b1"], ["b2"])
+    post_judgement(client, sid, ["b0", "b1"], ["b2"])
     for _ in range(3):
         assert worker.train_live()
     assert len(training.run.dataset) == 2  # the first pairs were fitted at once
     assert training.run.agent.num_timesteps == 3 * ROLLOUT
-    _judge(client, sid, ["b3"], ["b4", "b5", "b6"])  # arrives between two slices …
+    post_judgement(client, sid, ["b3"], ["b4", "b5", "b6"])  # arrives between two slices …
     assert worker.train_live()
     assert training.run.agent.num_timesteps == 4 * ROLLOUT  # 3 new pairs: no refit yet
     assert client.post(f"/api/sessions/{sid}/end-round").json()["phase"] == "training"
@@ -64,12 +49,12 @@ def test_a_restarted_worker_resumes_the_round_from_its_live_checkpoint(client, m
     monkeypatch.setattr(live_module, "CHECKPOINT_S", 0.0)
     sid = new_session(client, training="continuous")["id"]
     run_worker_once(client)
-    _judge(client, sid, ["b0", "b1"], ["b2"])
+    post_judgement(client, sid, ["b0", "b1"], ["b2"])
     first = _worker(client)
     for _ in range(2):
         first.train_live()
     assert first.live._live[sid].run.agent.num_timesteps == 2 * ROLLOUT
-    _judge(client, sid, ["b7"], ["b8"])  # acknowledged, then the worker is killed
+    post_judgement(client, sid, ["b7"], ["b8"])  # acknowledged, then the worker is killed
     second = _worker(client)  # a new worker: nothing in memory
     second.train_live()
     resumed = second.live._live[sid]
@@ -81,5 +66,5 @@ def test_a_restarted_worker_resumes_the_round_from_its_live_checkpoint(client, m
 def test_a_rounds_session_is_left_alone_while_open(client, training):
     sid = new_session(client, training=training)["id"]
     run_worker_once(client)
-    _judge(client, sid, ["b0"], ["b1"])
+    post_judgement(client, sid, ["b0"], ["b1"])
     assert not _worker(client).train_live()

@@ -1,9 +1,7 @@
 """A continuous session's next round is prepared ahead while the person compares, so that
 "End round" opens it as soon as the round is committed (`worker.live`, `jobs.stage_next`)."""
 
-import uuid
-
-from tests.unit.server.conftest import context_of, new_session, run_worker_once
+from tests.unit.server.conftest import context_of, new_session, post_judgement, run_worker_once
 
 from groupwise.storage.sessions import round_directory
 from groupwise.worker import live as live_module
@@ -16,15 +14,7 @@ def test_end_round_opens_the_round_prepared_ahead(client, monkeypatch):
     monkeypatch.setattr(live_module, "STAGE_AFTER_S", 0.0)
     sid = new_session(client, training="continuous")["id"]
     run_worker_once(client)  # round 0 ready
-    body = {
-        "client_id": str(uuid.uuid4()),
-        "round": 0,
-        "left": ["b0", "b1"],
-        "right": ["b2"],
-        "label": "left",
-        "source": "explored",
-    }
-    assert client.post(f"/api/sessions/{sid}/judgements", json=body).status_code == 201
+    post_judgement(client, sid, ["b0", "b1"], ["b2"])
     context = context_of(client)
     worker = Worker(context.db, context.data_dir, poll_s=0.1)
     assert worker.train_live()  # one slice: the first fit, a rollout, the next round staged
