@@ -18,6 +18,8 @@ from groupwise.config import (
     TrainingConfig,
 )
 from groupwise.preferences.dataset import PreferenceDataset
+from groupwise.rl.learned_reward import LearnedRewardVecEnv
+from groupwise.run import continuous
 from groupwise.run.continuous import GROUP_PAIRS_PER_COMPARISON, paper_pace
 from groupwise.run.headless import run_session
 from groupwise.run.progress import RunCallback
@@ -62,7 +64,7 @@ def _comparable(records: list[RoundRecord]) -> list[dict]:
     ]
 
 
-def test_ppo_runs_while_the_teacher_answers_and_refits_fall_between_rollouts(tmp_path):
+def test_ppo_runs_while_the_teacher_answers_and_the_reward_changes_between_rollouts(tmp_path):
     fits = _Fits()
     original = Run.create
 
@@ -70,8 +72,23 @@ def test_ppo_runs_while_the_teacher_answers_and_refits_fall_between_rollouts(tmp
         fits.run = original(*args, **kwargs)
         return fits.run
 
+    # each PPO env step notes which fit of the reward model gave its reward
+    fitted, seen = [0], []
+    real_fit, real_step = continuous.fit, LearnedRewardVecEnv.step_wait
+
+    def counted_fit(*args, **kwargs):
+        report = real_fit(*args, **kwargs)
+        fitted[0] += 1
+        return report
+
+    def noted_step(self):
+        seen.append(fitted[0])
+        return real_step(self)
+
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(Run, "create", create)
+        patch.setattr(continuous, "fit", counted_fit)
+        patch.setattr(LearnedRewardVecEnv, "step_wait", noted_step)
         records = _run(tmp_path, callback=fits)
     assert [r.round for r in records] == [0, 1]
     # the teacher's clock: every query of the round took PACE seconds
@@ -85,9 +102,13 @@ def test_ppo_runs_while_the_teacher_answers_and_refits_fall_between_rollouts(tmp
         trained = record.env_steps - steps_before
         assert trained % ROLLOUT == 0 and owed - ROLLOUT < trained <= owed
         steps_before = record.env_steps
-    # several fits a round, each between two rollouts, each on more pairs than the last
+    # several fits a round, each on more pairs than the last, and a rollout's rewards all
+    # from one fit: the reward changes only between rollouts (64 env steps of 2 envs)
     assert len(fits.fits) > 2 * len(records)
-    assert all(steps % ROLLOUT == 0 for steps, _ in fits.fits)
+    rollouts = [seen[i : i + 64] for i in range(0, len(seen), 64)]
+    assert len(seen) == records[-1].env_steps // 2
+    assert all(len(set(rollout)) == 1 for rollout in rollouts)
+    assert len({rollout[0] for rollout in rollouts}) > 2  # … and it did change between them
     sizes = [size for _, size in fits.fits]
     assert sizes == sorted(sizes) and sizes[0] > 0
     assert sizes[-1] == records[-1].pairs_total

@@ -47,8 +47,9 @@ def continuous_round(
     """One round of continuous training with a timed simulated teacher (module docstring).
 
     Raises:
-        ValueError: the teacher has no pace, `pair_cap` is set (a cap needs the whole
-            round's pairs), or the agent is not groupwise's own PPO.
+        ValueError: the teacher has no pace, or `pair_cap` is set (a cap needs the whole
+            round's pairs).
+        TypeError: the agent is not groupwise's own PPO (slices need its rollout size).
     """
     cfg, callback = run.cfg, as_callback(callback)
     pace = cfg.teacher.pace_s
@@ -157,21 +158,16 @@ class LiveRound:
     def _refit(self, keyed: Sequence[tuple[int, Judgement]]) -> None:
         run, loop, round_index = self.run, self.run.cfg.loop, self.offer.round
         tick = time.perf_counter()
-        keys = [key for key, _ in keyed]
-        judgements = [judgement for _, judgement in keyed]
-        self.fitted = {
-            key: len(derive_pairs([judgement], loop, round_index, [key]))
-            for key, judgement in keyed
-        }
+        derived = {key: derive_pairs([j], loop, round_index, [key]) for key, j in keyed}
+        self.fitted = {key: len(pairs) for key, pairs in derived.items()}
         dataset = dataclasses.replace(self.base)
-        dataset.add(
-            self.offer.pool.fragments,
-            derive_pairs(judgements, loop, round_index, keys),
-            round_index,
-        )
+        pairs = [pair for key, _ in keyed for pair in derived[key]]
+        dataset.add(self.offer.pool.fragments, pairs, round_index)
         run.dataset = dataset
         self.callback.on_phase("reward", 0, len(dataset))
-        multiplier = run.cfg.reward.initial_epoch_multiplier if len(self.base) == 0 else 1.0
+        # the run's first fit gets `initial_epoch_multiplier` × the epochs, as round 0's does
+        first = len(self.base) == 0 and self.report is None
+        multiplier = run.cfg.reward.initial_epoch_multiplier if first else 1.0
         epochs = max(1, round(run.cfg.reward.epochs * multiplier))
         if len(dataset):
             self.report = fit(run.ensemble, dataset, run.cfg.reward, self.streams.fit, epochs)

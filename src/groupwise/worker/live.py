@@ -97,9 +97,9 @@ class LiveSessions:
     def step(self) -> bool:
         """One slice of the open continuous session whose turn it is; False when none is
         open (the worker then sleeps)."""
-        jobs = [job for job in self._open_jobs() if self._broken.get(job.session_id) != job.round]
-        with self.db.read() as s:  # a round just ended keeps its run for the training job
-            ending = {row.id for row in sessions_in(s, (TRAINING,))}
+        open_jobs, ending = self._continuous_sessions()
+        jobs = [job for job in open_jobs if self._broken.get(job.session_id) != job.round]
+        # a round just ended keeps its run for the training job
         for stale in set(self._live) - {job.session_id for job in jobs} - ending:
             self._live.pop(stale).run.close()
         if not jobs:
@@ -218,21 +218,28 @@ class LiveSessions:
         )
         return LiveTraining(job.session_id, job.round, run, live, now, now, pool_steps=pool_steps)
 
-    def _open_jobs(self) -> list[Job]:
-        """The open rounds of continuous sessions, as jobs."""
+    def _continuous_sessions(self) -> tuple[list[Job], set[str]]:
+        """The open rounds of continuous sessions, as jobs, and the sessions whose round
+        just ended (training): one read of the sessions."""
         with self.db.read() as s:
-            rows = [row for row in sessions_in(s, (READY,))]
-            return [
+            rows = sessions_in(s, (READY, TRAINING))
+            settings = {row.id: settings_of(row) for row in rows}
+            continuous = [
+                row
+                for row in rows
+                if settings[row.id].training == CONTINUOUS and settings[row.id].driver == "app"
+            ]
+            jobs = [
                 Job(
                     session_id=row.id,
                     env=row.env,
                     mode=row.mode,
                     phase=row.phase,
                     round=row.round,
-                    settings=settings,
+                    settings=settings[row.id],
                     elapsed_s=0.0,
                 )
-                for row in rows
-                if (settings := settings_of(row)).training == CONTINUOUS
-                and settings.driver == "app"
+                for row in continuous
+                if row.phase == READY
             ]
+            return jobs, {row.id for row in continuous if row.phase == TRAINING}
