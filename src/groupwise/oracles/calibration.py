@@ -19,7 +19,7 @@ B-Pref imperfections) keeps its own decision rule.
 
 import math
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.special import ndtr
@@ -78,13 +78,21 @@ class CalibratedTeacher:
 
     make: Callable[[float], Teacher]
     label_error: float = PEOPLE_LABEL_ERROR
+    _last: list[tuple[BehaviourPool, float]] = field(
+        default_factory=list, init=False, repr=False, compare=False
+    )
+    """The last pool calibrated and its σ: a teacher asked one query at a time (continuous
+    training) calibrates each pool once."""
 
     def sigma(self, pool: BehaviourPool) -> float:
         """The per-step noise σ for `pool`: the calibrated sd over the behaviour length."""
         if len(pool) == 0:
             return 0.0
-        sd = calibrated_noise_sd(pool.true_returns, self.label_error)
-        return sd / pool.fragments[0].length
+        if self._last and self._last[0][0] is pool:
+            return self._last[0][1]
+        sigma = calibrated_noise_sd(pool.true_returns, self.label_error) / pool.fragments[0].length
+        self._last[:] = [(pool, sigma)]
+        return sigma
 
     def answer(
         self, pool: BehaviourPool, queries: Sequence[Query], rng: np.random.Generator

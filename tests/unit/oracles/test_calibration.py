@@ -8,7 +8,7 @@ import pytest
 from tests.unit.oracles.conftest import build_pool
 
 from groupwise.config import RunConfig, TeacherConfig
-from groupwise.oracles import ORACLES
+from groupwise.oracles import ORACLES, calibration
 from groupwise.oracles.calibration import (
     PEOPLE_LABEL_ERROR,
     CalibratedTeacher,
@@ -75,3 +75,21 @@ def test_every_decision_maker_can_be_calibrated():
         assert isinstance(feedback.teacher, CalibratedTeacher), name
         first = feedback.gather(pool, 8, np.random.default_rng(2))
         assert first == feedback.gather(pool, 8, np.random.default_rng(2)), name
+
+
+def test_a_pool_is_calibrated_once_for_queries_asked_one_at_a_time(monkeypatch):
+    calls = []
+    real = calibration.calibrated_noise_sd
+
+    def counted(returns, label_error):
+        calls.append(len(returns))
+        return real(returns, label_error)
+
+    monkeypatch.setattr(calibration, "calibrated_noise_sd", counted)
+    teacher = CalibratedTeacher(lambda sigma: PairwiseTeacher(sigma=sigma), PEOPLE_LABEL_ERROR)
+    pool, other = build_pool(RETURNS.tolist()), build_pool(RETURNS[:30].tolist())
+    rng = np.random.default_rng(0)
+    for _ in range(3):
+        teacher.answer(pool, [Query((0,), (1,))], rng)
+    teacher.answer(other, [Query((0,), (1,))], rng)
+    assert calls == [60, 30]
