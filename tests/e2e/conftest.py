@@ -275,6 +275,24 @@ class UI:
         for key in reversed(modifiers):
             self.page.keyboard.up(key)
 
+    def expect_group(self, group: str, ids: list[str], ordered: bool = False) -> None:
+        """Waits until a group's clips are `ids` (the page renders on the next animation frame,
+        so a count that the old groups already had proves nothing)."""
+        want = list(ids) if ordered else sorted(ids)
+        try:
+            self.page.wait_for_function(
+                """([sel, want, ordered]) => {
+                    const ids = [...document.querySelectorAll(sel)].map((e) => e.dataset.id);
+                    if (!ordered) ids.sort();
+                    return JSON.stringify(ids) === JSON.stringify(want);
+                }""",
+                arg=[f".group-{group} .clip", want, ordered],
+                timeout=5_000,
+            )
+        except Exception as err:
+            got = self.clip_ids(group)
+            raise AssertionError(f"group {group} is {got}, expected {ids}") from err
+
     def clip_ids(self, group: str) -> list[str]:
         """Behaviour ids of a group's clips, in order."""
         return list(
