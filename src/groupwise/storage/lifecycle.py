@@ -9,6 +9,7 @@ session's `revision` when it changes the session.
 
 from datetime import datetime
 
+from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
 
 from groupwise.storage.errors import ConflictError
@@ -103,10 +104,64 @@ def finish_training(
     session = get_session(s, session_id, lock=True)
     if session.phase != TRAINING or session.round != round_index:
         return False
-    current = get_round(s, session.id, session.round)
-    current.stats = dict(stats)
-    s.add(CheckpointRow(round_id=current.id, path=checkpoint, created_at=now))
-    round_point(s, session.id, round_index, current.stats, now)
+    record_training(s, session_id, round_index, checkpoint, stats, now)
+    _advance(s, session, now)
+    return True
+
+
+def advance_before_commit(s: DbSession, session_id: str, round_index: int) -> bool:
+    """Queue round `round_index + 1` before round `round_index`'s training is recorded
+    (continuous training with the next round prepared ahead: the person compares again
+    while the worker commits the round, `record_training`). False (nothing written) when
+    the session is no longer training that round or it was the last round."""
+    session = get_session(s, session_id, lock=True)
+    if session.phase != TRAINING or session.round != round_index:
+        return False
+    if round_index + 1 >= int(session.settings.get("rounds", 1)):
+        return False
+    _advance(s, session, utcnow())
+    return True
+
+
+def record_training(
+    s: DbSession,
+    session_id: str,
+    round_index: int,
+    checkpoint: str,
+    stats: dict[str, object],
+    now: datetime | None = None,
+) -> None:
+    """Store what the training after round `round_index` reported and the checkpoint it
+    wrote (a directory relative to the data directory)."""
+    now = now or utcnow()
+    row = get_round(s, session_id, round_index)
+    row.stats = dict(stats)
+    s.add(CheckpointRow(round_id=row.id, path=checkpoint, created_at=now))
+    round_point(s, session_id, round_index, row.stats, now)
+
+
+def uncommitted_round(s: DbSession, session_id: str) -> int | None:
+    """A feedback round before the current one whose training is not recorded yet
+    (`advance_before_commit` and the worker stopped before `record_training`), or None."""
+    session = get_session(s, session_id)
+    rows = s.scalars(
+        select(RoundRow)
+        .where(
+            RoundRow.session_id == session_id,
+            RoundRow.index < session.round,
+            RoundRow.phase == ROUND_CLOSED,
+            RoundRow.frozen_steps.is_(None),
+            RoundRow.pool_dir.is_not(None),
+        )
+        .order_by(RoundRow.index)
+    )
+    # stats in Python: a JSON column may hold JSON null rather than SQL NULL
+    return next((row.index for row in rows if row.stats is None), None)
+
+
+def _advance(s: DbSession, session: SessionRow, now: datetime) -> None:
+    """The round's training is done (or, continuous, under way): queue the next round, or
+    finish."""
     rounds = int(session.settings.get("rounds", 1))
     if session.round + 1 < rounds:
         session.round += 1
@@ -121,7 +176,6 @@ def finish_training(
     session.failed_phase = None
     session.error = None
     touch(session, now)
-    return True
 
 
 def start_final(

@@ -34,12 +34,14 @@ from groupwise.pool.publish import PublishConfig, publish_pool
 from groupwise.query.strategies import Query, QueryStrategy
 from groupwise.run.agent_package import SETTINGS_FILE
 from groupwise.run.checkpoint import checkpoint_dir
+from groupwise.run.progress import RunCallback
+from groupwise.run.records import RoundRecord
 from groupwise.run.round import Offer, begin_round, end_round
 from groupwise.run.run import Run
 from groupwise.storage import Database, SessionSettings
 from groupwise.storage.judgements import round_judgements
-from groupwise.storage.lifecycle import finish_training
-from groupwise.storage.phases import PREPARING, WORK_PHASES
+from groupwise.storage.lifecycle import advance_before_commit, finish_training, record_training
+from groupwise.storage.phases import WORK_PHASES
 from groupwise.storage.rounds import PreparedRound, store_prepared_round
 from groupwise.storage.sessions import (
     get_round,
@@ -241,11 +243,65 @@ def train(
     progress: JobProgress,
     live: "LiveTraining | None" = None,
 ) -> None:
-    """End round `job.round` on its stored judgements (module docstring). With `live` (a
-    continuous session's round, `worker.live`) the round's run is the one that trained
-    while the person compared, and the round adds no PPO steps of its own."""
+    """End round `job.round` on its stored judgements and queue the next round or the final
+    phase (module docstring). With `live` (a continuous session's round, `worker.live`) the
+    round's run is the one that trained while the person compared, the round adds no PPO
+    steps of its own, and a next round prepared ahead (`stage_next`) opens *before* the
+    round is committed: the person compares again while the worker fits, evaluates and
+    checkpoints (a worker killed meanwhile commits it when it resumes: `worker.live`)."""
+    r = job.round
+    opened = live is not None and open_staged(job, db, data_dir)
+    record = commit_round(job, db, data_dir, progress, live)
+    checkpoint = checkpoint_of(job.session_id, r)
+    with db.write() as s:
+        if opened:
+            record_training(s, job.session_id, r, checkpoint, record.stats())
+        elif not finish_training(s, job.session_id, r, checkpoint, record.stats()):
+            log.warning("session %s moved on while round %d trained", job.session_id, r)
+    log.info(
+        "session %s: round %d trained on %d pairs (reward acc %.2f, true return %.1f)",
+        job.session_id,
+        r,
+        record.pairs_total,
+        record.reward_accuracy,
+        record.true_return_mean,
+    )
+
+
+def checkpoint_of(session_id: str, round_index: int) -> str:
+    """The checkpoint directory of a session's round, relative to the data directory."""
+    return str(checkpoint_dir(Path(session_directory(session_id)), round_index))
+
+
+def open_staged(job: Job, db: Database, data_dir: Path) -> bool:
+    """Open round `job.round + 1` from the offer prepared ahead (`stage_next`), before round
+    `job.round` is committed; False when none was prepared (or the session moved on)."""
+    directory = data_dir / round_directory(job.session_id, job.round + 1)
+    staged = read_staged(directory)
+    if staged is None:
+        return False
+    with db.write() as s:
+        opened = advance_before_commit(s, job.session_id, job.round) and (
+            store_prepared_round(s, job.session_id, job.round + 1, staged)
+        )
+    drop_staged(directory)
+    if opened:
+        log.info("session %s: round %d opened (prepared ahead)", job.session_id, job.round + 1)
+    return opened
+
+
+def commit_round(
+    job: Job,
+    db: Database,
+    data_dir: Path,
+    progress: RunCallback | None,
+    live: "LiveTraining | None" = None,
+) -> RoundRecord:
+    """`end_round` of round `job.round` on its stored judgements: on `live`'s run (no PPO
+    steps), else on the run as the round before left it (`ppo_steps_per_round`)."""
     settings, r = job.settings, job.round
-    progress.on_phase("load", 0, 1)
+    if progress is not None:
+        progress.on_phase("load", 0, 1)
     with db.read() as s:
         pool_dir = get_round(s, job.session_id, r).pool_dir
         keyed = round_judgements(s, job.session_id, r)
@@ -269,23 +325,7 @@ def train(
             callback=progress,
         )
         run.drop_live()
-    checkpoint = checkpoint_dir(Path(session_directory(job.session_id)), r)
-    with db.write() as s:
-        if not finish_training(s, job.session_id, r, str(checkpoint), record.stats()):
-            log.warning("session %s moved on while round %d trained", job.session_id, r)
-        elif (staged := read_staged(data_dir / round_directory(job.session_id, r + 1))) and (
-            get_session(s, job.session_id).phase == PREPARING
-        ):  # prepared ahead while round r was open: the next round opens now
-            store_prepared_round(s, job.session_id, r + 1, staged)
-            drop_staged(data_dir / round_directory(job.session_id, r + 1))
-    log.info(
-        "session %s: round %d trained on %d pairs (reward acc %.2f, true return %.1f)",
-        job.session_id,
-        r,
-        record.pairs_total,
-        record.reward_accuracy,
-        record.true_return_mean,
-    )
+    return record
 
 
 def published_offer(directory: Path, round_index: int, budget: int, mode: str) -> Offer:

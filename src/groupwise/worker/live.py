@@ -23,7 +23,9 @@ was then (`jobs.stage_next`), so it opens as soon as the round is committed; a r
 sooner has its next pool sampled then, as in rounds mode.
 """
 
+import dataclasses
 import logging
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -35,11 +37,20 @@ from groupwise.run.run import Run
 from groupwise.run.streams import round_streams
 from groupwise.storage import Database
 from groupwise.storage.judgements import round_judgements
+from groupwise.storage.lifecycle import record_training, uncommitted_round
 from groupwise.storage.phases import READY, TRAINING
 from groupwise.storage.sessions import get_round, sessions_in, settings_of
 from groupwise.storage.training import add_point
 from groupwise.worker import curve
-from groupwise.worker.jobs import Job, open_run, published_offer, sampled_at, stage_next
+from groupwise.worker.jobs import (
+    Job,
+    checkpoint_of,
+    commit_round,
+    open_run,
+    published_offer,
+    sampled_at,
+    stage_next,
+)
 
 if TYPE_CHECKING:
     from groupwise.clips.render import RenderPool
@@ -194,7 +205,31 @@ class LiveSessions:
 
     def _resume(self, job: Job) -> LiveTraining:
         """The round as the last checkpoint (the round before, or this round's live one)
-        left it, refitted on the round's judgements so far."""
+        left it, refitted on the round's judgements so far; a round before it that was not
+        committed (`jobs.train` opened the next one first and the worker was killed) is
+        committed first."""
+        while True:
+            with self.db.read() as s:
+                pending = uncommitted_round(s, job.session_id)
+            if pending is None:
+                return self._resume_round(job)
+            log.warning(
+                "session %s: round %d was not committed; committing it", job.session_id, pending
+            )
+            earlier = dataclasses.replace(job, round=pending, phase=TRAINING, elapsed_s=math.nan)
+            record = commit_round(
+                earlier, self.db, self.data_dir, None, self._resume_round(earlier)
+            )
+            with self.db.write() as s:
+                record_training(
+                    s,
+                    job.session_id,
+                    pending,
+                    checkpoint_of(job.session_id, pending),
+                    record.stats(),
+                )
+
+    def _resume_round(self, job: Job) -> LiveTraining:
         run = open_run(job, self.data_dir, job.round - 1)
         resumed = run.restore_live(job.round)
         with self.db.read() as s:

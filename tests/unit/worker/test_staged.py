@@ -3,7 +3,8 @@
 
 from tests.unit.server.conftest import context_of, new_session, post_judgement, run_worker_once
 
-from groupwise.storage.sessions import round_directory
+from groupwise.storage.sessions import get_round, round_directory
+from groupwise.worker import jobs as jobs_module
 from groupwise.worker import live as live_module
 from groupwise.worker.jobs import sampled_at
 from groupwise.worker.offers import STAGED_FILE
@@ -32,3 +33,62 @@ def test_end_round_opens_the_round_prepared_ahead(client, monkeypatch):
     assert tree.status_code == 200 and tree.json()["round"] == 1
     assert tree.json()["tree"]["size"] == 16
     assert not worker.run_next()  # no preparing job was needed
+
+
+def _staged_session(client, monkeypatch) -> tuple[str, Worker]:
+    """A continuous session in round 0 with one judgement and round 1 prepared ahead."""
+    monkeypatch.setattr(live_module, "STAGE_AFTER_S", 0.0)
+    sid = new_session(client, training="continuous")["id"]
+    run_worker_once(client)
+    post_judgement(client, sid, ["b0", "b1"], ["b2"])
+    context = context_of(client)
+    worker = Worker(context.db, context.data_dir, poll_s=0.1)
+    assert worker.train_live()
+    return sid, worker
+
+
+def _round_stats(client, sid: str, round_index: int) -> dict | None:
+    with context_of(client).db.read() as s:
+        return get_round(s, sid, round_index).stats
+
+
+def test_the_round_prepared_ahead_opens_before_the_round_is_committed(client, monkeypatch):
+    sid, worker = _staged_session(client, monkeypatch)
+    seen = []
+    original = jobs_module.end_round
+
+    def end_round(*args, **kwargs):  # what the page sees while round 0 is fitted
+        state = client.get(f"/api/sessions/{sid}").json()
+        seen.append((state["phase"], state["round"], _round_stats(client, sid, 0)))
+        return original(*args, **kwargs)
+
+    monkeypatch.setattr(jobs_module, "end_round", end_round)
+    client.post(f"/api/sessions/{sid}/end-round")
+    assert worker.run_next()
+    assert seen == [("ready", 1, None)]
+    stats = _round_stats(client, sid, 0)
+    assert stats is not None and stats["pairs_total"] == 2  # max(m, n) pairs of 2 vs 1
+    state = client.get(f"/api/sessions/{sid}").json()
+    assert (state["phase"], state["round"]) == ("ready", 1)
+
+
+def test_a_worker_killed_between_opening_and_committing_commits_on_resume(
+    client, monkeypatch
+):
+    sid, worker = _staged_session(client, monkeypatch)
+    client.post(f"/api/sessions/{sid}/end-round")
+    context = context_of(client)
+    job = jobs_module.job_of(context.db, sid)
+    assert job is not None and jobs_module.open_staged(job, context.db, context.data_dir)
+    worker.live.close()  # killed here: round 1 open, round 0 not committed
+    assert _round_stats(client, sid, 0) is None
+
+    resumed = Worker(context.db, context.data_dir, poll_s=0.1)
+    post_judgement(client, sid, ["b3"], ["b4", "b5"], round_index=1)
+    assert resumed.train_live()  # commits round 0 first, then trains round 1
+    stats = _round_stats(client, sid, 0)
+    assert stats is not None and stats["round"] == 0
+    checkpoint = context.data_dir / jobs_module.checkpoint_of(sid, 0)
+    assert (checkpoint / "state.json").is_file()
+    training = resumed.live._live[sid]
+    assert training.round == 1 and len(training.run.dataset) > stats["pairs_total"]
