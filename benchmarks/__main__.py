@@ -3,7 +3,15 @@
 import importlib
 import sys
 
-BENCHMARKS = ["ppo_throughput", "render_fps", "dtw", "pool_prep", "submit_latency", "web_render"]
+BENCHMARKS = [
+    "ppo_throughput",
+    "render_fps",
+    "dtw",
+    "pool_prep",
+    "submit_latency",
+    "web_render",
+    "suggestions",
+]
 ON_DEMAND = ["peer", "faults", "fuzz", "continuous"]
 """Run only when named: `peer` (groupwise against imitation) takes about 45 minutes,
 `faults` (100 kills of server or worker under load, then `fuzz`) about 25, `fuzz`

@@ -36,6 +36,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import sparse
 
 from groupwise.types import FloatArray, IntArray
 
@@ -121,6 +122,43 @@ def _membership(candidates: Sequence[GroupCandidate], n: int) -> FloatArray:
     return m
 
 
+def group_inter(returns: FloatArray, membership: FloatArray) -> FloatArray:
+    """(G, G) inter(A, B) = mean over a ∈ A, b ∈ B of Var_k[R_k(a) − R_k(b)].
+
+    With c_f = R(f) − mean_k R_k(f) (centred over members), Var_k[R_k(a) − R_k(b)] =
+    (|c_a|² + |c_b|² − 2 c_a·c_b) / K, so the group means need only the (G, K) group means of
+    c and the (G,) group means of |c|² / K: O(G N K + G² K), where building the (N, N)
+    `pair_variance_matrix` first cost O(N² K) time and memory (issue 22: 0.3–0.5 s and
+    24 MB at N = 1,000). Equal to `membership @ pair_variance_matrix(returns) @
+    membership.T` up to rounding.
+    """
+    r = np.asarray(returns, dtype=np.float64)
+    k = r.shape[1]
+    centred = r - r.mean(axis=1, keepdims=True)
+    own = membership @ ((centred**2).sum(axis=1) / k)  # (G,)
+    mean_c = membership @ centred  # (G, K)
+    inter = own[:, None] + own[None, :] - (2.0 / k) * (mean_c @ mean_c.T)
+    return np.asarray(np.maximum(inter, 0.0))
+
+
+def _disjoint_pairs(candidates: Sequence[GroupCandidate], n: int) -> IntArray:
+    """(P, 2) rows i < j of the candidates that share no behaviour, in row-major order.
+
+    The overlaps are a sparse product of the (G, N) incidence matrix with itself: its cost
+    grows with the candidates that share behaviours, not with G² N.
+    """
+    g = len(candidates)
+    rows = np.concatenate([np.full(len(c.members), k) for k, c in enumerate(candidates)])
+    cols = np.concatenate([np.asarray(c.members) for c in candidates])
+    member = sparse.csr_array((np.ones(rows.size), (rows, cols)), shape=(g, n))
+    overlap = (member @ member.T).tocoo()
+    shared = np.zeros((g, g), dtype=bool)
+    shared[overlap.row, overlap.col] = True
+    i, j = np.triu_indices(g, k=1)
+    keep = ~shared[i, j]
+    return np.stack([i[keep], j[keep]], axis=1).astype(np.int64)
+
+
 def score_group_pairs(
     returns: FloatArray, intra: FloatArray, candidates: Sequence[GroupCandidate]
 ) -> GroupPairScores:
@@ -128,7 +166,9 @@ def score_group_pairs(
 
     returns: (N, K) predicted returns; intra: (N,) per-behaviour intra variance
     (`step_variance` or `return_variance`); candidates: G groups of pool indices.
-    Pairs sharing a behaviour are not scored. O(N² K + G² N).
+    Pairs sharing a behaviour are not scored. O(G N (K + G) + G² K) (`group_inter`): at
+    1,000 behaviours the G ≈ 100–300 tree candidates are scored in milliseconds
+    (`benchmarks/suggestions.py`).
     """
     r = np.asarray(returns, dtype=np.float64)
     v = np.asarray(intra, dtype=np.float64)
@@ -139,21 +179,18 @@ def score_group_pairs(
         empty = np.zeros(0)
         return GroupPairScores(np.zeros((0, 2), dtype=np.int64), empty, empty, empty, empty)
     membership = _membership(candidates, n)
-    inter_all = membership @ pair_variance_matrix(r) @ membership.T  # (G, G)
+    pairs = _disjoint_pairs(candidates, n)
+    i, j = pairs[:, 0], pairs[:, 1]
+    inter = group_inter(r, membership)[i, j]
     intra_group = membership @ v  # (G,)
-    overlap = (membership > 0).astype(np.int64) @ (membership > 0).T.astype(np.int64)
-    i, j = np.triu_indices(len(candidates), k=1)
-    disjoint = overlap[i, j] == 0
-    i, j = i[disjoint], j[disjoint]
     sizes = np.array([len(c.members) for c in candidates], dtype=np.float64)
-    inter = inter_all[i, j]
     intra_pair = np.maximum(intra_group[i], intra_group[j])
     penalty = 1.0 + np.abs(sizes[i] - sizes[j]) / (sizes[i] + sizes[j])
     score = _normalised(inter, floor=0.0, if_zero=0.0) / _normalised(
         intra_pair, floor=INTRA_FLOOR, if_zero=1.0
     )
     return GroupPairScores(
-        pairs=np.stack([i, j], axis=1).astype(np.int64),
+        pairs=pairs,
         inter=inter,
         intra=intra_pair,
         size_penalty=penalty,
@@ -183,25 +220,33 @@ def suggestion_order(
     if max_uses < 1:
         raise ValueError(f"max uses must be >= 1, got {max_uses}")
     order = np.argsort(-scores.score, kind="stable")
-    taken = np.zeros(len(scores), dtype=bool)
     chosen: list[int] = []
-    while len(chosen) < count:
-        uses: dict[int, int] = {}
-        before = len(chosen)
-        for row in order:
-            if len(chosen) >= count:
+    if len(scores) == 0 or count <= 0:
+        return np.asarray(chosen, dtype=np.int64)
+    g = int(scores.pairs.max()) + 1
+    while len(chosen) < count and order.size:
+        # one list: the best remaining pair whose candidates both have uses left is taken;
+        # the pairs before it can no longer be (uses only grow), so the scan resumes after
+        # it. Each step is one vectorised pass over the rest: O(taken · P) numpy work
+        # instead of a Python loop over every pair of every list (issue 22).
+        uses = np.zeros(g, dtype=np.int64)
+        a, b = scores.pairs[order, 0], scores.pairs[order, 1]
+        taken = np.zeros(order.size, dtype=bool)
+        start = 0
+        while len(chosen) < count and start < order.size:
+            free = (uses[a[start:]] < max_uses) & (uses[b[start:]] < max_uses)
+            hit = int(np.argmax(free))
+            if not free[hit]:
                 break
-            if taken[row]:
-                continue
-            a, b = (int(x) for x in scores.pairs[row])
-            if uses.get(a, 0) >= max_uses or uses.get(b, 0) >= max_uses:
-                continue
-            uses[a] = uses.get(a, 0) + 1
-            uses[b] = uses.get(b, 0) + 1
-            taken[row] = True
-            chosen.append(int(row))
-        if not refill or len(chosen) == before:
+            pos = start + hit
+            taken[pos] = True
+            chosen.append(int(order[pos]))
+            uses[a[pos]] += 1
+            uses[b[pos]] += 1
+            start = pos + 1
+        if not refill or not taken.any():
             break
+        order = order[~taken]
     return np.asarray(chosen, dtype=np.int64)
 
 
