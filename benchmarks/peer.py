@@ -7,8 +7,19 @@
 Same budget on both sides: 200 pairwise comparisons in 5 rounds (20 in round 0, then 45 a
 round), 20,480 PPO steps after each round (102,400 in all), identical PPO settings, a
 3-member bagged 64-64 reward ensemble, active selection of the most disputed of 10 candidate
-pairs, Boltzmann-rational synthetic labels (β = 1 on the fragments' true returns: imitation's
-`SyntheticGatherer`, our `PairwiseTeacher(sigma=0, beta=1)`). The final return is the mean
+pairs, and one teacher's noise on both sides (`--noise`):
+
+- `boltzmann` (the default): Boltzmann-rational labels, β = 1 on the fragments' true returns
+  (imitation's `SyntheticGatherer(temperature=1)`, our `PairwiseTeacher(sigma=0, beta=1)`),
+  nearly noise-free on Pendulum's return scale;
+- `spec`: SPEC §7's teacher on ours (`PairwiseTeacher(sigma=σ)`: each fragment's return
+  perceived with Normal(0, (L·σ)²) noise, the higher wins; σ = `--sigma`, 0.25 by default)
+  and on imitation's the logistic temperature that matches it, √2·L·σ / 1.702 (the
+  difference of two perceived returns has sd √2·L·σ, and Φ(x) ≈ σ(1.702 x)); fragments of
+  SPEC's L = 30 steps (`--fragment-length`) and imitation's round 0 trained 10× the epochs,
+  as ours is (its own default is 200×).
+
+The final return is the mean
 over 10 deterministic episodes with reset seeds 10,000 … 10,009, the same on both sides; the
 per-round curve uses the same episodes after each round.
 
@@ -54,6 +65,11 @@ ENVS = {
     },
 }
 
+NOISES = ("boltzmann", "spec")
+"""The teachers `--noise` chooses between (module docstring)."""
+LOGISTIC_PROBIT = 1.702
+"""Φ(x) ≈ σ(1.702 x): the logistic scale that matches a normal CDF."""
+
 BASE = {
     "comparisons": 200,
     "rounds": 5,
@@ -63,7 +79,10 @@ BASE = {
     "candidate_pairs": 10,
     "ensemble_size": 3,
     "reward_hidden": [64, 64],
+    "noise": "boltzmann",
     "boltzmann_beta": 1.0,
+    "sigma": 0.0,
+    "imitation_initial_epoch_multiplier": 200.0,
     "eval_seeds": list(range(10_000, 10_010)),
     "ppo": {
         "n_envs": 8,
@@ -91,10 +110,25 @@ def imitation_python() -> Path:
     return python
 
 
-def cell_spec(env: str, seed: int, variant: str) -> dict:
+def noise_spec(noise: str, sigma: float, fragment_length: int | None) -> dict:
+    """The spec fields of a teacher (`NOISES`): the same noise on both sides."""
+    if noise == "boltzmann":
+        return {} if fragment_length is None else {"fragment_length": fragment_length}
+    length = 30 if fragment_length is None else fragment_length
+    return {
+        "noise": "spec",
+        "sigma": sigma,
+        "fragment_length": length,
+        # imitation's temperature: the logistic match of the perceived returns' difference
+        "boltzmann_beta": float(np.sqrt(2.0) * length * sigma / LOGISTIC_PROBIT),
+        "imitation_initial_epoch_multiplier": 10.0,
+    }
+
+
+def cell_spec(env: str, seed: int, variant: str, teacher: dict | None = None) -> dict:
     extra = ENVS[env]
     spec = {**BASE, **extra, "env": env, "seed": seed, "variant": variant, "src": str(REPO / "src")}
-    return spec
+    return {**spec, **(teacher or {})}
 
 
 def run_cell(side: str, spec: dict, python: Path) -> dict:
@@ -181,6 +215,11 @@ def main(argv: list[str] | None = None) -> None:
     )
     parser.add_argument("--no-imitation", action="store_true")
     parser.add_argument("--no-groupwise", action="store_true", help="imitation's cells only")
+    parser.add_argument("--noise", choices=NOISES, default="boltzmann", help="the teacher")
+    parser.add_argument("--sigma", type=float, default=0.25, help="--noise spec: σ per step")
+    parser.add_argument(
+        "--fragment-length", type=int, default=None, help="L on every env (spec noise: 30)"
+    )
     parser.add_argument("--jobs", type=int, default=2)
     parser.add_argument("--out", type=Path, default=REPO / "runs" / "peer")
     args = parser.parse_args(argv)
@@ -192,8 +231,9 @@ def main(argv: list[str] | None = None) -> None:
     ours = Path(sys.executable)
     seeds = range(args.first_seed, args.first_seed + args.seeds)
     variants = [] if args.no_groupwise else args.variants.split(",")
+    teacher = noise_spec(args.noise, args.sigma, args.fragment_length)
     jobs = [
-        ("groupwise", cell_spec(env, seed, variant), ours)
+        ("groupwise", cell_spec(env, seed, variant, teacher), ours)
         for env in envs
         for variant in variants
         for seed in seeds
@@ -201,7 +241,11 @@ def main(argv: list[str] | None = None) -> None:
     if not args.no_imitation:
         theirs = imitation_python()
         jobs += [
-            ("imitation", {**cell_spec(env, seed, "imitation"), "imitation_label": env}, theirs)
+            (
+                "imitation",
+                {**cell_spec(env, seed, "imitation", teacher), "imitation_label": env},
+                theirs,
+            )
             for env in envs
             for seed in seeds
         ]
@@ -210,7 +254,7 @@ def main(argv: list[str] | None = None) -> None:
     with ThreadPoolExecutor(args.jobs) as pool, log.open("a") as handle:
         for result in pool.map(lambda job: run_cell(*job), jobs):
             results.append(result)
-            handle.write(json.dumps(result) + "\n")
+            handle.write(json.dumps({**result, "noise": args.noise, **teacher}) + "\n")
             handle.flush()
             print(
                 f"{result['side']:9} {result['env']:22} {result['variant']:12} seed "

@@ -3,8 +3,9 @@
     python benchmarks/peer_groupwise.py '<cell spec JSON>'   → one JSON line on stdout
 
 The library as a user would run it (`PreferenceComparisons`) with our PPO adapter, pairwise
-active learning (`PairwiseQueries`) and a Boltzmann teacher without perception noise
-(`PairwiseTeacher(sigma=0, beta)`, imitation's `SyntheticGatherer`). A `variant` names
+active learning (`PairwiseQueries`) and the spec's teacher: Boltzmann without perception
+noise (`PairwiseTeacher(sigma=0, beta)`, imitation's `SyntheticGatherer`), or with
+`"noise": "spec"` SPEC §7's perception noise (`PairwiseTeacher(sigma)`). A `variant` names
 changes to the defaults for ablations (`VARIANTS`).
 """
 
@@ -39,6 +40,9 @@ VARIANTS: dict[str, dict[str, dict[str, Any]]] = {
     "random-windows": {"loop": {"pool_selection": "random"}},
     "oversample4": {"loop": {"pool_oversample": 4.0}},
     "obs-only": {"reward": {"use_actions": False}},
+    "batch32-e3": {"reward": {"batch_size": 32}},
+    # imitation's reward training: 32 pairs a minibatch, no validation split (no adaptive L2)
+    "imitation-fit": {"reward": {"batch_size": 32, "validation_fraction": 0.0}},
 }
 """Variant name → {"loop" | "reward" | "ppo": field overrides} on top of the spec."""
 
@@ -51,7 +55,7 @@ def evaluate(agent: PPOAgent, make, seeds: list[int]) -> list[float]:
 
 def reward_correlations(
     comparisons: PreferenceComparisons, reward: RewardConfig, make, seed: int
-) -> tuple[float, float]:
+) -> dict[str, float]:
     """Per-state Pearson correlation of the learned reward with the true reward, for the
     loop's ensemble and for a fresh ensemble fitted from scratch (30 epochs) on the same
     pairs, over steps of 20 episodes of a random policy mixed with the final agent's."""
@@ -60,20 +64,24 @@ def reward_correlations(
     from groupwise.rl.rollout import sample_trajectories
 
     rng = np.random.default_rng([seed, 7])
-    agent = comparisons.session.agent
+    agent = comparisons.run.agent
     episodes = sample_trajectories(make, RandomPolicy(make().action_space), 10, rng)
     episodes += sample_trajectories(make, agent.policy(), 10, rng)
     obs = np.concatenate([t.obs for t in episodes])
     acts = np.concatenate([t.acts for t in episodes])
     true = np.concatenate([t.true_rewards for t in episodes])
-    loop_reward = comparisons.session.ensemble.step_rewards(obs, acts).mean(axis=0)
+    loop_reward = comparisons.run.ensemble.step_rewards(obs, acts).mean(axis=0)
     fresh = RewardEnsemble.for_env(make, reward, np.random.default_rng([seed, 8]))
     fit(fresh, comparisons.dataset, reward, np.random.default_rng([seed, 9]), 30)
     fresh_reward = fresh.step_rewards(obs, acts).mean(axis=0)
-    return (
-        float(np.corrcoef(loop_reward, true)[0, 1]),
-        float(np.corrcoef(fresh_reward, true)[0, 1]),
-    )
+    ppo_reward = comparisons.run.ensemble.mean_reward(obs, acts)  # what PPO is given
+    return {
+        "reward_corr": float(np.corrcoef(loop_reward, true)[0, 1]),
+        "fresh_fit_corr": float(np.corrcoef(fresh_reward, true)[0, 1]),
+        # the learned reward's offset against its spread over these steps: a large offset
+        # inflates the return std PPO's reward normaliser divides by
+        "reward_mean_over_sd": float(ppo_reward.mean() / ppo_reward.std()),
+    }
 
 
 def main(spec: dict) -> dict:
@@ -119,7 +127,10 @@ def main(spec: dict) -> dict:
         ppo_seconds[0] += time.perf_counter() - tick
 
     agent.learn = timed_learn  # type: ignore[method-assign]
-    teacher = PairwiseTeacher(sigma=0.0, beta=spec["boltzmann_beta"])
+    if spec.get("noise", "boltzmann") == "spec":  # SPEC §7: perceived returns, the higher wins
+        teacher = PairwiseTeacher(sigma=spec["sigma"])
+    else:
+        teacher = PairwiseTeacher(sigma=0.0, beta=spec["boltzmann_beta"])
     feedback = Feedback(PairwiseQueries(candidates=loop.candidate_pairs), teacher)
     curve: list[float] = []
     seeds = spec["eval_seeds"]
@@ -129,7 +140,7 @@ def main(spec: dict) -> dict:
     comparisons.train(on_round=lambda _: curve.append(float(np.mean(evaluate(agent, make, seeds)))))
     final = evaluate(agent, make, seeds)
     wall = time.perf_counter() - started
-    loop_corr, fresh_corr = reward_correlations(comparisons, reward, make, seed)
+    correlations = reward_correlations(comparisons, reward, make, seed)
     records = comparisons.records
     return {
         "side": "groupwise",
@@ -144,8 +155,7 @@ def main(spec: dict) -> dict:
         "env_steps": int(agent.num_timesteps),
         "label_error": float(records[-1].label_error_rate_total),
         "pairs": int(records[-1].pairs_total),
-        "reward_corr": loop_corr,
-        "fresh_fit_corr": fresh_corr,
+        **correlations,
     }
 
 

@@ -126,7 +126,8 @@ def main(spec: dict) -> dict:
         fragment_length=spec["fragment_length"],
         transition_oversampling=1,
         initial_comparison_frac=spec["initial_fraction"],
-        initial_epoch_multiplier=200.0,  # imitation's default
+        # imitation's default 200; 10 (ours) with SPEC noise (peer.noise_spec)
+        initial_epoch_multiplier=spec.get("imitation_initial_epoch_multiplier", 200.0),
         allow_variable_horizon=False,
         query_schedule="constant",
     )
