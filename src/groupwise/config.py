@@ -125,6 +125,10 @@ class PPOConfig:
     reset_reward_norm: bool = False
     """Forget the running return std at the start of every round's training (the reward
     function changed with the fit before it)."""
+    standardise_reward: bool = False
+    """Centre and scale the learned reward per step by its running mean and sd over PPO's
+    rollouts before PPO sees it (imitation's `NormalizedRewardNet`); `normalize_reward` then
+    scales the result by the return std as before."""
     tensorboard: bool = True
     """Write TensorBoard logs under the run directory."""
 

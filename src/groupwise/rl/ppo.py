@@ -7,6 +7,7 @@ repeats an uninterrupted one.
 
 import logging
 from pathlib import Path
+from typing import Any
 
 import gymnasium as gym
 import numpy as np
@@ -43,6 +44,9 @@ class PPOAgent:
         log_dir: Path | None = None,
     ) -> None:
         self.cfg = cfg
+        self.step_norm: StandardisedReward | None = None
+        if reward_fn is not None and cfg.standardise_reward:
+            reward_fn = self.step_norm = StandardisedReward(reward_fn)
         self.venv = _training_env(make_env, cfg, reward_fn)
         self.model = PPO(
             "MlpPolicy",
@@ -90,6 +94,8 @@ class PPOAgent:
             self.model.set_random_seed(seed)
             if self.cfg.reset_reward_norm:
                 self._normaliser().ret_rms = RunningMeanStd(shape=())
+                if self.step_norm is not None:
+                    self.step_norm.stats = RunningMeanStd(shape=())
             self.model.set_env(self.venv, force_reset=True)
         if self.model.tensorboard_log is None:
             # without one, SB3 makes an empty /tmp/SB3-<time> folder on every learn call
@@ -138,15 +144,18 @@ class PPOAgent:
         directory.mkdir(parents=True, exist_ok=True)
         self.model.save(directory / POLICY_FILE)
         obs_rms, ret_rms = self._running_stats()
-        np.savez(
-            directory / NORMALISER_FILE,
-            obs_mean=obs_rms.mean,
-            obs_var=obs_rms.var,
-            obs_count=obs_rms.count,
-            ret_mean=ret_rms.mean,
-            ret_var=ret_rms.var,
-            ret_count=ret_rms.count,
-        )
+        arrays: dict[str, Any] = {
+            "obs_mean": obs_rms.mean,
+            "obs_var": obs_rms.var,
+            "obs_count": obs_rms.count,
+            "ret_mean": ret_rms.mean,
+            "ret_var": ret_rms.var,
+            "ret_count": ret_rms.count,
+        }
+        if self.step_norm is not None:
+            stats = self.step_norm.stats
+            arrays |= {"step_mean": stats.mean, "step_var": stats.var, "step_count": stats.count}
+        np.savez(directory / NORMALISER_FILE, **arrays)
 
     def load(self, directory: Path) -> None:
         """Restore the policy, its optimiser, step count and normaliser saved by `save`."""
@@ -159,6 +168,10 @@ class PPOAgent:
             obs_rms.count = float(data["obs_count"])
             ret_rms.mean, ret_rms.var = data["ret_mean"], data["ret_var"]
             ret_rms.count = float(data["ret_count"])
+            if self.step_norm is not None and "step_mean" in data:
+                stats = self.step_norm.stats
+                stats.mean, stats.var = data["step_mean"], data["step_var"]
+                stats.count = float(data["step_count"])
 
     def close(self) -> None:
         self.venv.close()
@@ -172,6 +185,29 @@ class PPOAgent:
         norm = self._normaliser()
         assert isinstance(norm.obs_rms, RunningMeanStd)
         return norm.obs_rms, norm.ret_rms
+
+
+class StandardisedReward:
+    """`reward_fn`'s rewards centred and scaled by their running mean and sd over every
+    step it has rewarded (`PPOConfig.standardise_reward`; imitation's `NormalizedRewardNet`
+    with a `RunningNorm` output layer). The statistics include the batch being rewarded,
+    and are never reset unless `PPOConfig.reset_reward_norm` asks it.
+
+    Why: the Bradley–Terry reward's offset is not identified by preferences, and an offset
+    that is large against the reward's spread inflates the running return std that
+    `VecNormalize` divides by, so PPO sees a flatter reward (docs/results/peer).
+    """
+
+    def __init__(self, reward_fn: RewardFn, epsilon: float = 1e-8) -> None:
+        self.reward_fn = reward_fn
+        self.epsilon = epsilon
+        self.stats = RunningMeanStd(shape=())
+
+    def __call__(self, obs: FloatArray, acts: FloatArray) -> FloatArray:
+        rewards = np.asarray(self.reward_fn(obs, acts), dtype=np.float64)
+        self.stats.update(rewards)
+        scaled = (rewards - self.stats.mean) / np.sqrt(self.stats.var + self.epsilon)
+        return scaled.astype(np.float32)
 
 
 class AgentPolicy:

@@ -5,7 +5,7 @@ import numpy as np
 
 from groupwise.config import PPOConfig
 from groupwise.envs import make_env
-from groupwise.rl.ppo import PPOAgent
+from groupwise.rl.ppo import PPOAgent, StandardisedReward
 
 SMALL = PPOConfig(n_envs=2, n_steps=64, batch_size=32, n_epochs=1, tensorboard=False)
 
@@ -111,3 +111,30 @@ def test_progress_counts_the_whole_rollouts_that_run_not_the_steps_asked():
     agent.learn(129, seed=2, report=lambda done, total: reports.append((done, total)))
     assert reports == [(0, 256), (128, 256), (256, 256)]
     assert agent.num_timesteps == 128 + 256
+
+
+def test_standardised_reward_centres_and_scales_by_every_step_rewarded():
+    offset = StandardisedReward(lambda obs, acts: 100.0 + 0.5 * obs[:, 0])
+    rng = np.random.default_rng(0)
+    for _ in range(50):
+        rewards = offset(rng.normal(size=(8, 3)), np.zeros((8, 1)))
+    # x ~ N(0, 1): the raw reward has mean 100, sd 0.5; what PPO sees has mean 0, sd 1
+    assert rewards.dtype == np.float32
+    assert abs(offset.stats.mean - 100.0) < 0.1
+    assert abs(np.sqrt(offset.stats.var) - 0.5) < 0.05
+    seen = offset(np.array([[0.0, 0, 0], [2.0, 0, 0]]), np.zeros((2, 1)))
+    np.testing.assert_allclose(seen, [0.0, 2.0], atol=0.25)
+
+
+def test_standardised_reward_statistics_are_saved_and_restored(tmp_path):
+    cfg = dataclasses.replace(SMALL, standardise_reward=True)
+    agent = PPOAgent(make, cfg, seed=0, reward_fn=lambda obs, acts: 5.0 + obs[:, 0])
+    agent.learn(cfg.n_envs * cfg.n_steps, seed=0)
+    assert agent.step_norm is not None and agent.step_norm.stats.count > 1
+    agent.save(tmp_path)
+    restored = PPOAgent(make, cfg, seed=1, reward_fn=lambda obs, acts: 5.0 + obs[:, 0])
+    restored.load(tmp_path)
+    assert restored.step_norm is not None
+    assert restored.step_norm.stats.count == agent.step_norm.stats.count
+    np.testing.assert_allclose(restored.step_norm.stats.mean, agent.step_norm.stats.mean)
+    assert PPOAgent(make, SMALL, seed=0, reward_fn=lambda obs, acts: obs[:, 0]).step_norm is None
