@@ -26,7 +26,7 @@ run: $(STAMPS)/python $(WEB_BUILD)
 # unit and integration tests two at a time, then the browser tests one at a time (each runs
 # a server with its training worker and a Chromium: two at once only fight for the cores)
 test: $(STAMPS)/dev $(WEB_BUILD) test-web
-	$(BIN)/python -m pytest -n 2 --dist loadfile -q -m "not slow and not e2e"
+	GROUPWISE_PG_REQUIRED=1 $(BIN)/python -m pytest -n 2 --dist loadfile -q -m "not slow and not e2e"
 	GROUPWISE_E2E_REQUIRED=1 $(BIN)/python -m pytest -q tests/e2e
 
 test-web: $(STAMPS)/web
@@ -53,8 +53,9 @@ $(STAMPS)/system: scripts/system-deps.sh
 	@mkdir -p $(STAMPS) && touch $@
 
 # Debian's Chromium for the browser tests (never `playwright install`: no browser downloads)
+# and Debian's PostgreSQL server for the storage and server tests on PostgreSQL
 $(STAMPS)/system-dev: scripts/system-deps.sh
-	bash scripts/system-deps.sh chromium
+	bash scripts/system-deps.sh chromium postgresql
 	@mkdir -p $(STAMPS) && touch $@
 
 # the web UI's npm packages; node is checked first (order-only: a new check of node alone

@@ -1,8 +1,11 @@
 #!/usr/bin/env bash
 # Installs the Debian packages groupwise needs when they are missing: an offscreen GL
 # library for MuJoCo (EGL from Mesa; OSMesa as the fallback) and ffmpeg's needs are covered
-# by imageio-ffmpeg's bundled binary. Runs apt-get only as root; otherwise it names the
-# packages and stops.
+# by imageio-ffmpeg's bundled binary. Further packages come as arguments (the Makefile's
+# dev setup: chromium for the browser tests; postgresql for the storage and server tests on
+# PostgreSQL, whose server programs Debian keeps in /usr/lib/postgresql/<version>/bin, off
+# PATH, where tests/postgres.py looks for them). Runs apt-get only as root; otherwise it
+# names the packages and stops.
 set -euo pipefail
 
 packages=(libegl1 libgl1 libgl1-mesa-dri libosmesa6)

@@ -1,6 +1,10 @@
 """Connecting to the database: engines, pragmas, and read / write transactions.
 
-SQLite (the default, ``DIR/groupwise.db``) is opened with, on every connection:
+Two backends, one behaviour: SQLite (the default, ``DIR/groupwise.db``) and PostgreSQL
+(``--db postgresql+psycopg://…``, the `postgres` extra; a team's shared server, README).
+Both run every write transaction alone: one writer at a time, readers never blocked.
+
+SQLite is opened with, on every connection:
 
 - ``journal_mode=WAL``: readers never block the writer nor it them, so the event streams
   and page reads go on while a judgement commits or the worker writes progress;
@@ -15,9 +19,18 @@ upgrade from reader to writer does not wait on ``busy_timeout``). Within one pro
 writers also queue on a `threading.Lock` before they ask SQLite: SQLite's busy handler
 polls with growing sleeps (up to 100 ms), so 20 threads contending for the file lock saw
 multi-second tails (benchmarks/submit_latency.py: p99 3.7 s before, 0.7 s after).
-Reads use plain deferred transactions and never wait for writers (WAL). Other backends
-(PostgreSQL) get ordinary transactions; the repositories lock the session row
-(``SELECT … FOR UPDATE``) where SQLite's lock is not there.
+Reads use plain deferred transactions and never wait for writers (WAL).
+
+PostgreSQL (READ COMMITTED, its default) gets the same one-writer rule from a transaction-
+level advisory lock that every write transaction takes first (``pg_advisory_xact_lock``,
+released by its commit or rollback), across all processes and hosts that share the
+database: the repositories' read-then-write steps (numbering a judgement, counting the
+round's judgements, bumping the session's revision) then see every earlier commit, as on
+SQLite, instead of racing as two READ COMMITTED transactions would. The waiting writers
+queue in the server, not in a polling loop, and a judgement commits in about a millisecond,
+so the lock costs a shared team server little (benchmarks/submit_latency.py ``--db``).
+The repositories also lock the session row (``SELECT … FOR UPDATE``) before they change it.
+Reads are plain transactions and never wait for writers (MVCC).
 """
 
 import threading
@@ -26,7 +39,7 @@ from contextlib import contextmanager, nullcontext
 from pathlib import Path
 from typing import Any
 
-from sqlalchemy import Engine, create_engine, event, inspect
+from sqlalchemy import Connection, Engine, create_engine, event, inspect, text
 from sqlalchemy.engine import make_url
 from sqlalchemy.orm import Session as DbSession
 from sqlalchemy.orm import sessionmaker
@@ -36,6 +49,9 @@ from groupwise.storage.models import Base
 DATABASE_FILE = "groupwise.db"
 BUSY_TIMEOUT_MS = 15_000
 """How long a SQLite writer waits for the lock (20 clients writing at once wait ~ms)."""
+WRITE_LOCK = 0x67726F7570  # "group"
+"""The PostgreSQL advisory lock key every write transaction holds (module docstring)."""
+_TAKE_WRITE_LOCK = text("SELECT pg_advisory_xact_lock(:key)").bindparams(key=WRITE_LOCK)
 
 
 def sqlite_url(path: Path) -> str:
@@ -60,11 +76,13 @@ class Database:
     def __init__(self, url: str, *, pool_size: int = 8) -> None:
         self.url = url
         self.is_sqlite = make_url(url).get_backend_name() == "sqlite"
-        options: dict[str, Any] = {}
+        # the server's request threads (up to 40) each hold a connection while they wait
+        options: dict[str, Any] = {"pool_size": pool_size, "max_overflow": 32}
         if self.is_sqlite:
             options["connect_args"] = {"check_same_thread": False}
-            options["pool_size"] = pool_size
-            options["max_overflow"] = 32
+        else:
+            # a shared server restarts (or drops idle connections) without telling us
+            options["pool_pre_ping"] = True
         self.read_engine = self._engine(url, immediate=False, options=options)
         self.write_engine = (
             self._engine(url, immediate=True, options=options)
@@ -86,8 +104,11 @@ class Database:
     def create_schema(self) -> None:
         """Create every table that does not exist yet, and add the nullable columns a
         database made by an older version lacks (idempotent)."""
-        Base.metadata.create_all(self.write_engine)
-        add_missing_columns(self.write_engine)
+        with self.write_engine.begin() as connection:
+            if not self.is_sqlite:  # two servers starting at once would race to create
+                connection.execute(_TAKE_WRITE_LOCK)
+            Base.metadata.create_all(connection)
+            add_missing_columns(connection)
 
     @contextmanager
     def read(self) -> Iterator[DbSession]:
@@ -97,12 +118,15 @@ class Database:
 
     @contextmanager
     def write(self) -> Iterator[DbSession]:
-        """A write transaction: on SQLite it holds the write lock from its start."""
+        """A write transaction, holding the database's one write lock from its start
+        (SQLite's, or the PostgreSQL advisory lock `WRITE_LOCK`) until it ends."""
         with (
             self._write_lock or nullcontext(),
             self._writer() as s,
             s.begin(),
         ):
+            if not self.is_sqlite:
+                s.execute(_TAKE_WRITE_LOCK)
             yield s
 
     def dispose(self) -> None:
@@ -112,15 +136,16 @@ class Database:
             self.write_engine.dispose()
 
 
-def add_missing_columns(engine: Engine) -> list[str]:
+def add_missing_columns(bind: Engine | Connection) -> list[str]:
     """Add the model's nullable columns missing from existing tables; "table.column" of each.
 
     A column added by a later version (``rounds.shown_at``) is nullable, so an older
     database gains it with a portable ``ALTER TABLE … ADD COLUMN`` and keeps its rows.
+    `bind`: an engine (its own transaction) or a connection (the caller's transaction).
     Raises RuntimeError for a missing column that is not nullable (that needs a migration).
     """
     added: list[str] = []
-    with engine.begin() as connection:
+    with bind.begin() if isinstance(bind, Engine) else nullcontext(bind) as connection:
         existing = inspect(connection)
         for table in Base.metadata.sorted_tables:
             have = {column["name"] for column in existing.get_columns(table.name)}
@@ -132,7 +157,7 @@ def add_missing_columns(engine: Engine) -> list[str]:
                         f"the database lacks {table.name}.{column.name}; it was made by an "
                         "incompatible version of groupwise"
                     )
-                kind = column.type.compile(dialect=engine.dialect)
+                kind = column.type.compile(dialect=connection.dialect)
                 connection.exec_driver_sql(
                     f'ALTER TABLE "{table.name}" ADD COLUMN "{column.name}" {kind}'
                 )

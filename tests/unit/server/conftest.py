@@ -1,4 +1,7 @@
-"""The app in-process (no uvicorn, no worker process) on a real SQLite file and data dir.
+"""The app in-process (no uvicorn, no worker process) on a real database and data dir.
+
+`client` and `prepared` run every test that uses them on SQLite and on PostgreSQL
+(`db_backend`, tests/conftest.py); the worker tests, which import them, stay on SQLite.
 
 `prepared` runs the real worker job in this process to open round 0 of a tiny GridWorld
 session, so the round's endpoints have a real pool, tree, clips and suggestions to serve.
@@ -13,6 +16,9 @@ import pytest
 with warnings.catch_warnings():  # Starlette 1.x announces a move from httpx to httpx2
     warnings.simplefilter("ignore", UserWarning)
     from fastapi.testclient import TestClient
+
+from tests.conftest import new_database_url
+from tests.postgres import BACKENDS
 
 from groupwise.server import AppConfig, create_app
 from groupwise.server.context import AppContext
@@ -73,17 +79,24 @@ def post_judgement(
     return response.json()
 
 
+@pytest.fixture(scope="session", params=BACKENDS)
+def db_backend(request: pytest.FixtureRequest) -> str:
+    """The app's tests run on SQLite and on PostgreSQL."""
+    return str(request.param)
+
+
 @pytest.fixture
-def client(tmp_path) -> TestClient:
-    with make_client(tmp_path) as test_client:
+def client(tmp_path, database_url) -> TestClient:
+    with make_client(tmp_path, database_url=database_url) as test_client:
         yield test_client
 
 
 @pytest.fixture(scope="module")
-def prepared(tmp_path_factory) -> tuple[TestClient, str, str]:
+def prepared(request, tmp_path_factory, db_backend) -> tuple[TestClient, str, str]:
     """A client and two sessions (groupwise, pairwise) whose round 0 is open."""
     data = tmp_path_factory.mktemp("data")
-    with make_client(data) as test_client:
+    url = new_database_url(request, db_backend, data)
+    with make_client(data, database_url=url) as test_client:
         groupwise = new_session(test_client)["id"]
         pairwise = new_session(test_client, "pairwise")["id"]
         run_worker_once(test_client)

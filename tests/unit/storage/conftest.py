@@ -1,11 +1,13 @@
-"""A real SQLite database in a temporary directory, with a session whose round 0 is open."""
+"""A real database, SQLite in a temporary directory and PostgreSQL (a database of the test
+process's throw-away cluster, tests/postgres.py), with a session whose round 0 is open."""
 
 import hashlib
 from collections.abc import Callable
 
 import pytest
+from tests.postgres import BACKENDS
 
-from groupwise.storage import Database, SessionSettings, default_url
+from groupwise.storage import Database, SessionSettings
 from groupwise.storage import sessions as repo
 from groupwise.storage.rounds import (
     BehaviourInput,
@@ -37,9 +39,15 @@ def prepared(n: int = N) -> PreparedRound:
     )
 
 
+@pytest.fixture(scope="session", params=BACKENDS)
+def db_backend(request: pytest.FixtureRequest) -> str:
+    """Every storage test runs on SQLite and on PostgreSQL."""
+    return str(request.param)
+
+
 @pytest.fixture
-def db(tmp_path) -> Database:
-    database = Database(default_url(tmp_path))
+def db(database_url: str) -> Database:
+    database = Database(database_url)
     database.create_schema()
     yield database
     database.dispose()

@@ -1,5 +1,5 @@
 """Session rows (cascades, lookup, resumable sessions) and the database's pragmas and
-schema upgrades, on a real SQLite file."""
+schema upgrades, on real SQLite and PostgreSQL databases."""
 
 import sqlite3
 
@@ -13,11 +13,25 @@ from groupwise.storage.models import JudgementRow, PairRow, SessionRow
 from groupwise.storage.sessions import find_resumable, get_session, list_sessions
 
 
+@pytest.mark.parametrize("db_backend", ["sqlite"])
 def test_sqlite_runs_in_wal_mode_with_foreign_keys(db):
     with db.read() as s:
         assert s.execute(text("PRAGMA journal_mode")).scalar() == "wal"
         assert s.execute(text("PRAGMA foreign_keys")).scalar() == 1
         assert s.execute(text("PRAGMA busy_timeout")).scalar() > 0
+
+
+ADVISORY_LOCKS = text(
+    "SELECT count(*) FROM pg_locks WHERE locktype = 'advisory' AND pid = pg_backend_pid()"
+)
+
+
+@pytest.mark.parametrize("db_backend", ["postgresql"])
+def test_postgresql_writes_hold_the_one_write_lock_and_reads_do_not(db):
+    with db.write() as s:
+        assert s.execute(ADVISORY_LOCKS).scalar() == 1
+    with db.read() as s:
+        assert s.execute(ADVISORY_LOCKS).scalar() == 0
 
 
 def test_deleting_a_session_cascades_to_its_judgements_and_pairs(db, open_session):
