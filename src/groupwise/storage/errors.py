@@ -18,3 +18,12 @@ class ConflictError(StorageError):
 
 class InvalidError(StorageError):
     """The request is well-formed but its content is not acceptable (HTTP 422)."""
+
+
+def check_text(what: str, value: str) -> str:
+    """`value`, unless it holds a NUL character: PostgreSQL's text cannot store one and no
+    name, id or annotator needs one, so both backends refuse it alike. Raises InvalidError.
+    """
+    if "\x00" in value:
+        raise InvalidError(f"{what} contains a NUL character")
+    return value

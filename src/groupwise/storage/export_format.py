@@ -28,7 +28,7 @@ from typing import Any, Literal
 
 import pyarrow as pa
 import pyarrow.parquet as pq
-from pydantic import BaseModel, ConfigDict, Field, ValidationError
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator
 
 from groupwise.storage.errors import InvalidError
 from groupwise.storage.settings import SessionSettings
@@ -40,6 +40,15 @@ _ROUNDS_KEY = b"groupwise.rounds"
 
 class _Strict(BaseModel):
     model_config = ConfigDict(extra="ignore", frozen=True)
+
+    @field_validator("*", mode="after")
+    @classmethod
+    def _no_nul(cls, value: Any) -> Any:
+        # PostgreSQL's text cannot hold NUL (`storage.errors.check_text`): refused on import
+        texts = value if isinstance(value, list) else [value]
+        if any(isinstance(v, str) and "\x00" in v for v in texts):
+            raise ValueError("contains a NUL character")
+        return value
 
 
 class SessionLine(_Strict):

@@ -30,7 +30,7 @@ from groupwise.preferences.judgement import (
     Source,
 )
 from groupwise.preferences.pairs import judgement_pairs
-from groupwise.storage.errors import ConflictError, InvalidError, NotFoundError
+from groupwise.storage.errors import ConflictError, InvalidError, NotFoundError, check_text
 from groupwise.storage.lifecycle import close_round
 from groupwise.storage.models import BehaviourRow, JudgementRow, PairRow, SessionRow, utcnow
 from groupwise.storage.phases import READY
@@ -126,9 +126,12 @@ def add_judgement(
         ConflictError: the session is not ready, the round is not the open one or its
             time is up, or the `client_id` was used for a different comparison.
         InvalidError: a behaviour not in the round, in both groups or twice in one; an
-            empty group or one too large for the mode; an unknown label or source.
+            empty group or one too large for the mode; an unknown label or source; a NUL
+            character in the client id or annotator (`check_text`).
     """
     now = now or utcnow()
+    check_text("client_id", judgement.client_id)
+    check_text("annotator", judgement.annotator)
     session = get_session(s, session_id, lock=True)
     stored = _by_client_id(s, session_id, judgement.client_id)
     if stored is not None:

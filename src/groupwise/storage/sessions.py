@@ -15,7 +15,7 @@ from pathlib import PurePosixPath
 from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
 
-from groupwise.storage.errors import NotFoundError
+from groupwise.storage.errors import NotFoundError, check_text
 from groupwise.storage.models import RoundRow, SessionRow, utcnow
 from groupwise.storage.phases import FINISHED, PREPARING, ROUND_PREPARING, WORK_PHASES
 from groupwise.storage.settings import LIBRARY, SessionSettings
@@ -55,10 +55,13 @@ def create_session(
 ) -> SessionRow:
     """Add a new session in phase ``preparing`` with round 0 waiting for its pool.
 
-    Raises ValueError for an unknown mode (the caller validated env and settings).
+    Raises ValueError for an unknown mode (the caller validated env and settings),
+    InvalidError for a NUL character in env or annotator (`check_text`).
     """
     if mode not in MODES:
         raise ValueError(f"mode must be one of {MODES}, got {mode!r}")
+    check_text("env", env)
+    check_text("annotator", annotator)
     now = now or utcnow()
     session = SessionRow(
         id=session_id or new_session_id(),

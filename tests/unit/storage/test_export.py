@@ -1,4 +1,4 @@
-"""Export to JSONL and Parquet and import into a new session, on a real SQLite file."""
+"""Export to JSONL and Parquet and import into a new session, on SQLite and PostgreSQL."""
 
 import json
 
@@ -74,6 +74,7 @@ def test_jsonl_is_one_object_per_line(db, open_session):
         (b'{"type": "round", "round": 0}\n', "no session line"),
         (b'{"type": "what"}\n', "no known type"),
         (b'{"type": "session", "id": "s", "env": "GridWorld", "mode": "solo"}\n', "line 1: mode"),
+        (b'{"type": "round", "round": 0, "close_reason": "a\\u0000"}\n', "line 1: close_reason"),
     ],
 )
 def test_bad_jsonl_is_rejected_with_its_line(data, message):

@@ -1,4 +1,5 @@
-"""Storing, retrying, undoing and listing judgements on a real SQLite file."""
+"""Storing, retrying, undoing and listing judgements on real SQLite and PostgreSQL
+databases."""
 
 from datetime import UTC, datetime, timedelta
 
@@ -166,3 +167,15 @@ def test_no_judgements_once_the_time_is_up(db, open_session):
         add_judgement(s, sid, judgement("in time"), now=started + timedelta(seconds=59))
     with pytest.raises(ConflictError, match="time of round 0 is up"), db.write() as s:
         add_judgement(s, sid, judgement("late"), now=started + timedelta(seconds=61))
+
+
+@pytest.mark.parametrize("field", ["client_id", "annotator"])
+def test_a_nul_character_is_refused_on_every_backend(db, open_session, field):
+    # PostgreSQL's text cannot hold one (it failed there with a 500); SQLite refuses it alike
+    sid = open_session()
+    fields = {"client_id": "c1", "annotator": "", field: "a\x00b"}
+    bad = JudgementInput(fields["client_id"], 0, ("b1",), ("b2",), "left", "explored",
+                         annotator=fields["annotator"])  # fmt: skip
+    with pytest.raises(InvalidError, match=f"{field} contains a NUL character"), db.write() as s:
+        add_judgement(s, sid, bad)
+    assert rows(db, JudgementRow) == 0
