@@ -43,6 +43,10 @@ VARIANTS: dict[str, dict[str, dict[str, Any]]] = {
     "batch32-e3": {"reward": {"batch_size": 32}},
     # imitation's reward training: 32 pairs a minibatch, no validation split (no adaptive L2)
     "imitation-fit": {"reward": {"batch_size": 32, "validation_fraction": 0.0}},
+    # imitation's reward for PPO: running per-step centring and scaling, no return scaling
+    "std-step": {"ppo": {"standardise_reward": True, "normalize_reward": False}},
+    "std-step-ret": {"ppo": {"standardise_reward": True}},
+    "additive": {"reward": {"additive_actions": True}},
 }
 """Variant name → {"loop" | "reward" | "ppo": field overrides} on top of the spec."""
 

@@ -90,6 +90,11 @@ class RewardConfig:
     seeds from learning to spin (-127 ± 12 vs -233 ± 198) and did better on GridWorld, but
     cannot see a control cost: on the study's Reacher (1,000 steps) the groupwise DM's agents
     collapsed to -865 ± 546 against -199 ± 70 with [obs ; act]."""
+    additive_actions: bool = False
+    """With `use_actions`, each member's reward is f(obs) + g(act), two MLPs summed, instead
+    of one MLP over [obs ; act]: the form of every SPEC env's true reward (a state term and
+    a control cost), and one that cannot pay an action only in some states, which PPO, setting
+    the action, exploits (docs/results/peer)."""
 
 
 @dataclass(frozen=True, config=_STRICT)
@@ -262,6 +267,16 @@ class TreeConfig:
     """Threshold spacing (`behaviour.tree.BANDS`): level l holds about N / k^l clusters
     ("counts"), or cuts at fixed fractions of the root height ("linear", the paper's; or
     "geometric")."""
+    balance: Annotated[float, Field(ge=1.0)] | None = 2.0
+    """Size caps after the cut (`behaviour.tree.balance_levels`, issue 22): a node at level
+    l >= 2 below the root holding more than max(8, balance · k^l) leaves, or more than half
+    the pool, is split by its own sub-tree unless its behaviours are indistinguishable, and
+    a level-1 node by more than 8; None: the bands alone."""
+    dtw_window: Annotated[int, Field(ge=0)] | None = None
+    """Sakoe–Chiba radius of the DTW distances, in steps (`behaviour.dtw`; None: no band)."""
+    dtw_stride: PositiveInt = 1
+    """Coarser time step of the DTW distances: the means of this many consecutive steps are
+    aligned (`behaviour.dtw`; 1: every step). Clips and the reward model keep every step."""
 
 
 @dataclass(frozen=True, config=_STRICT)

@@ -25,7 +25,7 @@ from torch import Tensor
 
 from groupwise.config import RewardConfig
 from groupwise.envs.spaces import action_dim, observation_dim
-from groupwise.reward.network import RewardNet, StackedMLP
+from groupwise.reward.network import RewardNet, member_mlp
 from groupwise.types import FloatArray
 
 log = logging.getLogger(__name__)
@@ -66,6 +66,7 @@ class RewardEnsemble:
             cfg.hidden_sizes,
             cfg.activation,
             generator,
+            self._split,
         )
         self.net.eval()
         self.l2_weight = float(cfg.initial_l2)
@@ -93,6 +94,13 @@ class RewardEnsemble:
     @property
     def in_dim(self) -> int:
         return self.obs_dim + self.act_dim if self.cfg.use_actions else self.obs_dim
+
+    @property
+    def _split(self) -> int | None:
+        """Where the additive members split their inputs (`RewardConfig.additive_actions`):
+        after the observation; None for one MLP over all inputs."""
+        additive = self.cfg.use_actions and self.cfg.additive_actions and self.act_dim > 0
+        return self.obs_dim if additive else None
 
     # ---------------------------------------------------------------- prediction
 
@@ -163,8 +171,8 @@ class RewardEnsemble:
         scratch, `RewardConfig.warm_start` off); the normaliser is left to `fit`."""
         generator = torch.Generator().manual_seed(int(rng.integers(0, 2**63 - 1)))
         cfg = self.cfg
-        self.net.mlp = StackedMLP(
-            cfg.ensemble_size, self.in_dim, cfg.hidden_sizes, cfg.activation, generator
+        self.net.mlp = member_mlp(
+            cfg.ensemble_size, self.in_dim, cfg.hidden_sizes, cfg.activation, generator, self._split
         )
         self.net.eval()
         self.l2_weight = float(cfg.initial_l2)

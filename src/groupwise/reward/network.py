@@ -177,6 +177,56 @@ class StackedMLP(nn.Module):
         return nn.Sequential(*layers)
 
 
+class AdditiveMLP(nn.Module):
+    """K members r(x) = f(x[:split]) + g(x[split:]): one `StackedMLP` over the first `split`
+    features (the observation), one over the rest (the action), summed.
+
+    The same interface as `StackedMLP` (forward, `l2_penalty`, `members`), so training
+    and prediction take either. No term can depend on both parts at once.
+    """
+
+    def __init__(
+        self,
+        members: int,
+        in_dim: int,
+        split: int,
+        hidden_sizes: tuple[int, ...],
+        activation: str = "relu",
+        generator: torch.Generator | None = None,
+    ) -> None:
+        """Raises ValueError unless 0 < split < in_dim (and as `StackedMLP` does)."""
+        super().__init__()
+        if not 0 < split < in_dim:
+            raise ValueError(f"cannot split {in_dim} features after {split}")
+        self.members = members
+        self.in_dim = in_dim
+        self.split = split
+        self.first = StackedMLP(members, split, hidden_sizes, activation, generator)
+        self.second = StackedMLP(members, in_dim - split, hidden_sizes, activation, generator)
+
+    def forward(self, x: Tensor) -> Tensor:
+        """x: (N, in_dim) or (K, N, in_dim). Returns (K, N)."""
+        return self.first(x[..., : self.split]) + self.second(x[..., self.split :])
+
+    def l2_penalty(self) -> Tensor:
+        """(K,) sum of squared weights (biases excluded) of each member, both terms."""
+        return self.first.l2_penalty() + self.second.l2_penalty()
+
+
+def member_mlp(
+    members: int,
+    in_dim: int,
+    hidden_sizes: tuple[int, ...],
+    activation: str = "relu",
+    generator: torch.Generator | None = None,
+    split: int | None = None,
+) -> StackedMLP | AdditiveMLP:
+    """The members' MLPs: one over all features, or with `split` an `AdditiveMLP`."""
+    if split is None:
+        return StackedMLP(members, in_dim, hidden_sizes, activation, generator)
+    return AdditiveMLP(members, in_dim, split, hidden_sizes, activation, generator)
+
+
 class RewardNet(nn.Module):
     """Normaliser then stacked MLP: features (..., in_dim) -> per-member rewards (K, ...)."""
 
@@ -187,10 +237,12 @@ class RewardNet(nn.Module):
         hidden_sizes: tuple[int, ...],
         activation: str = "relu",
         generator: torch.Generator | None = None,
+        split: int | None = None,
     ) -> None:
+        """`split`: members f(x[:split]) + g(x[split:]) (`AdditiveMLP`); None: one MLP."""
         super().__init__()
         self.norm = RunningNorm(in_dim)
-        self.mlp = StackedMLP(members, in_dim, hidden_sizes, activation, generator)
+        self.mlp = member_mlp(members, in_dim, hidden_sizes, activation, generator, split)
 
     def forward(self, x: Tensor) -> Tensor:
         """x: (N, in_dim) shared by all members, or (K, N, in_dim). Returns (K, N)."""

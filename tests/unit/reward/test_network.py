@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 import torch
 
-from groupwise.reward import RunningNorm, StackedMLP
+from groupwise.reward.network import AdditiveMLP, RunningNorm, StackedMLP
 
 
 def test_running_norm_merges_batches_like_one_pass():
@@ -88,3 +88,22 @@ def test_copies_compute_with_their_own_parameters(clone):
     x = torch.ones(5, 3)
     assert torch.equal(twin(x), torch.zeros(2, 5))
     assert not torch.equal(mlp(x), torch.zeros(2, 5))
+
+
+def test_additive_members_are_a_sum_of_an_observation_term_and_an_action_term():
+    mlp = AdditiveMLP(3, 5, 3, (7, 6), generator=torch.Generator().manual_seed(1))
+    x = torch.randn(4, 5)
+    out = mlp(x)
+    assert out.shape == (3, 4)
+    torch.testing.assert_close(out, mlp.first(x[:, :3]) + mlp.second(x[:, 3:]))
+    # no interaction: the change an action makes is the same in every state
+    a, b = torch.randn(1, 2), torch.randn(1, 2)
+    states = torch.randn(6, 3)
+    with_a = mlp(torch.cat([states, a.expand(6, 2)], dim=1))
+    with_b = mlp(torch.cat([states, b.expand(6, 2)], dim=1))
+    difference = with_a - with_b  # (K, 6)
+    torch.testing.assert_close(difference, difference[:, :1].expand(3, 6))
+    torch.testing.assert_close(mlp(x.expand(3, 4, 5)), out)  # per-member batches too
+    torch.testing.assert_close(mlp.l2_penalty(), mlp.first.l2_penalty() + mlp.second.l2_penalty())
+    with pytest.raises(ValueError, match="split"):
+        AdditiveMLP(2, 3, 3, (4,))
