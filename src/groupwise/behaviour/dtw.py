@@ -23,6 +23,14 @@ a band of radius r around both the diagonal from (0, 0) and the one ending at
 (r = 0: lock-step alignment). dtaidistance counts the diagonal itself as 1: our r is its
 `window = r + 1`. `window=None` is unconstrained.
 
+Coarser time step. `stride = s` > 1 measures the DTW of block means: each sequence becomes
+the means of s consecutive steps (a last, shorter block averages the steps left), and the
+distance of those is multiplied by s, so it keeps the scale of the full-resolution distance
+(a path over L / s coarse steps sums about L / s costs). A window is then ceil(r / s) coarse
+steps. Only the distance is coarser: the clips and the reward model keep every step. The
+work per pair falls by about s² (`benchmarks/dtw_options.py` measures how much that
+changes the tree).
+
 Speed. All N (N - 1) / 2 distances are computed by one numba kernel, parallel over rows
 of the matrix (launched on about a tenth of the rows at a time, to report progress). The
 local costs come from ||x||^2 + ||y||^2 - 2 x.y: the dot products are the only O(L^2 D)
@@ -84,27 +92,56 @@ def _check_window(window: int | None) -> int:
     return int(window)
 
 
-def dtw_distance(x: FloatArray, y: FloatArray, window: int | None = None) -> float:
-    """DTW distance (module docstring) between x (n, D) and y (m, D)."""
+def _check_stride(stride: int) -> int:
+    if int(stride) != stride or stride < 1:
+        raise ValueError(f"stride must be an int >= 1, got {stride!r}")
+    return int(stride)
+
+
+def coarsen(sequence: FloatArray, stride: int) -> FloatArray:
+    """(ceil(L / stride), D) the means of `stride` consecutive steps of (L, D); the last
+    block averages the steps left. stride 1 returns the steps unchanged."""
+    seq = np.asarray(sequence, dtype=np.float64)
+    stride = _check_stride(stride)
+    if stride == 1:
+        return seq
+    starts = np.arange(0, seq.shape[0], stride)
+    sums = np.add.reduceat(seq, starts, axis=0)
+    counts = np.diff(np.append(starts, seq.shape[0]))
+    return np.ascontiguousarray(sums / counts[:, None])
+
+
+def _coarse_window(window: int, stride: int) -> int:
+    return window if window < 0 else -(-window // stride)
+
+
+def dtw_distance(x: FloatArray, y: FloatArray, window: int | None = None, stride: int = 1) -> float:
+    """DTW distance (module docstring) between x (n, D) and y (m, D), with an optional
+    Sakoe–Chiba `window` (steps) and a coarser time step `stride`."""
     a, b = _as_sequences([x, y])
-    return float(_pair_distance(a, b, _check_window(window)))
+    s = _check_stride(stride)
+    w = _coarse_window(_check_window(window), s)
+    return float(_pair_distance(coarsen(a, s), coarsen(b, s), w)) * s
 
 
 def dtw_matrix(
     sequences: Sequence[FloatArray],
     window: int | None = None,
     progress: ProgressFn | None = None,
+    stride: int = 1,
 ) -> FloatArray:
     """All pairwise DTW distances as a condensed vector.
 
-    sequences: N arrays (L_i, D); lengths may differ.
+    sequences: N arrays (L_i, D); lengths may differ. window: Sakoe–Chiba radius in steps
+    (None: unconstrained); stride: the coarser time step (module docstring; 1: every step).
     Returns (N (N - 1) / 2,) float64 in `scipy.spatial.distance.squareform` order:
     entry N i - i (i + 1) / 2 + (j - i - 1) is dtw(sequences[i], sequences[j]) for i < j.
     N < 2 gives an empty vector. `progress` hears (pairs done, N (N - 1) / 2) after each
     launch of the kernel (`_rows_per_launch` rows of the matrix each: about ten a matrix).
     """
-    seqs = _as_sequences(sequences)
-    w = _check_window(window)
+    s = _check_stride(stride)
+    seqs = [coarsen(q, s) for q in _as_sequences(sequences)]
+    w = _coarse_window(_check_window(window), s)
     n = len(seqs)
     out = np.zeros(n * (n - 1) // 2)
     if n < 2:
@@ -165,6 +202,8 @@ def dtw_matrix(
             done += int(pairs_of_row[first : first + rows].sum())
             if progress is not None:
                 progress(done, total)
+    if s > 1:
+        out *= s
     return out
 
 
@@ -208,8 +247,9 @@ def _batches(lengths: IntArray) -> tuple[IntArray, IntArray]:
 
 
 @njit(cache=True, fastmath=True)
-def _products(xa: np.ndarray, lane_t: np.ndarray, col: int, width: int, g: np.ndarray) -> None:
-    """g[i, c] = xa[i] . lane_t[:, col + c] for i < len(xa), c < width.
+def _products_full(xa: np.ndarray, lane_t: np.ndarray, col: int, width: int, g: np.ndarray) -> None:
+    """g[i, c] = xa[i] . lane_t[:, col + c] for i < len(xa), c < width: `_products` without
+    a band (a separate kernel: the banded one's per-row ranges cost a third more here).
 
     Two rows and four dimensions per pass keep the vector loop's loads per FMA low.
     """
@@ -265,7 +305,7 @@ def _products(xa: np.ndarray, lane_t: np.ndarray, col: int, width: int, g: np.nd
 
 
 @njit(cache=True)
-def _costs(
+def _costs_full(
     xa: np.ndarray,
     sqa: np.ndarray,
     lane_t: np.ndarray,
@@ -274,7 +314,7 @@ def _costs(
     width: int,
     g: np.ndarray,
 ) -> None:
-    """Turn the dot products in g into Euclidean local costs, in place."""
+    """Turn the dot products in g into Euclidean local costs, in place (no band)."""
     na = xa.shape[0]
     dim = xa.shape[1]
     for i in range(na):
@@ -296,6 +336,129 @@ def _costs(
                     row[c] = v
         for c in range(width):
             row[c] = np.sqrt(row[c])
+
+
+@njit(cache=True, fastmath=True)
+def _products(
+    xa: np.ndarray,
+    lane_t: np.ndarray,
+    col: int,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    g: np.ndarray,
+) -> None:
+    """g[i, c] = xa[i] . lane_t[:, col + c] for i < len(xa) and c in [lo[i], hi[i]) lanes
+    (times `_LANES`: the steps of the other sequences a band allows row i).
+
+    Two rows and four dimensions per pass keep the vector loop's loads per FMA low; a pass
+    covers the union of its two rows' ranges. Every value is summed in the same order
+    whatever the ranges, so a band changes which cells are computed, never their values.
+    """
+    na = xa.shape[0]
+    dim = xa.shape[1]
+    i = 0
+    while i + 1 < na:
+        c0 = min(lo[i], lo[i + 1]) * _LANES
+        c1 = max(hi[i], hi[i + 1]) * _LANES
+        width = c1 - c0
+        r0 = g[i, c0:c1]
+        r1 = g[i + 1, c0:c1]
+        for c in range(width):
+            r0[c] = 0.0
+            r1[c] = 0.0
+        d = 0
+        while d + 4 <= dim:
+            x0 = xa[i, d]
+            x1 = xa[i, d + 1]
+            x2 = xa[i, d + 2]
+            x3 = xa[i, d + 3]
+            z0 = xa[i + 1, d]
+            z1 = xa[i + 1, d + 1]
+            z2 = xa[i + 1, d + 2]
+            z3 = xa[i + 1, d + 3]
+            y0 = lane_t[d, col + c0 : col + c1]
+            y1 = lane_t[d + 1, col + c0 : col + c1]
+            y2 = lane_t[d + 2, col + c0 : col + c1]
+            y3 = lane_t[d + 3, col + c0 : col + c1]
+            for c in range(width):
+                a = y0[c]
+                b = y1[c]
+                e = y2[c]
+                f = y3[c]
+                r0[c] += x0 * a + x1 * b + x2 * e + x3 * f
+                r1[c] += z0 * a + z1 * b + z2 * e + z3 * f
+            d += 4
+        while d < dim:
+            x0 = xa[i, d]
+            z0 = xa[i + 1, d]
+            y0 = lane_t[d, col + c0 : col + c1]
+            for c in range(width):
+                r0[c] += x0 * y0[c]
+                r1[c] += z0 * y0[c]
+            d += 1
+        i += 2
+    if i < na:
+        c0 = lo[i] * _LANES
+        c1 = hi[i] * _LANES
+        r0 = g[i, c0:c1]
+        for c in range(c1 - c0):
+            r0[c] = 0.0
+        for d in range(dim):
+            x0 = xa[i, d]
+            y0 = lane_t[d, col + c0 : col + c1]
+            for c in range(c1 - c0):
+                r0[c] += x0 * y0[c]
+
+
+@njit(cache=True)
+def _costs(
+    xa: np.ndarray,
+    sqa: np.ndarray,
+    lane_t: np.ndarray,
+    lane_sq: np.ndarray,
+    col: int,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    g: np.ndarray,
+) -> None:
+    """Turn the dot products in g (row i: lanes [lo[i], hi[i])) into Euclidean local costs,
+    in place."""
+    na = xa.shape[0]
+    dim = xa.shape[1]
+    for i in range(na):
+        s = sqa[i]
+        row = g[i]
+        c0 = lo[i] * _LANES
+        c1 = hi[i] * _LANES
+        cancelled = False
+        for c in range(c0, c1):
+            t = s + lane_sq[col + c]
+            v = t - 2.0 * row[c]
+            row[c] = v
+            cancelled |= v <= _EXACT_TOL * t
+        if cancelled:
+            for c in range(c0, c1):
+                if row[c] <= _EXACT_TOL * (s + lane_sq[col + c]):
+                    v = 0.0
+                    for d in range(dim):
+                        diff = xa[i, d] - lane_t[d, col + c]
+                        v += diff * diff
+                    row[c] = v
+        for c in range(c0, c1):
+            row[c] = np.sqrt(row[c])
+
+
+@njit(cache=True)
+def _band(na: int, nb: int, window: int, lo: np.ndarray, hi: np.ndarray) -> None:
+    """lo[i], hi[i]: the columns j in [lo[i], hi[i]) the window allows row i (module
+    docstring); all of them for window -1."""
+    for i in range(na):
+        if window >= 0:
+            lo[i] = max(0, i - window - max(0, na - nb))
+            hi[i] = min(nb, i + window + max(0, nb - na) + 1)
+        else:
+            lo[i] = 0
+            hi[i] = nb
 
 
 @njit(parallel=True, cache=True)
@@ -329,12 +492,18 @@ def _matrix_kernel(
         prev = np.empty((maxlen + 1, _LANES))
         cur = np.empty((maxlen + 1, _LANES))
         g = np.empty((maxlen, maxlen * _LANES))
+        lo_row = np.empty(maxlen, dtype=np.int64)
+        hi_row = np.empty(maxlen, dtype=np.int64)
         for b in range(first_batch[a], n_batches):
             nb = batch_len[b]
-            width = nb * _LANES
             col = batch_col[b]
-            _products(xa, lane_t, col, width, g)
-            _costs(xa, sqa, lane_t, lane_sq, col, width, g)
+            _band(na, nb, window, lo_row, hi_row)
+            if window < 0:
+                _products_full(xa, lane_t, col, nb * _LANES, g)
+                _costs_full(xa, sqa, lane_t, lane_sq, col, nb * _LANES, g)
+            else:
+                _products(xa, lane_t, col, lo_row, hi_row, g)
+                _costs(xa, sqa, lane_t, lane_sq, col, lo_row, hi_row, g)
             # R row -1: 0 before the first column, inf elsewhere
             for j in range(nb + 1):
                 for k in range(_LANES):
@@ -342,11 +511,8 @@ def _matrix_kernel(
             for k in range(_LANES):
                 prev[0, k] = 0.0
             for i in range(na):
-                lo = 0
-                hi = nb
-                if window >= 0:
-                    lo = max(0, i - window - max(0, na - nb))
-                    hi = min(nb, i + window + max(0, nb - na) + 1)
+                lo = lo_row[i]
+                hi = hi_row[i]
                 for j in range(lo + 1):
                     for k in range(_LANES):
                         cur[j, k] = inf

@@ -8,7 +8,7 @@ import pytest
 from dtaidistance import dtw_ndim
 from scipy.spatial.distance import squareform
 
-from groupwise.behaviour.dtw import dtw_distance, dtw_matrix, warm_up
+from groupwise.behaviour.dtw import coarsen, dtw_distance, dtw_matrix, warm_up
 
 
 def reference_dtw(x: np.ndarray, y: np.ndarray, window: int | None = None) -> float:
@@ -177,3 +177,42 @@ def test_progress_counts_pairs_up_to_all_of_them_and_changes_nothing():
     assert reports[0] == (0, total) and reports[-1] == (total, total)
     done = [d for d, _ in reports]
     assert len(done) >= 3 and done == sorted(set(done))  # about ten launches: increasing
+
+
+def test_coarsen_by_hand():
+    x = np.arange(10.0).reshape(5, 2)  # steps (0, 1), (2, 3), (4, 5), (6, 7), (8, 9)
+    np.testing.assert_array_equal(coarsen(x, 2), [[1.0, 2.0], [5.0, 6.0], [8.0, 9.0]])
+    np.testing.assert_array_equal(coarsen(x, 5), [[4.0, 5.0]])
+    np.testing.assert_array_equal(coarsen(x, 7), [[4.0, 5.0]])
+    np.testing.assert_array_equal(coarsen(x, 1), x)
+    with pytest.raises(ValueError):
+        coarsen(x, 0)
+
+
+@pytest.mark.parametrize(("window", "stride"), [(None, 2), (None, 3), (4, 2), (0, 3)])
+def test_stride_is_the_scaled_distance_of_block_means(window, stride):
+    """dtw(x, y; window r, stride s) = s · dtw(coarsen(x), coarsen(y); window ceil(r / s)),
+    by the matrix, the pair function and the reference programme alike."""
+    rng = np.random.default_rng(4)
+    seqs = random_pool(rng, 13, [5, 9, 12], dim=4)
+    got = squareform(dtw_matrix(seqs, window=window, stride=stride))
+    coarse_window = None if window is None else -(-window // stride)
+    for i in range(len(seqs)):
+        for j in range(i + 1, len(seqs)):
+            a, b = coarsen(seqs[i], stride), coarsen(seqs[j], stride)
+            want = stride * reference_dtw(a, b, coarse_window)
+            assert got[i, j] == pytest.approx(want, rel=1e-10)
+            assert dtw_distance(seqs[i], seqs[j], window, stride) == pytest.approx(want, rel=1e-12)
+
+
+@pytest.mark.parametrize("window", [0, 2, 5])
+def test_a_band_on_long_equal_windows_matches_dtaidistance(window):
+    """The banded kernel computes only the band's products: rows pair up over the union of
+    their ranges, which must not leave a cell of either row out."""
+    rng = np.random.default_rng(5)
+    seqs = random_pool(rng, 17, [40], dim=6)
+    got = squareform(dtw_matrix(seqs, window=window))
+    for i in range(len(seqs)):
+        for j in range(i + 1, len(seqs)):
+            want = dtaidistance_dtw(seqs[i], seqs[j], window)
+            assert got[i, j] == pytest.approx(want, rel=1e-10)
