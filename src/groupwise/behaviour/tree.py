@@ -18,6 +18,21 @@ Construction, from condensed DTW distances of N behaviours:
    A merge of height h gets the first level k whose threshold exceeds h (t_k > h); a merge
    that no threshold exceeds (the root, and any merge as high as the root) gets the top
    level. So a merge exactly at t_k goes to level k + 1. Leaves are level 0.
+   Size caps ("balance", `balance_levels`; on by default, `TreeConfig.balance`). A cut fixes
+   how many clusters a level has, not how balanced they are: pools of a trained policy are
+   concentrated, and in a Hopper session round 1's top level held 3, 94 and 3 behaviours
+   (issue 22). So, top down, a node at level l (1 <= l < levels) with more than cap_l leaves
+   (MAX_GROUP at level 1, max(MAX_GROUP, ceil(balance · k^l)) above, at most floor(N / 2))
+   is split by its own sub-tree: its merge moves up to its parent's level (and is dissolved
+   into it), so its two dendrogram children take its place at level l, each split again
+   while too big. k^l is the mean cluster size the counts cut aims for at level l, so a node
+   may hold `balance` times that; a level-1 node at most MAX_GROUP (it is a group a person
+   picks: none is left unselectable for want of a split); and no node below the root more
+   than half the pool — unless its behaviours are indistinguishable: at levels >= 2 a node
+   whose mean pairwise distance is at most half the pool's mean pairwise distance
+   (`INDISTINCT_SPREAD`) is left whole (its behaviours are closer to each other than most
+   behaviours of the pool are to their nearest neighbour, so a split could only be
+   arbitrary). Level 1 is always split down to its cap: it holds the groups a person picks.
 3. n-ary tree. A merge with the same level as its parent is dissolved: its children take
    its place in the parent's child list, at the same position. Heights are monotone for
    every offered linkage, so a child's level never exceeds its parent's.
@@ -57,12 +72,14 @@ JSON (`to_json`, read back by `from_json`):
     poster URL, ...) filled by `to_json`'s `leaf_extra` argument ({} without it).
 """
 
+import math
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from functools import cached_property
 from typing import Any, Literal
 
 import numpy as np
+from scipy.spatial.distance import squareform
 
 from groupwise.behaviour.linkage import (
     as_condensed,
@@ -72,7 +89,7 @@ from groupwise.behaviour.linkage import (
 from groupwise.config import TreeConfig
 from groupwise.pool.ids import behaviour_id
 from groupwise.preferences.judgement import MAX_GROUP
-from groupwise.types import FloatArray
+from groupwise.types import FloatArray, IntArray
 
 NodeKind = Literal["leaf", "merge", "padding"]
 JSON_FORMAT = "groupwise.behaviour-tree/1"
@@ -249,6 +266,8 @@ def build_tree(distances: FloatArray, config: TreeConfig | None = None) -> Behav
             # heights are monotone for every offered linkage; clamping top-down keeps the
             # levels consistent even if rounding ever made a child higher than its parent
             level[child] = min(level[child], level[n + r]) if child >= n else 0
+    if cfg.balance is not None:
+        balance_levels(z, level, parent, d, cfg.balance)
     # a merge at its parent's level is dissolved into the parent
     dissolved = np.zeros(n_clusters, dtype=bool)
     dissolved[n:-1] = level[n:-1] == level[parent[n:-1]]
@@ -275,6 +294,81 @@ def build_tree(distances: FloatArray, config: TreeConfig | None = None) -> Behav
             built[c] = _merge(node_id, lvl, children, float(heights[r]))
     root = built.pop(n_clusters - 1)
     return BehaviourTree(root, cfg.levels, thresholds, cfg.method, cfg.bands)
+
+
+def level_caps(n: int, levels: int, balance: float) -> tuple[int, ...]:
+    """(levels - 1,) the most leaves a node at level 1 … levels - 1 may hold before it is
+    split (module docstring): MAX_GROUP at level 1, max(MAX_GROUP, ceil(balance · k^l))
+    above, never more than floor(N / 2)."""
+    k = n ** (1.0 / levels)
+    caps = [MAX_GROUP] + [max(MAX_GROUP, _ceil(balance * k**lv)) for lv in range(2, levels)]
+    return tuple(min(cap, n // 2) for cap in caps)
+
+
+def _ceil(x: float) -> int:
+    """ceil, forgiving rounding: 100^(2/4) is 10.000000000000002 in floating point."""
+    return math.ceil(x - 1e-9)
+
+
+INDISTINCT_SPREAD = 0.5
+"""A node whose mean pairwise distance is at most this share of the pool's is left whole
+above level 1 (module docstring). On the Hopper pools of issue 22 the tightest cluster of
+more than a quarter of the pool had 0.59 of the pool's mean distance; a behaviour's
+nearest neighbour was typically 0.59–0.71 of the median distance away
+(docs/results/tree-balance)."""
+
+
+def indistinguishable_spread(distances: FloatArray) -> float:
+    """The largest mean pairwise distance of an indistinguishable node: INDISTINCT_SPREAD
+    times the mean of the pool's condensed `distances` (module docstring)."""
+    return INDISTINCT_SPREAD * float(np.mean(distances))
+
+
+def balance_levels(
+    z: FloatArray, level: IntArray, parent: IntArray, distances: FloatArray, balance: float
+) -> None:
+    """Apply the size caps (module docstring) to the merge levels of a dendrogram, in place.
+
+    z: SciPy linkage (N - 1, 4); level, parent: (2N - 1,) each cluster's level (leaves 0,
+    the root `levels`, monotone) and parent (-1 for the root); distances: condensed.
+    Only raises levels, each to its parent's, so they stay monotone.
+    """
+    n = z.shape[0] + 1
+    top = int(level[-1])
+    if n < 4 or top < 2:
+        return
+    caps = level_caps(n, top, balance)
+    square = squareform(distances)
+    floor = indistinguishable_spread(distances)
+    size = np.ones(2 * n - 1, dtype=np.int64)
+    size[n:] = z[:, 3].astype(np.int64)
+    children = z[:, :2].astype(np.int64)
+
+    def leaves(c: int) -> list[int]:
+        out, stack = [], [c]
+        while stack:
+            x = stack.pop()
+            if x < n:
+                out.append(x)
+            else:
+                stack.extend(children[x - n])
+        return out
+
+    def spread(c: int) -> float:
+        idx = np.asarray(leaves(c))
+        return float(square[np.ix_(idx, idx)].sum() / (len(idx) * (len(idx) - 1)))
+
+    for upper in range(top, 1, -1):  # nodes at level upper - 1 under nodes at level upper
+        at = upper - 1
+        cap = caps[at - 1]
+        below = level[:-1] <= at
+        frontier = np.flatnonzero(below & (level[parent[:-1]] >= upper)).tolist()
+        while frontier:
+            c = frontier.pop()
+            if c < n or size[c] <= cap or (at >= 2 and spread(c) <= floor):
+                continue
+            level[c] = upper  # dissolved into its parent: its children take its place
+            frontier.extend(int(x) for x in children[c - n])
 
 
 def group_candidates(

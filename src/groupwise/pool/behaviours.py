@@ -61,18 +61,28 @@ class BehaviourPool:
 
     @property
     def distances(self) -> FloatArray:
-        """Condensed exact DTW distances of the pool's behaviours (SPEC §4), computed once."""
+        """Condensed DTW distances of the pool's behaviours (SPEC §4) with the default
+        `TreeConfig`'s band and time step, computed once."""
         return self.measure_distances()
 
-    def measure_distances(self, progress: ProgressFn | None = None) -> FloatArray:
-        """`distances`, computed now unless they were before; `progress` hears (pairs done,
-        pairs) while they are computed (`behaviour.dtw.dtw_matrix`)."""
+    def measure_distances(
+        self, progress: ProgressFn | None = None, cfg: "TreeConfig | None" = None
+    ) -> FloatArray:
+        """The distances with `cfg`'s DTW band and time step (`TreeConfig.dtw_window`,
+        `dtw_stride`; default config: `distances`), computed now unless they were before;
+        `progress` hears (pairs done, pairs) while they are computed
+        (`behaviour.dtw.dtw_matrix`)."""
         from groupwise.behaviour import dtw_matrix, pool_features
+        from groupwise.config import TreeConfig
 
-        if "distances" not in self._measured:
+        cfg = cfg or TreeConfig()
+        key = f"distances/{cfg.dtw_window}/{cfg.dtw_stride}"
+        if key not in self._measured:
             features = pool_features(self.fragments)
-            self._measured["distances"] = dtw_matrix(features, progress=progress)
-        return self._measured["distances"]
+            self._measured[key] = dtw_matrix(
+                features, window=cfg.dtw_window, progress=progress, stride=cfg.dtw_stride
+            )
+        return self._measured[key]
 
     def tree(self, cfg: "TreeConfig | None" = None) -> "BehaviourTree":
         """The pool's behaviour tree cut by `cfg` (SPEC §4), built once per config: the one
@@ -82,5 +92,5 @@ class BehaviourPool:
 
         cfg = cfg or TreeConfig()
         if cfg not in self._trees:
-            self._trees[cfg] = build_tree(self.distances, cfg)
+            self._trees[cfg] = build_tree(self.measure_distances(cfg=cfg), cfg)
         return self._trees[cfg]

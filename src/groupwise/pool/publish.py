@@ -194,7 +194,7 @@ def publish_pool(
         )
         pending = workers.start(jobs, store)
         mark = time.perf_counter()
-        distances = pool.distances
+        distances = pool.measure_distances(cfg=cfg.tree)
         dtw_s = time.perf_counter() - mark
         mark = time.perf_counter()
         tree = pool.tree(cfg.tree)

@@ -17,6 +17,8 @@ from groupwise.behaviour.tree import (
     from_json,
     geometric_thresholds,
     group_candidates,
+    indistinguishable_spread,
+    level_caps,
     linear_thresholds,
     medoids,
     to_json,
@@ -25,8 +27,8 @@ from groupwise.behaviour.tree import (
 # six points on a line; complete linkage merges (0,1)@1 -> m6, (4,5)@1 -> m7,
 # (2,m6)@3 -> m8, (3,m8)@7 -> m9, (m7,m9)@16 -> root. D = 16, thresholds 4, 8, 12, 16.
 LINE = np.array([0.0, 1.0, 3.0, 7.0, 15.0, 16.0])
-LINEAR = TreeConfig(bands="linear")
-"""The paper's cut, which the hand-worked trees below were drawn for."""
+LINEAR = TreeConfig(bands="linear", balance=None)
+"""The paper's cut, which the hand-worked trees below were drawn for (no size caps)."""
 
 LINE_D = pdist(LINE[:, None])
 
@@ -54,6 +56,22 @@ def check_invariants(tree: BehaviourTree, n: int) -> None:
         assert len(node.children) == 1 if node.kind == "padding" else len(node.children) >= 1
     leaves = [node for node in tree.nodes() if node.kind == "leaf"]
     assert [leaf.behaviour for leaf in leaves] == list(tree.leaf_order)
+
+
+def check_caps(tree: BehaviourTree, d: np.ndarray, balance: float) -> None:
+    """Every node below the root holds at most its level's cap, or is a level >= 2 node of
+    indistinguishable behaviours (`balance_levels`)."""
+    n = tree.root.size
+    if n < 4 or tree.levels < 2:
+        return
+    square = squareform(d)
+    floor = indistinguishable_spread(d)
+    caps = level_caps(n, tree.levels, balance)
+    for node in tree.nodes():
+        if 1 <= node.level < tree.levels and node.size > caps[node.level - 1]:
+            idx = np.array(node.leaves)
+            spread = square[np.ix_(idx, idx)].sum() / (len(idx) * (len(idx) - 1))
+            assert node.level >= 2 and spread <= floor, (node.id, node.size)
 
 
 def test_line_tree_by_hand():
@@ -114,7 +132,7 @@ def test_threshold_bands():
     assert (
         linear_thresholds(np.array([0.1, 0.3]), 3)[-1] == 0.3
     )  # the top is exactly the root height
-    tree = build_tree(LINE_D, TreeConfig(bands="geometric"))
+    tree = build_tree(LINE_D, TreeConfig(bands="geometric", balance=None))
     assert tree.thresholds == (2.0, 4.0, 8.0, 16.0)
     assert tree.node("m8").level == 2 and tree.node("m9").level == 3
     check_invariants(tree, 6)
@@ -208,20 +226,24 @@ def test_invalid_inputs():
     bands=st.sampled_from(["counts", "linear", "geometric"]),
     levels=st.integers(1, 5),
     ties=st.booleans(),
+    balance=st.sampled_from([None, 1.0, 2.0]),
 )
-def test_tree_properties(n, seed, method, bands, levels, ties):
+def test_tree_properties(n, seed, method, bands, levels, ties, balance):
     rng = np.random.default_rng(seed)
     d = rng.random(n * (n - 1) // 2) * 10
     if ties:  # few distinct values: equal heights and merges exactly at thresholds
         d = np.round(d / 2.5) * 2.5
-    tree = build_tree(d, TreeConfig(levels=levels, method=method, bands=bands))
+    cfg = TreeConfig(levels=levels, method=method, bands=bands, balance=balance)
+    tree = build_tree(d, cfg)
     check_invariants(tree, n)
     if n >= 2:
         assert tree.leaf_order == tuple(int(i) for i in leaves_list(linkage(d, method)))
         t = (0.0, *tree.thresholds)
         for node in tree.nodes():
-            if node.kind == "merge" and node.level < levels:
+            if node.kind == "merge" and node.level < levels and balance is None:
                 assert t[node.level - 1] <= node.height < t[node.level]
+        if balance is not None:
+            check_caps(tree, d, balance)
     assert from_json(json.loads(json.dumps(to_json(tree)))) == tree
 
 
@@ -283,3 +305,60 @@ def test_count_thresholds_leave_the_target_numbers_of_clusters():
         assert n - merges_below == clusters
     assert thresholds[-1] == heights[-1]
     assert count_thresholds(np.zeros(0), 3) == (0.0, 0.0, 0.0)
+
+
+def _dominant_pool(n: int, seed: int, spread: float) -> np.ndarray:
+    """Condensed distances of a trained policy's pool: 90 % of the behaviours one cloud of
+    radius `spread` (4-D), the rest outliers away from it and from each other."""
+    rng = np.random.default_rng(seed)
+    main = rng.normal(size=(n - n // 10, 4)) * spread
+    outliers = 3.0 + rng.normal(size=(n // 10, 4)) * 2.0
+    return pdist(np.concatenate([main, outliers]))
+
+
+@pytest.mark.parametrize("n", [60, 100, 200, 1000])
+@pytest.mark.parametrize("method", ["complete", "average", "ward"])
+def test_a_dominant_group_is_split_and_every_level_offers_groups(n, method):
+    """Issue 22: the counts cut left one top-level cluster of nearly every behaviour (94 of
+    100 in a Hopper session); with the size caps none holds more than half the leaves, and
+    levels 1 and 2 each offer selectable (2–8-leaf) groups."""
+    d = _dominant_pool(n, seed=n, spread=1.0)
+    plain = build_tree(d, TreeConfig(method=method, balance=None))
+    tree = build_tree(d, TreeConfig(method=method))
+    if method != "ward":  # Ward's merges alone balance this pool, not Hopper's (docs/results)
+        assert max(c.size for c in plain.root.children) > n / 2  # the problem
+    assert max(c.size for c in tree.root.children) <= n / 2
+    for level in (1, 2):
+        assert any(2 <= node.size <= 8 for node in tree.at_level(level)), level
+    assert all(node.size <= 8 for node in tree.at_level(1))
+    check_caps(tree, d, 2.0)
+    check_invariants(tree, n)
+    assert tree.leaf_order == plain.leaf_order
+
+
+def test_indistinguishable_behaviours_stay_one_cluster_above_level_1():
+    """A cloud whose mean pairwise distance is below half the pool's is not split at levels
+    >= 2 (nothing tells its behaviours apart), but level 1 still offers it in groups a
+    person can pick."""
+    n = 100
+    rng = np.random.default_rng(0)
+    # 90 near-identical behaviours; ten outliers in pairs, each pair a tight couple
+    main = rng.normal(size=(90, 4)) * 1e-3
+    couples = np.repeat(rng.normal(size=(5, 4)) * 50.0, 2, axis=0) + rng.normal(size=(10, 4))
+    d = pdist(np.concatenate([main, couples]))
+    square = squareform(d)
+    inner = square[:90, :90].sum() / (90 * 89)
+    assert inner <= indistinguishable_spread(d)
+    tree = build_tree(d)
+    (whole,) = [c for c in tree.root.children if 0 in c.leaves]
+    assert set(range(90)) <= set(whole.leaves) and whole.size > n / 2
+    assert all(node.size <= 8 for node in tree.at_level(1))
+    check_caps(tree, d, 2.0)
+
+
+def test_level_caps():
+    # N = 100, 4 levels: k = 3.16; level 1: MAX_GROUP; 2 k^2 = 20; 2 k^3 = 63 -> N / 2
+    # N = 1000: k = 5.62, 2 k^2 = 63.2 -> 64, 2 k^3 = 355.7 -> 356
+    assert level_caps(100, 4, 2.0) == (8, 20, 50)
+    assert level_caps(1000, 4, 2.0) == (8, 64, 356)
+    assert level_caps(10, 4, 2.0) == (5, 5, 5)
