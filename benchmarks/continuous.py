@@ -2,14 +2,16 @@
 
 Starts a real server (`groupwise serve`: uvicorn, SQLite, the training worker process) with
 one session of `--env` whose settings say ``training: "continuous"``, and plays a person:
-one comparison every `--pace` seconds for `--minutes` minutes. Meanwhile it reads the
-worker's live checkpoint (``checkpoints/live/state.json``: PPO steps, written every 30 s) to
-measure PPO steps per minute of session time, and times each judgement's answer. Then it
-ends the round and times the wait until the next round is open. It measures PPO's
-single-core throughput the same way as `ppo_throughput` (CPU time, learned reward) and
-prints a Markdown table.
+one comparison every `--pace` seconds for `--minutes` minutes a round, then "End round",
+for `--rounds` rounds. Meanwhile it reads the worker's live checkpoint
+(``checkpoints/live/state.json``: PPO steps, written every 30 s) to measure PPO steps per
+minute of session time, and times each judgement's answer and each wait from "End round"
+until the next round is open (the person's wait: the worker prepares the next round ahead
+after the session's `stage_after_s` (60 s), so a round should last longer than that and the
+staging). It measures PPO's single-core throughput the same way as `ppo_throughput` (CPU
+time, learned reward) and prints a Markdown table.
 
-    python -m benchmarks continuous [--env Hopper] [--minutes 3] [--pace 5]
+    python -m benchmarks continuous [--env Hopper] [--rounds 10] [--minutes 1.5] [--pace 5]
 """
 
 import argparse
@@ -35,7 +37,7 @@ SETTINGS = {
     "pool_size": 100,
     "round_seconds": 0,
     "comparisons_per_round": 0,
-    "rounds": 3,
+    "rounds": 3,  # set to --rounds + 1
     "frame_size": 96,
     "training": "continuous",
 }
@@ -49,23 +51,39 @@ def _live_steps(data: Path, session: str) -> int | None:
         return None
 
 
+def _wait_open(http: httpx.Client, session: str, round_index: int) -> None:
+    """Poll (every 50 ms) until round `round_index` is open."""
+    deadline = time.monotonic() + 900
+    while time.monotonic() < deadline:
+        state = http.get(f"/api/sessions/{session}").json()
+        if state["phase"] == "failed":
+            raise RuntimeError(f"session {session} failed: {state['error']}")
+        if state["phase"] == "ready" and state["round"] == round_index:
+            return
+        time.sleep(0.05)
+    raise TimeoutError(f"round {round_index} of {session} did not open")
+
+
 def main(argv: Sequence[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
     parser.add_argument("--env", default="Hopper")
-    parser.add_argument("--minutes", type=float, default=3.0)
+    parser.add_argument("--rounds", type=int, default=10, help="rounds ended")
+    parser.add_argument("--minutes", type=float, default=1.5, help="minutes a round")
     parser.add_argument("--pace", type=float, default=5.0, help="seconds per comparison")
     args = parser.parse_args([] if argv is None else list(argv))
     rng = np.random.default_rng(0)
     latencies: list[float] = []
     samples: list[tuple[float, int]] = []
+    waits: list[float] = []
     with tempfile.TemporaryDirectory() as tmp:
         data = Path(tmp) / "data"
         process, url, first = start_server(data, args.env)
         try:
             with httpx.Client(base_url=url, timeout=60) as http:
                 wait_for(http, first, "ready")  # the server is up (its CLI session ready)
+                settings = {**SETTINGS, "rounds": args.rounds + 1}
                 session = http.post(
-                    "/api/sessions", json={"env": args.env, "settings": SETTINGS}
+                    "/api/sessions", json={"env": args.env, "settings": settings}
                 ).json()["id"]
                 wait_for(http, session, "ready")
                 pool = SETTINGS["pool_size"]
@@ -79,33 +97,29 @@ def main(argv: Sequence[str] | None = None) -> None:
 
                 watcher = threading.Thread(target=watch, daemon=True)
                 watcher.start()
-                end = time.monotonic() + 60 * args.minutes
-                while time.monotonic() < end:
-                    a, b, c = (f"b{i}" for i in rng.choice(pool, size=3, replace=False))
-                    body = {
-                        "client_id": str(uuid.uuid4()),
-                        "round": 0,
-                        "left": [a, b],
-                        "right": [c],
-                        "label": "left",
-                        "source": "explored",
-                    }
+                for round_index in range(args.rounds):
+                    end = time.monotonic() + 60 * args.minutes
+                    while time.monotonic() < end:
+                        a, b, c = (f"b{i}" for i in rng.choice(pool, size=3, replace=False))
+                        body = {
+                            "client_id": str(uuid.uuid4()),
+                            "round": round_index,
+                            "left": [a, b],
+                            "right": [c],
+                            "label": "left",
+                            "source": "explored",
+                        }
+                        tick = time.perf_counter()
+                        answer = http.post(f"/api/sessions/{session}/judgements", json=body)
+                        latencies.append(time.perf_counter() - tick)
+                        answer.raise_for_status()
+                        time.sleep(args.pace)
                     tick = time.perf_counter()
-                    answer = http.post(f"/api/sessions/{session}/judgements", json=body)
-                    latencies.append(time.perf_counter() - tick)
-                    answer.raise_for_status()
-                    time.sleep(args.pace)
+                    http.post(f"/api/sessions/{session}/end-round").raise_for_status()
+                    _wait_open(http, session, round_index + 1)
+                    waits.append(time.perf_counter() - tick)
                 done.set()
                 watcher.join()
-                tick = time.perf_counter()
-                http.post(f"/api/sessions/{session}/end-round").raise_for_status()
-                deadline = time.monotonic() + 600
-                while time.monotonic() < deadline:
-                    state = http.get(f"/api/sessions/{session}").json()
-                    if state["phase"] == "ready" and state["round"] == 1:
-                        break
-                    time.sleep(0.1)
-                wait_s = time.perf_counter() - tick
         finally:
             process.terminate()
             process.wait(timeout=30)
@@ -118,7 +132,8 @@ def main(argv: Sequence[str] | None = None) -> None:
         per_minute = float("nan")
     print(
         f"{args.env}, one continuous session, a comparison every {args.pace:g} s for "
-        f"{args.minutes:g} min, {os.cpu_count()} CPUs, load average {os.getloadavg()[0]:.1f}\n"
+        f"{args.minutes:g} min a round, {args.rounds} rounds, {os.cpu_count()} CPUs, "
+        f"load average {os.getloadavg()[0]:.1f}\n"
     )
     print("| measure | value |")
     print("|---|---:|")
@@ -127,7 +142,11 @@ def main(argv: Sequence[str] | None = None) -> None:
     print(f"| ratio | {per_minute / (single * 60):.2f} |")
     p50, p99 = np.percentile(latencies, [50, 99]) * 1000
     print(f"| judgement answer, median / p99 (ms, n={len(latencies)}) | {p50:.0f} / {p99:.0f} |")
-    print(f"| End round → next round open (s) | {wait_s:.1f} |")
+    w50, w95 = np.percentile(waits, [50, 95])
+    print(
+        f"| End round → next round open, median / p95 (s, n={len(waits)}) | {w50:.1f} / {w95:.1f} |"
+    )
+    print(f"| End round → next round open, max (s) | {max(waits):.1f} |")
     print(
         f"\n{len(samples)} live checkpoints read; {statistics.mean(latencies) * 1000:.0f} ms mean"
     )

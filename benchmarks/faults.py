@@ -22,6 +22,7 @@ when it is mid-step, a worker running it (a server restart dominates: importing 
 
     python -m benchmarks faults
     python -m benchmarks.faults [--trials 100] [--clients 4] [--seed 0] [--fuzz-cases 10000]
+        [--training continuous|rounds]
 
 After the trials it runs the schemathesis fuzz of the live API (`benchmarks.fuzz`) unless
 ``--fuzz-cases 0``.
@@ -99,6 +100,13 @@ class FaultConfig:
     """Most time a client waits between two answered submissions (uniform)."""
     usable_timeout_s: float = 240.0
     """Longest wait for the session to be usable again before the trial counts as stuck."""
+    training: str = "continuous"
+    """The session's training mode: "continuous" (the app's default: the worker trains PPO
+    and refits while the clients answer, and prepares the next round ahead after
+    `stage_after_s`, so kills land mid-PPO, mid-refit, mid-staging and between opening a
+    round and committing the one before) or "rounds" (PPO only after a round ends)."""
+    stage_after_s: float = 2.0
+    """Continuous: seconds into a round when the next one is prepared ahead."""
 
 
 @dataclass
@@ -129,14 +137,16 @@ class Outcome:
 class ServeProcess:
     """`groupwise serve` on a free port of `data` (resuming its session after a restart)."""
 
-    def __init__(self, data: Path) -> None:
+    def __init__(self, data: Path, settings: dict[str, Any]) -> None:
         self.data = data
+        self.settings = settings
         self.log = data.parent / "server.log"
         self.process: subprocess.Popen[str] | None = None
 
     def start(self) -> tuple[str, str]:
         command = [sys.executable, "-m", "groupwise.cli", "serve", "--env", "GridWorld"]
-        command += ["--data", str(self.data), "--port", "0", "--settings", json.dumps(SETTINGS)]
+        command += ["--data", str(self.data), "--port", "0"]
+        command += ["--settings", json.dumps(self.settings)]
         env = {**os.environ, "PYTHONWARNINGS": "ignore", "PYTHONUNBUFFERED": "1"}
         with open(self.log, "ab") as log:
             self.process = subprocess.Popen(
@@ -209,7 +219,10 @@ class Harness:
     def __init__(self, config: FaultConfig, data: Path) -> None:
         self.config = config
         self.rng = np.random.default_rng(config.seed)
-        self.server = ServeProcess(data)
+        settings = {**SETTINGS, "training": config.training}
+        if config.training == "continuous":
+            settings["stage_after_s"] = config.stage_after_s
+        self.server = ServeProcess(data, settings)
         self.ledger = Ledger()
         self.http = httpx.Client(timeout=15)
         self.worker_pids: set[int] = set()
@@ -237,7 +250,9 @@ class Harness:
                 thread.start()
             for _ in range(self.config.trials):
                 kind = "server" if self.rng.random() < self.config.server_share else "worker"
-                if kind == "worker" or self.rng.random() < self.config.end_round_share:
+                # rounds mode: a worker only works after a round ends; continuous: always
+                trains_now = kind == "worker" and self.config.training == "rounds"
+                if trains_now or self.rng.random() < self.config.end_round_share:
                     self._control(target, "end-round")
                 time.sleep(self.rng.uniform(*self.config.load_s))
                 killed_at, killed = self._kill(kind, target)
@@ -432,11 +447,16 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--clients", type=int, default=4)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--fuzz-cases", type=int, default=10_000, help="0: no fuzz")
+    parser.add_argument("--training", choices=("continuous", "rounds"), default="continuous")
     args = parser.parse_args([] if argv is None else list(argv))
-    outcome = run(FaultConfig(trials=args.trials, clients=args.clients, seed=args.seed))
+    config = FaultConfig(
+        trials=args.trials, clients=args.clients, seed=args.seed, training=args.training
+    )
+    outcome = run(config)
     print(
         f"Fault injection: {args.trials} SIGKILLs of `groupwise serve` or its training worker "
-        f"while {args.clients} clients submit judgements (GridWorld, 16 behaviours a round).\n",
+        f"while {args.clients} clients submit judgements (GridWorld, 16 behaviours a round, "
+        f"{args.training} training).\n",
         flush=True,
     )
     print(table(outcome), flush=True)

@@ -5,6 +5,7 @@ points from the event stream; the finished page draws the same curve. Screenshot
 training-curve.png, training-curve-finished.png (1366 × 768)."""
 
 import re
+import time
 from typing import Any
 
 import pytest
@@ -76,3 +77,40 @@ def test_a_continuous_round_shows_ppo_steps_and_the_true_return_growing(
     assert points[-1]["round"] == 0 and points[-1]["ppo_steps"] >= steps  # the round's record
     expect(learning.locator("circle.curve-point")).to_have_count(len(evaluated))
     shot(page, "training-curve-finished")
+
+
+def test_end_round_shows_the_round_prepared_ahead(server: Server, page: Page) -> None:
+    """The next round is prepared while the person compares (`stage_after_s`), so "End
+    round" brings its chart without a preparing phase: the worker opens it before it commits
+    the ended round (how long that takes: `python -m benchmarks continuous`)."""
+    sid = server.new_session("groupwise", **CONTINUOUS, rounds=3, stage_after_s=0)
+    page.goto(f"{server.url}/?session={sid}")
+    expect(page.locator(".arc.leaf")).to_have_count(16)
+    button = page.get_by_role("button", name="Group A (left) is better")
+    expect(button).to_be_enabled()
+    button.click()
+    expect(page.locator(".toast")).to_contain_text("Saved")
+    staged = server.data / "sessions" / sid / "round-0001" / "staged.json"
+    deadline = time.monotonic() + 120
+    while not staged.is_file():  # PPO started with the answer; the next round follows it
+        assert time.monotonic() < deadline, f"round 1 was not prepared ahead\n{server.tail()}"
+        time.sleep(0.2)
+
+    page.get_by_role("button", name="End round").click()
+    tick = time.monotonic()
+    page.get_by_role("button", name="Click again to end the round").click()
+    expect(page.locator(".statusbar .round")).to_have_text("Round 1 of 0–2")
+    expect(page.locator(".arc.leaf")).to_have_count(16)
+    waited = time.monotonic() - tick
+    print(f"End round → round 1's chart: {waited:.2f} s")
+    server.wait_phase(sid, "ready", round_index=1)
+    assert not staged.exists()  # opened from it (a preparing job would have left it there)
+    # round 0 is committed after round 1 opened: its record arrives in the background
+    sql = (
+        "SELECT count(*) FROM checkpoints c JOIN rounds r ON r.id = c.round_id "
+        'WHERE r.session_id = ? AND r."index" = 0'
+    )
+    deadline = time.monotonic() + 120
+    while server.db_rows(sql, sid) != [(1,)]:
+        assert time.monotonic() < deadline, f"round 0 was not committed\n{server.tail()}"
+        time.sleep(0.5)

@@ -999,6 +999,14 @@ export interface components {
              */
             reset_reward_norm: boolean;
             /**
+             * Standardise Reward
+             * @description Centre and scale the learned reward per step by its running mean and sd over PPO's
+             *     rollouts before PPO sees it (imitation's `NormalizedRewardNet`); `normalize_reward` then
+             *     scales the result by the return std as before.
+             * @default false
+             */
+            standardise_reward: boolean;
+            /**
              * Tensorboard
              * @description Write TensorBoard logs under the run directory.
              * @default true
@@ -1266,6 +1274,7 @@ export interface components {
              *         "normalize_obs": true,
              *         "normalize_reward": true,
              *         "reset_reward_norm": false,
+             *         "standardise_reward": false,
              *         "tensorboard": true
              *       },
              *       "ppo_steps_per_round": 20000,
@@ -1301,8 +1310,9 @@ export interface components {
              *       "round_seconds": 600,
              *       "rounds": 5,
              *       "seed": 0,
+             *       "stage_after_s": 60,
              *       "suggestions": 100,
-             *       "training": "rounds"
+             *       "training": "continuous"
              *     }
              */
             settings: components["schemas"]["SessionSettings"];
@@ -1417,6 +1427,12 @@ export interface components {
              */
             seed: number;
             /**
+             * Stage After S
+             * @description continuous training: seconds into a round when the next round's pool is sampled from the policy as it is then and prepared ahead, so End round opens it at once (later: a younger policy's behaviours; a round ended sooner waits for its pool)
+             * @default 60
+             */
+            stage_after_s: number;
+            /**
              * Suggestions
              * @description top-k pairwise suggestion edges precomputed
              * @default 100
@@ -1424,8 +1440,8 @@ export interface components {
             suggestions: number;
             /**
              * Training
-             * @description rounds: PPO trains after each round; continuous: PPO trains while you compare, the reward model refitting as your answers arrive
-             * @default rounds
+             * @description continuous: PPO trains while you compare, the reward model refitting as your answers arrive, and the next round is prepared ahead; rounds: PPO trains after each round (the simulation study's protocol, SPEC §8)
+             * @default continuous
              * @enum {string}
              */
             training: "rounds" | "continuous";

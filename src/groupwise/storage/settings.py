@@ -112,9 +112,10 @@ class SessionSettings(BaseModel):
     pair_cap: PairCap = None
     pair_oversample: PairOversample = 1.0
     training: Literal["rounds", "continuous"] = Field(
-        default="rounds",
-        description="rounds: PPO trains after each round; continuous: PPO trains while you "
-        "compare, the reward model refitting as your answers arrive",
+        default="continuous",
+        description="continuous: PPO trains while you compare, the reward model refitting as "
+        "your answers arrive, and the next round is prepared ahead; rounds: PPO trains after "
+        "each round (the simulation study's protocol, SPEC §8)",
     )
     # -- advanced knobs (the New-session page's "Advanced") ------------------------------
     driver: Literal["app", "library"] = Field(
@@ -127,6 +128,14 @@ class SessionSettings(BaseModel):
     )
     render_workers: int = Field(
         default=2, ge=0, le=8, description="clip render processes (0: inline)"
+    )
+    stage_after_s: float = Field(
+        default=60,
+        ge=0,
+        le=3600,
+        description="continuous training: seconds into a round when the next round's pool is "
+        "sampled from the policy as it is then and prepared ahead, so End round opens it at "
+        "once (later: a younger policy's behaviours; a round ended sooner waits for its pool)",
     )
     exploration_fraction: ExplorationFraction = 0.25
     eval_episodes: int = Field(

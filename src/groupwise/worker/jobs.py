@@ -199,21 +199,29 @@ def published_round(
     return prepared_round(pool, published, queries, settings.suggestions)
 
 
-def stage_next(job: Job, run: Run, data_dir: Path, render: RenderPool) -> None:
-    """Prepare round `job.round + 1`'s offer ahead, from the policy as it is now, while
-    round `job.round` is still open (continuous training): published into its directory
-    and kept there (`offers.write_staged`) until round `job.round` ends (`train`)."""
+def stage_next(job: Job, run: Run) -> Offer:
+    """The offer of round `job.round + 1`, sampled ahead from the policy as it is now while
+    round `job.round` is still open (continuous training); `publish_staged` publishes it."""
     settings = job.settings
-    offer = begin_round(
+    return begin_round(
         run,
         session_strategy(run.cfg, job.mode),
         settings.comparisons_per_round,
         n_queries=offered_queries(settings),
         round_index=job.round + 1,
     )
+
+
+def publish_staged(
+    job: Job, offer: Offer, data_dir: Path, render: RenderPool, ppo_steps: int
+) -> None:
+    """Publish an offer prepared ahead (`stage_next`: clips, tree, candidates) into its
+    round's directory and keep it there (`offers.write_staged`) until round `job.round`
+    ends (`train`). Touches no run: the worker calls it on a thread of its own while PPO
+    goes on."""
     prepared = published_round(
-        data_dir, job.session_id, job.env, settings, offer.pool, offer.queries, render,
-        sample_s=offer.sample_s, ppo_steps=run.agent.num_timesteps,
+        data_dir, job.session_id, job.env, job.settings, offer.pool, offer.queries, render,
+        sample_s=offer.sample_s, ppo_steps=ppo_steps,
     )  # fmt: skip
     write_staged(data_dir / round_directory(job.session_id, job.round + 1), prepared)
     log.info("session %s: round %d staged", job.session_id, job.round + 1)

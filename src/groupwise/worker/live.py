@@ -18,9 +18,11 @@ slices have trained long enough (`curve.EVAL_MIN_S`, `curve.EVAL_COST`).
 
 When the person ends the round, the training job ends it through `end_round` on the live
 run (`take`), with no PPO steps of its own: the policy trained all along. The next round's
-offer was prepared ahead, after `STAGE_AFTER_S` seconds of the round, from the policy as it
-was then (`jobs.stage_next`), so it opens as soon as the round is committed; a round ended
-sooner has its next pool sampled then, as in rounds mode.
+offer was prepared ahead, `stage_after_s` seconds into the round (a session setting), from
+the policy as it was then (`jobs.stage_next`); it opens first, and the ended round is
+committed (final fit, evaluation, checkpoint) while the person already compares again. A
+worker killed in between commits that round when it resumes. A round ended sooner has its
+next pool sampled then, as in rounds mode.
 """
 
 import dataclasses
@@ -28,6 +30,7 @@ import logging
 import math
 import time
 from collections.abc import Callable
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -47,6 +50,7 @@ from groupwise.worker.jobs import (
     checkpoint_of,
     commit_round,
     open_run,
+    publish_staged,
     published_offer,
     sampled_at,
     stage_next,
@@ -59,10 +63,6 @@ log = logging.getLogger(__name__)
 
 CHECKPOINT_S = 30.0
 """Seconds between a continuous round's live checkpoints."""
-STAGE_AFTER_S = 60.0
-"""Seconds of a round's continuous training before the next round's offer is prepared
-ahead from the policy as it is then (`jobs.stage_next`), so that "End round" opens it
-at once; the worker trains nothing while it renders the clips."""
 CONTINUOUS = "continuous"
 
 
@@ -80,8 +80,9 @@ class LiveTraining:
     """`time.monotonic()` when this worker took the round up."""
     pool_steps: int
     """PPO steps of the policy that sampled the round's pool."""
-    staged: bool = False
-    """Whether the next round's offer was prepared ahead."""
+    staged: "Future[None] | None" = None
+    """The next round's offer being published ahead (on `LiveSessions`' staging thread),
+    or published; None before."""
     trained_s: float = 0.0
     """Seconds this worker's PPO slices of the round took."""
     evaluated_s: float | None = None
@@ -101,6 +102,9 @@ class LiveSessions:
         self._live: dict[str, LiveTraining] = {}
         self._turns: dict[str, int] = {}
         self._turn = 0
+        self._staging = ThreadPoolExecutor(max_workers=1, thread_name_prefix="staging")
+        """Publishes next rounds prepared ahead (`jobs.publish_staged`): rendering waits on
+        the render processes, so PPO goes on meanwhile."""
         self._broken: dict[str, int] = {}
         """Sessions whose continuous training failed, and the round: left alone until the
         round ends (its training job then tries once more and fails visibly if it must)."""
@@ -151,12 +155,19 @@ class LiveSessions:
         self._stage(job, training)
 
     def _stage(self, job: Job, training: LiveTraining) -> None:
-        """Prepare the next round's offer ahead once the round trained `STAGE_AFTER_S`."""
+        """Prepare the next round's offer ahead once the round trained `stage_after_s`: the
+        pool sampled and its queries chosen here, its clips rendered and published on the
+        staging thread while the slices go on."""
         last = job.round + 1 >= job.settings.rounds
-        if training.staged or last or time.monotonic() - training.started < STAGE_AFTER_S:
+        waited = time.monotonic() - training.started
+        if training.staged is not None or last or waited < job.settings.stage_after_s:
             return
-        stage_next(job, training.run, self.data_dir, self.render(job.settings.render_workers))
-        training.staged = True
+        offer = stage_next(job, training.run)
+        render = self.render(job.settings.render_workers)
+        steps = training.run.agent.num_timesteps
+        training.staged = self._staging.submit(
+            publish_staged, job, offer, self.data_dir, render, steps
+        )
 
     def _point(self, training: LiveTraining, *, evaluate: bool) -> None:
         """Store a point of the learning curve: the steps and last fit now, and the greedy
@@ -182,9 +193,11 @@ class LiveSessions:
 
     def take(self, job: Job) -> LiveTraining:
         """The live training of `job`'s round, to end it (the training job): this worker's,
-        or resumed from the live checkpoint and the database after a restart."""
+        or resumed from the live checkpoint and the database after a restart. A next round
+        being published ahead is waited for: it opens as soon as it is ready."""
         training = self._live.pop(job.session_id, None)
         if training is not None and training.round == job.round:
+            _wait_staged(training)
             return training
         if training is not None:
             training.run.close()
@@ -194,6 +207,7 @@ class LiveSessions:
         for training in self._live.values():
             training.run.close()
         self._live.clear()
+        self._staging.shutdown(wait=True, cancel_futures=True)
 
     def _training(self, job: Job) -> LiveTraining:
         training = self._live.get(job.session_id)
@@ -278,3 +292,16 @@ class LiveSessions:
                 if row.phase == READY
             ]
             return jobs, {row.id for row in continuous if row.phase == TRAINING}
+
+
+def _wait_staged(training: LiveTraining) -> None:
+    """Wait for the next round being published ahead; a failure is logged (the round
+    ending then prepares its next round as in rounds mode)."""
+    if training.staged is None:
+        return
+    try:
+        training.staged.result()
+    except Exception:
+        log.exception(
+            "session %s: preparing round %d ahead failed", training.session_id, training.round + 1
+        )

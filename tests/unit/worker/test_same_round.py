@@ -81,10 +81,11 @@ def _state(checkpoint: Path) -> tuple[PreferenceDataset, dict[str, torch.Tensor]
 
 
 def test_an_app_round_and_a_headless_round_are_the_same_round(client, tmp_path):
-    sid = new_session(client, seed=7)["id"]
+    chosen = {"seed": 7, "training": "rounds"}  # PPO after each round, as the headless loop
+    sid = new_session(client, **chosen)["id"]
     data = context_of(client).data_dir
     app_dir = data / "sessions" / sid
-    settings = SessionSettings.model_validate({**TINY, "seed": 7}).for_env("GridWorld")
+    settings = SessionSettings.model_validate({**TINY, **chosen}).for_env("GridWorld")
     for r in (0, 1):
         run_worker_once(client)  # prepare round r
         _answer(client, sid, r)

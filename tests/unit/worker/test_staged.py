@@ -5,20 +5,21 @@ from tests.unit.server.conftest import context_of, new_session, post_judgement, 
 
 from groupwise.storage.sessions import get_round, round_directory
 from groupwise.worker import jobs as jobs_module
-from groupwise.worker import live as live_module
 from groupwise.worker.jobs import sampled_at
 from groupwise.worker.offers import STAGED_FILE
 from groupwise.worker.process import Worker
 
 
-def test_end_round_opens_the_round_prepared_ahead(client, monkeypatch):
-    monkeypatch.setattr(live_module, "STAGE_AFTER_S", 0.0)
-    sid = new_session(client, training="continuous")["id"]
+def test_end_round_opens_the_round_prepared_ahead(client):
+    sid = new_session(client, training="continuous", stage_after_s=0)["id"]
     run_worker_once(client)  # round 0 ready
     post_judgement(client, sid, ["b0", "b1"], ["b2"])
     context = context_of(client)
     worker = Worker(context.db, context.data_dir, poll_s=0.1)
     assert worker.train_live()  # one slice: the first fit, a rollout, the next round staged
+    published = worker.live._live[sid].staged
+    assert published is not None
+    published.result()  # its clips render on the staging thread while slices go on
     staged = context.data_dir / round_directory(sid, 1) / STAGED_FILE
     assert staged.is_file()
     # sampled from the policy after its first rollout (1 env × 32 steps): the pool's age
@@ -35,15 +36,14 @@ def test_end_round_opens_the_round_prepared_ahead(client, monkeypatch):
     assert not worker.run_next()  # no preparing job was needed
 
 
-def _staged_session(client, monkeypatch) -> tuple[str, Worker]:
+def _staged_session(client) -> tuple[str, Worker]:
     """A continuous session in round 0 with one judgement and round 1 prepared ahead."""
-    monkeypatch.setattr(live_module, "STAGE_AFTER_S", 0.0)
-    sid = new_session(client, training="continuous")["id"]
+    sid = new_session(client, training="continuous", stage_after_s=0)["id"]
     run_worker_once(client)
     post_judgement(client, sid, ["b0", "b1"], ["b2"])
     context = context_of(client)
     worker = Worker(context.db, context.data_dir, poll_s=0.1)
-    assert worker.train_live()
+    assert worker.train_live()  # round 1 sampled; it is published on the staging thread
     return sid, worker
 
 
@@ -53,7 +53,7 @@ def _round_stats(client, sid: str, round_index: int) -> dict | None:
 
 
 def test_the_round_prepared_ahead_opens_before_the_round_is_committed(client, monkeypatch):
-    sid, worker = _staged_session(client, monkeypatch)
+    sid, worker = _staged_session(client)
     seen = []
     original = jobs_module.end_round
 
@@ -72,15 +72,15 @@ def test_the_round_prepared_ahead_opens_before_the_round_is_committed(client, mo
     assert (state["phase"], state["round"]) == ("ready", 1)
 
 
-def test_a_worker_killed_between_opening_and_committing_commits_on_resume(
-    client, monkeypatch
-):
-    sid, worker = _staged_session(client, monkeypatch)
+def test_a_worker_killed_between_opening_and_committing_commits_on_resume(client):
+    sid, worker = _staged_session(client)
     client.post(f"/api/sessions/{sid}/end-round")
     context = context_of(client)
     job = jobs_module.job_of(context.db, sid)
-    assert job is not None and jobs_module.open_staged(job, context.db, context.data_dir)
-    worker.live.close()  # killed here: round 1 open, round 0 not committed
+    assert job is not None
+    training = worker.live.take(job)  # as the training job: round 1 is published by now
+    assert jobs_module.open_staged(job, context.db, context.data_dir)
+    training.run.close()  # killed here: round 1 open, round 0 not committed
     assert _round_stats(client, sid, 0) is None
 
     resumed = Worker(context.db, context.data_dir, poll_s=0.1)
