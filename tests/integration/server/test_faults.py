@@ -5,7 +5,6 @@ continuous sessions (the app's default) the worker is killed while it trains PPO
 prepares the next round ahead or commits a round after opening the next."""
 
 import pytest
-
 from benchmarks.faults import FaultConfig, run
 
 
