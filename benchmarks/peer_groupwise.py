@@ -46,7 +46,8 @@ VARIANTS: dict[str, dict[str, dict[str, Any]]] = {
     # imitation's reward for PPO: running per-step centring and scaling, no return scaling
     "std-step": {"ppo": {"standardise_reward": True, "normalize_reward": False}},
     "std-step-ret": {"ppo": {"standardise_reward": True}},
-    "additive": {"reward": {"additive_actions": True}},
+    "additive": {"reward": {"action_term": "additive"}},
+    "cost": {"reward": {"action_term": "cost"}},
 }
 """Variant name → {"loop" | "reward" | "ppo": field overrides} on top of the spec."""
 

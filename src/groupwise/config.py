@@ -90,11 +90,14 @@ class RewardConfig:
     seeds from learning to spin (-127 ± 12 vs -233 ± 198) and did better on GridWorld, but
     cannot see a control cost: on the study's Reacher (1,000 steps) the groupwise DM's agents
     collapsed to -865 ± 546 against -199 ± 70 with [obs ; act]."""
-    additive_actions: bool = False
-    """With `use_actions`, each member's reward is f(obs) + g(act), two MLPs summed, instead
-    of one MLP over [obs ; act]: the form of every SPEC env's true reward (a state term and
-    a control cost), and one that cannot pay an action only in some states, which PPO, setting
-    the action, exploits (docs/results/peer)."""
+    action_term: Literal["joint", "additive", "cost"] = "joint"
+    """How the action enters each member's reward (with `use_actions`): "joint", one MLP over
+    [obs ; act] (SPEC §3); "additive", f(obs) + g(act), two MLPs summed; "cost",
+    f(obs) − Σ_i c_i (a_i / rms_i)², a learned control cost c_i ≥ 0. "additive" and "cost" have
+    the form of every SPEC env's true reward (a state term and a control cost) and cannot
+    pay an action only in some states, which PPO, setting the action, exploits: a joint
+    reward learnt from 30-step sums credits the torque that keeps a pendulum near the top
+    (braking) and PPO, braking everywhere, cannot swing up (docs/results/peer)."""
 
 
 @dataclass(frozen=True, config=_STRICT)

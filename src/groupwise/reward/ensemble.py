@@ -67,6 +67,7 @@ class RewardEnsemble:
             cfg.activation,
             generator,
             self._split,
+            cfg.action_term,
         )
         self.net.eval()
         self.l2_weight = float(cfg.initial_l2)
@@ -97,10 +98,10 @@ class RewardEnsemble:
 
     @property
     def _split(self) -> int | None:
-        """Where the additive members split their inputs (`RewardConfig.additive_actions`):
-        after the observation; None for one MLP over all inputs."""
-        additive = self.cfg.use_actions and self.cfg.additive_actions and self.act_dim > 0
-        return self.obs_dim if additive else None
+        """Where members that separate the action (`RewardConfig.action_term`) split their
+        inputs: after the observation; None for one MLP over all inputs."""
+        separate = self.cfg.use_actions and self.cfg.action_term != "joint" and self.act_dim > 0
+        return self.obs_dim if separate else None
 
     # ---------------------------------------------------------------- prediction
 
@@ -172,7 +173,13 @@ class RewardEnsemble:
         generator = torch.Generator().manual_seed(int(rng.integers(0, 2**63 - 1)))
         cfg = self.cfg
         self.net.mlp = member_mlp(
-            cfg.ensemble_size, self.in_dim, cfg.hidden_sizes, cfg.activation, generator, self._split
+            cfg.ensemble_size,
+            self.in_dim,
+            cfg.hidden_sizes,
+            cfg.activation,
+            generator,
+            self._split,
+            cfg.action_term,
         )
         self.net.eval()
         self.l2_weight = float(cfg.initial_l2)
@@ -194,12 +201,19 @@ class RewardEnsemble:
     def update_normalizer(self, obs: np.ndarray, acts: np.ndarray) -> None:
         """Fold the steps obs (..., obs_dim), acts (..., act_dim) into the input statistics."""
         self.net.norm.update(self.features(obs, acts))
+        self._uncentre_actions()
 
     def refit_normalizer(self, obs: np.ndarray, acts: np.ndarray) -> None:
         """Reset the input statistics to exactly those of these steps (each counted once)."""
         x = self.features(obs, acts)
         self.net.norm.reset()
         self.net.norm.update(x)
+        self._uncentre_actions()
+
+    def _uncentre_actions(self) -> None:
+        """A control cost's actions are scaled, not centred (`RunningNorm.uncentre`)."""
+        if self._split is not None and self.cfg.action_term == "cost":
+            self.net.norm.uncentre(self._split)
 
     # ---------------------------------------------------------------- persistence
 

@@ -10,6 +10,7 @@ K separate `nn.Sequential` forwards would cost K times the Python and dispatch o
 import math
 from collections.abc import Callable
 from itertools import pairwise
+from typing import Literal
 
 import numpy as np
 import torch
@@ -83,6 +84,15 @@ class RunningNorm(nn.Module):
         self.mean.copy_(mean)
         self.var.copy_(m2 / total)
         self.count.fill_(total)
+
+    @torch.no_grad()
+    def uncentre(self, start: int) -> None:
+        """From feature `start` on, scale by the root mean square instead of centring and
+        scaling by the sd (a control cost must be 0 at action 0). Second moments merge as
+        variances about 0 do, so `update` keeps them exact; call this after each update."""
+        tail = slice(start, None)
+        self.var[tail] += self.mean[tail].square()
+        self.mean[tail] = 0.0
 
     def forward(self, x: Tensor) -> Tensor:
         """(..., dim) -> (..., dim) standardised and clipped."""
@@ -177,9 +187,28 @@ class StackedMLP(nn.Module):
         return nn.Sequential(*layers)
 
 
+class QuadraticCost(nn.Module):
+    """K members' control cost −Σ_i c_i z_i² over `dims` features, c_i = softplus(w_i) ≥ 0."""
+
+    def __init__(self, members: int, dims: int, initial: float = 0.01) -> None:
+        """Every c_i starts at `initial` (> 0)."""
+        super().__init__()
+        self.members = members
+        self.raw = nn.Parameter(torch.full((members, 1, dims), math.log(math.expm1(initial))))
+
+    def forward(self, z: Tensor) -> Tensor:
+        """z: (N, dims) or (K, N, dims). Returns (K, N)."""
+        return -(nn.functional.softplus(self.raw) * z.square()).sum(dim=-1)
+
+    def l2_penalty(self) -> Tensor:
+        """(K,) zeros: the costs are not weights to shrink (shrinking w raises c to 0.69)."""
+        return torch.zeros(self.members)
+
+
 class AdditiveMLP(nn.Module):
     """K members r(x) = f(x[:split]) + g(x[split:]): one `StackedMLP` over the first `split`
-    features (the observation), one over the rest (the action), summed.
+    features (the observation) and, over the rest (the action), another `StackedMLP`
+    (`second="mlp"`) or a `QuadraticCost` (`second="cost"`), summed.
 
     The same interface as `StackedMLP` (forward, `l2_penalty`, `members`), so training
     and prediction take either. No term can depend on both parts at once.
@@ -193,6 +222,7 @@ class AdditiveMLP(nn.Module):
         hidden_sizes: tuple[int, ...],
         activation: str = "relu",
         generator: torch.Generator | None = None,
+        second: Literal["mlp", "cost"] = "mlp",
     ) -> None:
         """Raises ValueError unless 0 < split < in_dim (and as `StackedMLP` does)."""
         super().__init__()
@@ -202,7 +232,11 @@ class AdditiveMLP(nn.Module):
         self.in_dim = in_dim
         self.split = split
         self.first = StackedMLP(members, split, hidden_sizes, activation, generator)
-        self.second = StackedMLP(members, in_dim - split, hidden_sizes, activation, generator)
+        self.second: StackedMLP | QuadraticCost = (
+            StackedMLP(members, in_dim - split, hidden_sizes, activation, generator)
+            if second == "mlp"
+            else QuadraticCost(members, in_dim - split)
+        )
 
     def forward(self, x: Tensor) -> Tensor:
         """x: (N, in_dim) or (K, N, in_dim). Returns (K, N)."""
@@ -220,11 +254,15 @@ def member_mlp(
     activation: str = "relu",
     generator: torch.Generator | None = None,
     split: int | None = None,
+    action_term: Literal["joint", "additive", "cost"] = "joint",
 ) -> StackedMLP | AdditiveMLP:
-    """The members' MLPs: one over all features, or with `split` an `AdditiveMLP`."""
-    if split is None:
+    """The members' MLPs: one over all features ("joint", or no `split`), or split after
+    `split` features into an `AdditiveMLP` with an MLP ("additive") or a control cost
+    ("cost") over the rest."""
+    if split is None or action_term == "joint":
         return StackedMLP(members, in_dim, hidden_sizes, activation, generator)
-    return AdditiveMLP(members, in_dim, split, hidden_sizes, activation, generator)
+    second: Literal["mlp", "cost"] = "mlp" if action_term == "additive" else "cost"
+    return AdditiveMLP(members, in_dim, split, hidden_sizes, activation, generator, second)
 
 
 class RewardNet(nn.Module):
@@ -238,11 +276,14 @@ class RewardNet(nn.Module):
         activation: str = "relu",
         generator: torch.Generator | None = None,
         split: int | None = None,
+        action_term: Literal["joint", "additive", "cost"] = "joint",
     ) -> None:
-        """`split`: members f(x[:split]) + g(x[split:]) (`AdditiveMLP`); None: one MLP."""
+        """`split` and `action_term`: the members' form (`member_mlp`)."""
         super().__init__()
         self.norm = RunningNorm(in_dim)
-        self.mlp = member_mlp(members, in_dim, hidden_sizes, activation, generator, split)
+        self.mlp = member_mlp(
+            members, in_dim, hidden_sizes, activation, generator, split, action_term
+        )
 
     def forward(self, x: Tensor) -> Tensor:
         """x: (N, in_dim) shared by all members, or (K, N, in_dim). Returns (K, N)."""

@@ -159,19 +159,23 @@ def test_mismatched_inputs_raise():
         fit(_ensemble(), data, CFG, np.random.default_rng(0), epochs=1)
 
 
-def test_additive_members_learn_a_state_reward_and_a_control_cost():
+@pytest.mark.parametrize("term", ["additive", "cost"])
+def test_separate_action_terms_learn_a_state_reward_and_a_control_cost(term):
     """True reward = obs[0] − acts[0]²: separable, as the SPEC envs' rewards are."""
     obs, acts, _ = fragments(400, np.random.default_rng(0))
     returns = (obs[..., 0] - acts[..., 0] ** 2).sum(axis=1).astype(np.float64)
     pairs = np.arange(400).reshape(200, 2)
     labels = (returns[pairs[:, 0]] > returns[pairs[:, 1]]).astype(np.float32)
-    cfg = RewardConfig(additive_actions=True)
+    cfg = RewardConfig(action_term=term)
     ens = _ensemble(cfg=cfg)
     assert type(ens.net.mlp).__name__ == "AdditiveMLP"
     fit(ens, PreferenceDataset(obs, acts, returns, pairs, labels), cfg, np.random.default_rng(0), 8)
     test_obs, test_acts, _ = fragments(300, np.random.default_rng(123))
     truth = (test_obs[..., 0] - test_acts[..., 0] ** 2).sum(axis=1)
     assert np.corrcoef(ens.returns(test_obs, test_acts).mean(axis=1), truth)[0, 1] > 0.9
+    zero, full = np.zeros((1, ACT_DIM)), np.array([[1.0, 0.0]])
+    state = test_obs[:1, 0]
+    assert ens.mean_reward(state, full)[0] < ens.mean_reward(state, zero)[0]  # a cost
     # a fresh fit from scratch (warm_start off) rebuilds the same kind of members
     ens.reinitialise(np.random.default_rng(1))
     assert type(ens.net.mlp).__name__ == "AdditiveMLP"

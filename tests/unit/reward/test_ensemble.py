@@ -172,12 +172,12 @@ def test_files_written_before_observation_only_members_load_with_actions(tmp_pat
 
 
 def test_additive_ensemble_saves_and_loads(tmp_path: Path):
-    ens = _ensemble(2, RewardConfig(additive_actions=True, hidden_sizes=(8, 8)))
+    ens = _ensemble(2, RewardConfig(action_term="additive", hidden_sizes=(8, 8)))
     ens.save(tmp_path / "reward.pt")
     rebuilt = RewardEnsemble.load(tmp_path / "reward.pt")
-    assert rebuilt.cfg.additive_actions
+    assert rebuilt.cfg.action_term == "additive"
     obs, acts = _inputs(5)
     np.testing.assert_allclose(rebuilt.mean_reward(obs, acts), ens.mean_reward(obs, acts))
     # without action inputs there is nothing to add: one MLP over the observation
-    alone = _ensemble(2, RewardConfig(additive_actions=True, use_actions=False))
+    alone = _ensemble(2, RewardConfig(action_term="additive", use_actions=False))
     assert alone.net.mlp.in_dim == OBS

@@ -107,3 +107,27 @@ def test_additive_members_are_a_sum_of_an_observation_term_and_an_action_term():
     torch.testing.assert_close(mlp.l2_penalty(), mlp.first.l2_penalty() + mlp.second.l2_penalty())
     with pytest.raises(ValueError, match="split"):
         AdditiveMLP(2, 3, 3, (4,))
+
+
+def test_a_control_cost_is_zero_at_zero_and_grows_with_the_action_squared():
+    mlp = AdditiveMLP(2, 4, 3, (5,), second="cost")
+    states = torch.randn(3, 3)
+    rewards = [mlp(torch.cat([states, torch.full((3, 1), a)], dim=1)) for a in (0.0, 1.0, 2.0)]
+    torch.testing.assert_close(rewards[0], mlp.first(states))
+    cost_1, cost_2 = rewards[0] - rewards[1], rewards[0] - rewards[2]
+    assert (cost_1 > 0).all()
+    torch.testing.assert_close(cost_2, 4 * cost_1)
+    torch.testing.assert_close(mlp.l2_penalty(), mlp.first.l2_penalty())
+
+
+def test_uncentred_features_are_scaled_by_their_root_mean_square():
+    rng = np.random.default_rng(0)
+    parts = [rng.normal(loc=[1.0, 2.0], scale=[1.0, 0.5], size=(n, 2)) for n in (30, 50)]
+    norm = RunningNorm(2)
+    for part in parts:  # merged after each update, as the ensemble does
+        norm.update(part)
+        norm.uncentre(1)
+    everything = np.concatenate(parts)
+    assert float(norm.mean[1]) == 0.0
+    np.testing.assert_allclose(float(norm.var[1]), (everything[:, 1] ** 2).mean(), rtol=1e-5)
+    np.testing.assert_allclose(float(norm.mean[0]), everything[:, 0].mean(), rtol=1e-5)
