@@ -26,6 +26,7 @@ import subprocess
 import tempfile
 import time
 import uuid
+from collections.abc import Iterator
 from pathlib import Path
 
 BACKENDS = ("sqlite", "postgresql")
@@ -34,14 +35,10 @@ UNPRIVILEGED = "nobody"
 """The user initdb and postgres run as when the tests run as root."""
 START_TIMEOUT_S = 60.0
 
-SETTINGS = {
-    "listen_addresses": "",
-    "max_connections": "200",
-    # a test cluster need not survive a power cut; the storage code commits as it would
-    "fsync": "off",
-    "full_page_writes": "off",
-    "shared_buffers": "32MB",
-}
+SETTINGS = {"listen_addresses": "", "max_connections": "200", "shared_buffers": "32MB"}
+FAST = {"fsync": "off", "full_page_writes": "off"}
+"""A test cluster need not survive a power cut (`durable=False`); the storage code commits
+as it would. A benchmark keeps both on, as SQLite's ``synchronous=FULL``."""
 
 
 def find_bin_dir() -> Path | None:
@@ -75,8 +72,9 @@ def free_port() -> int:
 class PostgresCluster:
     """One PostgreSQL server on a temporary cluster; `url()` of its databases."""
 
-    def __init__(self, bin_dir: Path) -> None:
+    def __init__(self, bin_dir: Path, *, durable: bool = False) -> None:
         self.bin_dir = bin_dir
+        self.settings = SETTINGS if durable else {**SETTINGS, **FAST}
         self.root = Path(tempfile.mkdtemp(prefix="groupwise-pg-"))
         self.data = self.root / "data"
         self.port = free_port()
@@ -111,7 +109,7 @@ class PostgresCluster:
             cwd=self.root,
             **self._as,  # type: ignore[arg-type]  # user/group/extra_groups of Popen
         )  # fmt: skip
-        options = [f"-c{key}={value}" for key, value in SETTINGS.items()]
+        options = [f"-c{key}={value}" for key, value in self.settings.items()]
         log = open(self.root / "postgres.log", "wb")  # the server's stdout, closed below
         with log:
             self.process = subprocess.Popen(
@@ -187,13 +185,13 @@ class PostgresCluster:
 
 
 @contextlib.contextmanager
-def running_cluster(bin_dir: Path | None = None):  # type: ignore[no-untyped-def]
+def running_cluster(*, durable: bool = False) -> Iterator[PostgresCluster]:
     """A started `PostgresCluster`, stopped on exit. Raises RuntimeError when PostgreSQL's
     server programs are not installed."""
-    found = bin_dir or find_bin_dir()
+    found = find_bin_dir()
     if found is None:
         raise RuntimeError("PostgreSQL's server programs (initdb, postgres) are not installed")
-    cluster = PostgresCluster(found)
+    cluster = PostgresCluster(found, durable=durable)
     try:
         yield cluster.start()
     finally:
