@@ -32,7 +32,14 @@ from groupwise.preferences.judgement import (
 from groupwise.preferences.pairs import judgement_pairs
 from groupwise.storage.errors import ConflictError, InvalidError, NotFoundError, check_text
 from groupwise.storage.lifecycle import close_round
-from groupwise.storage.models import BehaviourRow, JudgementRow, PairRow, SessionRow, utcnow
+from groupwise.storage.models import (
+    MAX_INTEGER,
+    BehaviourRow,
+    JudgementRow,
+    PairRow,
+    SessionRow,
+    utcnow,
+)
 from groupwise.storage.phases import READY
 from groupwise.storage.rounds import mark_suggestion_used
 from groupwise.storage.sessions import get_round, get_session, settings_of, touch
@@ -290,11 +297,13 @@ def undo_judgement(
     """
     now = now or utcnow()
     session = get_session(s, session_id, lock=True)
-    row = s.scalars(
-        select(JudgementRow)
-        .where(JudgementRow.id == judgement_id, JudgementRow.session_id == session_id)
-        .options(selectinload(JudgementRow.pairs))
-    ).one_or_none()
+    row = None
+    if 0 <= judgement_id <= MAX_INTEGER:
+        row = s.scalars(
+            select(JudgementRow)
+            .where(JudgementRow.id == judgement_id, JudgementRow.session_id == session_id)
+            .options(selectinload(JudgementRow.pairs))
+        ).one_or_none()
     if row is None:
         raise NotFoundError(f"session {session_id} has no judgement {judgement_id}")
     if row.undone:
@@ -336,7 +345,7 @@ def list_judgements(
         query = query.where(JudgementRow.undone.is_(False))
     if after_revision is not None:
         query = (
-            query.where(JudgementRow.revision > after_revision)
+            query.where(JudgementRow.revision > min(after_revision, MAX_INTEGER))
             .order_by(None)
             .order_by(JudgementRow.revision)
         )

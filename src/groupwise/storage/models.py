@@ -57,6 +57,12 @@ class UTCDateTime(TypeDecorator[datetime]):
         return value.replace(tzinfo=UTC) if value.tzinfo is None else value.astimezone(UTC)
 
 
+MAX_INTEGER = 2**31 - 1
+"""The largest id, revision or count an ``Integer`` column holds on every backend
+(PostgreSQL's ``integer``; SQLite's are 64-bit): a larger one in a query matches no row, and
+on PostgreSQL it fails the query, so the repositories answer it before they ask."""
+
+
 def utcnow() -> datetime:
     """The current time, timezone-aware UTC (the only kind of time stored)."""
     return datetime.now(UTC)

@@ -15,7 +15,7 @@ from datetime import datetime
 from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
 
-from groupwise.storage.models import RoundRow, TrainingPointRow, utcnow
+from groupwise.storage.models import MAX_INTEGER, RoundRow, TrainingPointRow, utcnow
 from groupwise.storage.sessions import get_session, touch
 
 
@@ -122,7 +122,7 @@ def list_points(
     get_session(s, session_id)
     query = select(TrainingPointRow).where(TrainingPointRow.session_id == session_id)
     if after_revision is not None:
-        query = query.where(TrainingPointRow.revision > after_revision)
+        query = query.where(TrainingPointRow.revision > min(after_revision, MAX_INTEGER))
     rows = s.scalars(query.order_by(TrainingPointRow.revision, TrainingPointRow.id))
     return [_point(row) for row in rows]
 

@@ -6,7 +6,7 @@ from datetime import UTC, datetime, timedelta
 import pytest
 from sqlalchemy import func, select
 
-from groupwise.storage import ConflictError, Database, InvalidError
+from groupwise.storage import ConflictError, Database, InvalidError, NotFoundError
 from groupwise.storage.counts import counts
 from groupwise.storage.judgements import (
     JudgementInput,
@@ -20,6 +20,7 @@ from groupwise.storage.models import JudgementRow, PairRow
 from groupwise.storage.phases import ROUND_CLOSED, TRAINING
 from groupwise.storage.sessions import get_round, get_session
 from groupwise.storage.timer import show_round
+from groupwise.storage.training import list_points
 
 
 def judgement(client_id: str = "c1", left=("b1", "b7"), right=("b3",), **kw) -> JudgementInput:
@@ -179,3 +180,16 @@ def test_a_nul_character_is_refused_on_every_backend(db, open_session, field):
     with pytest.raises(InvalidError, match=f"{field} contains a NUL character"), db.write() as s:
         add_judgement(s, sid, bad)
     assert rows(db, JudgementRow) == 0
+
+
+def test_ids_and_revisions_beyond_an_integer_column_match_nothing(db, open_session):
+    # PostgreSQL's integer is 32-bit: such a number failed the query there (a 500)
+    sid = open_session()
+    with db.write() as s:
+        record, _ = add_judgement(s, sid, judgement())
+    with pytest.raises(NotFoundError, match="no judgement 4611686018427387904"), db.write() as s:
+        undo_judgement(s, sid, 2**62)
+    with db.read() as s:
+        assert list_judgements(s, sid, after_revision=2**62) == []
+        assert list_judgements(s, sid, after_revision=0) == [record]
+        assert list_points(s, sid, after_revision=2**62) == []
