@@ -15,6 +15,7 @@ EXTRAS = {
     "uvicorn": "app",
     "sqlalchemy": "app",
     "pyarrow": "app",
+    "psycopg": "postgres",
     "matplotlib": "study",
     "sklearn": "study",
     "ray": "study",

@@ -2,7 +2,16 @@
 
 from collections.abc import Callable
 
-from groupwise.commands import case_study, clustering_study, pool, report, serve, study, train
+from groupwise.commands import (
+    case_study,
+    clustering_study,
+    export,
+    pool,
+    report,
+    serve,
+    study,
+    train,
+)
 
 COMMANDS: list[Callable] = [
     train.register,
@@ -12,5 +21,6 @@ COMMANDS: list[Callable] = [
     report.register,
     serve.register,
     case_study.register,
+    export.register,
 ]
 """Each adds its subparser and sets `handler` to a function (args) -> exit code."""

@@ -1,12 +1,15 @@
 """Export and import of sessions over HTTP (formats: `groupwise.storage.export_format`)."""
 
 from dataclasses import dataclass
+from pathlib import Path
 
 from groupwise.server import schemas
 from groupwise.server.state import read_state
 from groupwise.storage import Database, InvalidError
 from groupwise.storage import export as repo
 from groupwise.storage.export_format import from_jsonl, from_parquet, to_jsonl, to_parquet
+from groupwise.storage.phases import FINISHED
+from groupwise.storage.sessions import get_session
 
 FORMATS = {
     "jsonl": ("application/x-ndjson", to_jsonl),
@@ -31,16 +34,27 @@ class ExportFile:
     filename: str
 
 
-def export_file(db: Database, session_id: str, fmt: str) -> ExportFile:
-    """The session's export in `fmt` ("jsonl" or "parquet"). Raises NotFoundError."""
+def export_file(
+    db: Database, session_id: str, fmt: str, states_from: Path | None = None
+) -> ExportFile:
+    """The session's export in `fmt` ("jsonl" or "parquet"); with `states_from` (the data
+    directory) the compared behaviours' arrays too, and their true rewards once the session
+    has finished (never while a person may still judge). Raises NotFoundError."""
     media_type, write = FORMATS[fmt]
     with db.read() as s:
-        export = repo.export_session(s, session_id)
+        states = None
+        if states_from is not None:
+            finished = get_session(s, session_id).phase == FINISHED
+            states = repo.StatesExport(states_from, true_rewards=finished)
+        export = repo.export_session(s, session_id, states)
     return ExportFile(write(export), media_type, f"{session_id}.{fmt}")
 
 
-def import_file(db: Database, body: bytes, content_type: str) -> schemas.SessionState:
-    """Import an export into a new, finished session. Raises InvalidError."""
+def import_file(
+    db: Database, body: bytes, content_type: str, data_dir: Path
+) -> schemas.SessionState:
+    """Import an export into a new, finished session (its states, if any, into `data_dir`).
+    Raises InvalidError."""
     kind = content_type.split(";", 1)[0].strip().lower()
     parse = IMPORT_TYPES.get(kind)
     if parse is None:
@@ -51,7 +65,7 @@ def import_file(db: Database, body: bytes, content_type: str) -> schemas.Session
         raise InvalidError("the body is empty")
     export = parse(body)
     with db.write() as s:
-        session_id = repo.import_session(s, export).id
+        session_id = repo.import_session(s, export, data_dir=data_dir).id
     return read_state(db, session_id)
 
 

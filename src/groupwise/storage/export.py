@@ -4,13 +4,23 @@ session export (its file formats, JSONL and Parquet: `groupwise.storage.export_f
 Undone judgements are exported (flagged, without pairs): the export is the record of truth.
 Importing creates a new, finished session holding the same judgements and pairs (pairs are
 copied, not derived again) with `origin` naming the exported session.
+
+With states (`export_session(..., states=StatesExport(data_dir))`), the export also carries
+the arrays of every behaviour a judgement compared, read from the round's pool
+(`groupwise.storage.states`), and, when `true_rewards` allows, their true rewards. Importing
+such an export into a data directory writes them to the new session's round directories,
+so the session's pairs train a reward model there (`states.preference_dataset`) without
+the original pools.
 """
 
+from dataclasses import dataclass
 from datetime import datetime
+from pathlib import Path
 
 from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
 
+from groupwise.pool.ids import behaviour_index
 from groupwise.preferences.judgement import LABELS as PAIR_LABELS
 from groupwise.storage.errors import InvalidError
 from groupwise.storage.export_format import (
@@ -20,20 +30,46 @@ from groupwise.storage.export_format import (
     SessionExport,
     SessionLine,
 )
-from groupwise.storage.judgements import LABELS, SOURCES, list_judgements
+from groupwise.storage.judgements import LABELS, SOURCES, JudgementRecord, list_judgements
 from groupwise.storage.models import JudgementRow, PairRow, RoundRow, SessionRow, utcnow
 from groupwise.storage.phases import FINISHED, ROUND_CLOSED
-from groupwise.storage.sessions import MODES, get_session, new_session_id, touch
+from groupwise.storage.sessions import (
+    MODES,
+    get_session,
+    new_session_id,
+    round_directory,
+    touch,
+)
 from groupwise.storage.settings import SessionSettings
+from groupwise.storage.states import BehaviourStates, read_round_states, write_round_states
 
 
-def export_session(s: DbSession, session_id: str) -> SessionExport:
-    """Everything the export holds of a session. Raises NotFoundError."""
+@dataclass(frozen=True)
+class StatesExport:
+    """Export the judged behaviours' states, read from `data_dir`'s pools."""
+
+    data_dir: Path
+    """The data directory the session's pools (or imported states) live in."""
+    true_rewards: bool = True
+    """Include the env's true rewards (the HTTP export does only for a finished session:
+    while it runs, the person answering must not see them)."""
+
+
+def export_session(
+    s: DbSession, session_id: str, states: StatesExport | None = None
+) -> SessionExport:
+    """Everything the export holds of a session; with `states`, the compared behaviours'
+    arrays too. Raises NotFoundError (also when a round's pool is gone)."""
     session = get_session(s, session_id)
-    rounds = s.scalars(
-        select(RoundRow).where(RoundRow.session_id == session_id).order_by(RoundRow.index)
+    rounds = list(
+        s.scalars(
+            select(RoundRow).where(RoundRow.session_id == session_id).order_by(RoundRow.index)
+        )
     )
     judgements = list_judgements(s, session_id, include_undone=True)
+    behaviours: tuple[BehaviourStates, ...] = ()
+    if states is not None:
+        behaviours = _judged_states(session_id, rounds, judgements, states)
     return SessionExport(
         session=SessionLine(
             id=session.id,
@@ -75,17 +111,50 @@ def export_session(s: DbSession, session_id: str) -> SessionExport:
             )
             for j in judgements
         ),
+        behaviours=behaviours,
     )
 
 
-def import_session(s: DbSession, export: SessionExport, now: datetime | None = None) -> SessionRow:
-    """Add a new, finished session holding the export's rounds, judgements and pairs.
+def _judged_states(
+    session_id: str,
+    rounds: list[RoundRow],
+    judgements: list[JudgementRecord],
+    states: StatesExport,
+) -> tuple[BehaviourStates, ...]:
+    """Per round with judgements, the states of every behaviour they compared."""
+    found = []
+    for row in rounds:
+        names = {n for j in judgements if j.round == row.index for n in (*j.left, *j.right)}
+        if not names:
+            continue
+        ordered = sorted(names, key=behaviour_index)
+        read = read_round_states(states.data_dir, session_id, row.index, row.pool_dir, ordered)
+        if not states.true_rewards:
+            read = BehaviourStates(read.round, read.names, read.obs, read.acts, None)
+        found.append(read)
+    return tuple(found)
+
+
+def import_session(
+    s: DbSession,
+    export: SessionExport,
+    now: datetime | None = None,
+    *,
+    data_dir: Path | None = None,
+) -> SessionRow:
+    """Add a new, finished session holding the export's rounds, judgements and pairs; the
+    export's states, if any, are written into `data_dir`'s round directories of the new
+    session (before the caller commits).
 
     Raises InvalidError when the export contradicts itself (a judgement of a round that is
-    not listed, a client_id or seq twice, an unknown mode).
+    not listed, a client_id or seq twice, an unknown mode, states that lack a compared
+    behaviour) or carries states and no `data_dir` is given.
     """
     now = now or utcnow()
     meta = export.session
+    _check_states(export)
+    if export.behaviours and data_dir is None:
+        raise InvalidError("the export carries states; import it into a data directory")
     if meta.mode not in MODES:
         raise InvalidError(f"mode must be one of {MODES}")
     indices = sorted({r.round for r in export.rounds} | {j.round for j in export.judgements})
@@ -163,4 +232,21 @@ def import_session(s: DbSession, export: SessionExport, now: datetime | None = N
             )
         )
     s.flush()
+    if data_dir is not None:
+        for states in export.behaviours:
+            write_round_states(data_dir / round_directory(session.id, states.round), states)
     return session
+
+
+def _check_states(export: SessionExport) -> None:
+    """An export with states holds every behaviour its judgements compared, once a round."""
+    if not export.behaviours:
+        return
+    by_round = {states.round: states for states in export.behaviours}
+    if len(by_round) != len(export.behaviours):
+        raise InvalidError("the export lists the states of a round twice")
+    for j in export.judgements:
+        if j.round not in by_round:
+            raise InvalidError(f"the export has no states of round {j.round}")
+        for name in (*j.left, *j.right):
+            by_round[j.round].row(name)

@@ -27,9 +27,18 @@ def export(
     session_id: SessionId,
     context: Context,
     format: Annotated[Literal["jsonl", "parquet"], Query()] = "jsonl",
+    states: Annotated[
+        bool,
+        Query(
+            description="also the compared behaviours' observations and actions (and, once "
+            "the session has finished, true rewards); docs/export.md"
+        ),
+    ] = False,
 ) -> Response:
     """The session's judgements and pairs as a file download."""
-    file = transfer.export_file(context.db, session_id, format)
+    file = transfer.export_file(
+        context.db, session_id, format, context.data_dir if states else None
+    )
     return Response(
         file.body,
         media_type=file.media_type,
@@ -58,4 +67,6 @@ async def import_session(request: Request, context: Context) -> SessionState:
     body = await request.body()
     content_type = request.headers.get("content-type", "")
     # the body is read asynchronously; parsing and storing run on a worker thread
-    return await anyio.to_thread.run_sync(transfer.import_file, context.db, body, content_type)
+    return await anyio.to_thread.run_sync(
+        transfer.import_file, context.db, body, content_type, context.data_dir
+    )

@@ -1,0 +1,133 @@
+"""`groupwise export` and `groupwise import`: a session's judgements and pairs to a file
+(JSONL or Parquet, docs/export.md) and a file to a new session of another data directory.
+
+``groupwise export SESSION --data DIR --states -o feedback.parquet`` writes the judgements
+with the compared behaviours' observations, actions and true rewards (read from the
+round's pools in DIR); ``groupwise import feedback.parquet --data OTHER`` makes a new,
+finished session in OTHER whose pairs train a reward model there without those pools
+(`groupwise.storage.states.preference_dataset`).
+"""
+
+import argparse
+import sys
+from pathlib import Path
+
+from groupwise.commands.arguments import UsageError, writable_dir
+
+FORMATS = ("jsonl", "parquet")
+
+
+def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
+    export = subparsers.add_parser(
+        "export", help="write a session's judgements and pairs to a JSONL or Parquet file"
+    )
+    export.add_argument("session", nargs="?", help="session id (default: the newest session)")
+    _add_database(export)
+    export.add_argument(
+        "-o", "--output", type=Path, help="file to write (default: SESSION.FORMAT here)"
+    )
+    export.add_argument(
+        "--format",
+        choices=FORMATS,
+        help="jsonl or parquet (default: from the output's suffix, else jsonl)",
+    )
+    export.add_argument(
+        "--states",
+        action="store_true",
+        help="also each compared behaviour's observations, actions and true rewards",
+    )
+    export.add_argument(
+        "--no-true-rewards",
+        dest="true_rewards",
+        action="store_false",
+        help="with --states: leave the env's true rewards out",
+    )
+    export.set_defaults(handler=run_export)
+
+    imported = subparsers.add_parser(
+        "import", help="import an exported session (JSONL or Parquet) as a new, finished one"
+    )
+    imported.add_argument("file", type=Path, help="an export of `groupwise export` or the app")
+    _add_database(imported)
+    imported.set_defaults(handler=run_import)
+
+
+def _add_database(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--data", type=Path, default=Path("groupwise-data"), help="data directory")
+    parser.add_argument("--db", help="SQLAlchemy database URL (default: DATA/groupwise.db)")
+
+
+def _format_of(args: argparse.Namespace) -> str:
+    if args.format:
+        return str(args.format)
+    suffix = args.output.suffix.lstrip(".").lower() if args.output else ""
+    return suffix if suffix in FORMATS else "jsonl"
+
+
+def run_export(args: argparse.Namespace) -> int:
+    from groupwise.storage import Database, StorageError, default_url
+    from groupwise.storage.export import StatesExport, export_session
+    from groupwise.storage.export_format import to_jsonl, to_parquet
+    from groupwise.storage.sessions import list_sessions
+
+    fmt = _format_of(args)
+    data = args.data.resolve()
+    if args.db is None and not (data / "groupwise.db").is_file():
+        raise UsageError(f"{data} holds no groupwise database; pass --data DIR or --db URL")
+    db = Database(args.db or default_url(data), pool_size=1)
+    try:
+        with db.read() as s:
+            session_id = args.session
+            if session_id is None:
+                newest = list_sessions(s)
+                if not newest:
+                    raise UsageError("the database holds no session")
+                session_id = newest[0].id
+            states = StatesExport(data, args.true_rewards) if args.states else None
+            export = export_session(s, session_id, states)
+    except StorageError as error:
+        raise UsageError(str(error)) from None
+    finally:
+        db.dispose()
+    body = to_parquet(export) if fmt == "parquet" else to_jsonl(export)
+    output = args.output or Path(f"{session_id}.{fmt}")
+    writable_dir(output.resolve().parent)
+    output.write_bytes(body)
+    what = f"{len(export.judgements)} judgements"
+    if args.states:
+        what += f", {sum(len(b.names) for b in export.behaviours)} behaviours' states"
+    print(f"groupwise: wrote {output} ({what})", file=sys.stderr)
+    return 0
+
+
+def run_import(args: argparse.Namespace) -> int:
+    from groupwise.storage import Database, StorageError, default_url
+    from groupwise.storage.counts import counts
+    from groupwise.storage.export import import_session
+    from groupwise.storage.export_format import from_jsonl, from_parquet
+
+    try:
+        body = args.file.read_bytes()
+    except OSError as error:
+        raise UsageError(f"cannot read {args.file}: {error.strerror or error}") from None
+    parse = from_parquet if body.startswith(b"PAR1") else from_jsonl
+    data = writable_dir(args.data).resolve()
+    db = Database(args.db or default_url(data), pool_size=1)
+    try:
+        export = parse(body)
+        db.create_schema()
+        with db.write() as s:
+            session = import_session(s, export, data_dir=data)
+            counted = counts(s, session)
+            session_id = session.id
+    except StorageError as error:
+        raise UsageError(f"{args.file}: {error}") from None
+    finally:
+        db.dispose()
+    print(
+        f"groupwise: imported {args.file} as session {session_id} "
+        f"({counted.comparisons_total} judgements, {counted.pairs_total} pairs"
+        + (", with states" if export.behaviours else "")
+        + ")",
+    )
+    return 0
