@@ -3,13 +3,14 @@
 Pure numpy/scipy/numba; no torch, FastAPI or SB3. A round uses it as
 
     features = pool_features(pool.fragments)         # N x (L_i, D), z-scored over the pool
-    distances = dtw_matrix(features, window=None)     # (N (N - 1) / 2,) condensed
+    window = band_window(0.2, 188)                    # Sakoe–Chiba radius: 38 steps
+    distances = dtw_matrix(features, window=window)   # (N (N - 1) / 2,) condensed
     tree = build_tree(distances, TreeConfig())        # levels, leaf order, unique ids
     groups = group_candidates(tree)                   # level 1-2 nodes with 2..8 leaves
     payload = to_json(tree, leaf_extra={i: {"clip": url_i} ...})
 """
 
-from groupwise.behaviour.dtw import dtw_distance, dtw_matrix, warm_up
+from groupwise.behaviour.dtw import band_window, dtw_distance, dtw_matrix, warm_up
 from groupwise.behaviour.features import (
     Standardiser,
     fit_standardiser,
@@ -43,6 +44,7 @@ __all__ = [
     "TreeNode",
     "as_condensed",
     "assign_levels",
+    "band_window",
     "build_tree",
     "count_thresholds",
     "dtw_distance",

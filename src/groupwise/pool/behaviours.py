@@ -68,19 +68,20 @@ class BehaviourPool:
     def measure_distances(
         self, progress: ProgressFn | None = None, cfg: "TreeConfig | None" = None
     ) -> FloatArray:
-        """The distances with `cfg`'s DTW band and time step (`TreeConfig.dtw_window`,
+        """The distances with `cfg`'s DTW band and time step (`TreeConfig.dtw_band`,
         `dtw_stride`; default config: `distances`), computed now unless they were before;
         `progress` hears (pairs done, pairs) while they are computed
         (`behaviour.dtw.dtw_matrix`)."""
-        from groupwise.behaviour import dtw_matrix, pool_features
+        from groupwise.behaviour import band_window, dtw_matrix, pool_features
         from groupwise.config import TreeConfig
 
         cfg = cfg or TreeConfig()
-        key = f"distances/{cfg.dtw_window}/{cfg.dtw_stride}"
+        key = f"distances/{cfg.dtw_band}/{cfg.dtw_stride}"
         if key not in self._measured:
             features = pool_features(self.fragments)
+            window = band_window(cfg.dtw_band, max(len(f) for f in features))
             self._measured[key] = dtw_matrix(
-                features, window=cfg.dtw_window, progress=progress, stride=cfg.dtw_stride
+                features, window=window, progress=progress, stride=cfg.dtw_stride
             )
         return self._measured[key]
 

@@ -154,7 +154,16 @@ def test_noise_free_dm_is_always_right_and_seeded(make_pool):
 
 def test_reference_walk_ranks_by_sum_over_all_groups_in_two_passes(make_pool):
     pool = _random_pool(make_pool, n=120, seed=6)
-    reference = InteractiveWalk(rank="sum", min_group=1, max_group=10**6, padding=True, passes=2)
+    # the reference code's tree: counts, without the size caps (issue 22) that keep its
+    # level-1 nodes within 8 behaviours
+    reference = InteractiveWalk(
+        tree=TreeConfig(balance=None),
+        rank="sum",
+        min_group=1,
+        max_group=10**6,
+        padding=True,
+        passes=2,
+    )
     candidates = reference.candidates(pool)
     assert max(len(c.members) for c in candidates) > 8  # no 8-behaviour limit
     assert min(len(c.members) for c in candidates) == 1  # padding over single leaves
