@@ -1078,6 +1078,19 @@ export interface components {
          */
         RewardConfig: {
             /**
+             * Action Term
+             * @description How the action enters each member's reward (with `use_actions`): "joint", one MLP over
+             *     [obs ; act] (SPEC §3); "additive", f(obs) + g(act), two MLPs summed; "cost",
+             *     f(obs) − Σ_i c_i (a_i / rms_i)², a learned control cost c_i ≥ 0. "additive" and "cost" have
+             *     the form of every SPEC env's true reward (a state term and a control cost) and cannot
+             *     pay an action only in some states, which PPO, setting the action, exploits: a joint
+             *     reward learnt from 30-step sums credits the torque that keeps a pendulum near the top
+             *     (braking) and PPO, braking everywhere, cannot swing up (docs/results/peer).
+             * @default joint
+             * @enum {string}
+             */
+            action_term: "joint" | "additive" | "cost";
+            /**
              * Activation
              * @description Hidden-layer nonlinearity, a key of `groupwise.reward.network.ACTIVATIONS`.
              * @default relu
@@ -1280,6 +1293,7 @@ export interface components {
              *       "ppo_steps_per_round": 20000,
              *       "render_workers": 2,
              *       "reward": {
+             *         "action_term": "joint",
              *         "activation": "relu",
              *         "batch_size": 4,
              *         "bootstrap": true,
@@ -2712,6 +2726,8 @@ export interface operations {
         parameters: {
             query?: {
                 format?: "jsonl" | "parquet";
+                /** @description also the compared behaviours' observations and actions (and, once the session has finished, true rewards); docs/export.md */
+                states?: boolean;
             };
             header?: never;
             path: {
