@@ -77,10 +77,11 @@ def _settled(page: Page) -> None:
 
 def _fill_groups(page: Page, server: Server, sid: str, ui: Any) -> tuple[list[str], list[str]]:
     """Fills A and B by clicking two disjoint clusters (a click replaces the group; a
-    suggested group is not clicked again, which would toggle its behaviours out)."""
+    suggested group, in A or in B, is not clicked again, which would toggle its behaviours
+    out)."""
     _settled(page)
-    shown = set(ui.clip_ids("A"))
-    clusters = [c for c in _clusters(server, sid) if set(c[1]) != shown]
+    shown = [set(ui.clip_ids("A")), set(ui.clip_ids("B"))]
+    clusters = [c for c in _clusters(server, sid) if set(c[1]) not in shown]
     (node_a, leaves_a), (node_b, leaves_b) = _disjoint_pair(clusters)
     ui.click_arc(node_a)
     expect(page.locator(".group-A .clip")).to_have_count(len(leaves_a))
