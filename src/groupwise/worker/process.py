@@ -106,13 +106,18 @@ class Worker:
         log.info("training worker %d started", os.getpid())
         try:
             while _parent_alive():
-                if not self.run_next() and not self.train_live():
+                if not self.work_once():
                     time.sleep(self.poll_s)
         finally:
             self._close_render_pools()
             if self._live is not None:
                 self._live.close()
         _exit_if_orphaned()
+
+    def work_once(self) -> bool:
+        """The waiting job of one session, else one slice of continuous training: a job
+        never waits for more than one slice. False when there was nothing to do."""
+        return self.run_next() or self.train_live()
 
     def run_next(self) -> bool:
         """Run the job of the longest-waiting session, if any; True when one ran."""

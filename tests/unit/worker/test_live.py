@@ -68,3 +68,22 @@ def test_a_rounds_session_is_left_alone_while_open(client, training):
     run_worker_once(client)
     post_judgement(client, sid, ["b0"], ["b1"])
     assert not _worker(client).train_live()
+
+
+def test_sessions_take_turns_and_a_job_goes_first(client):
+    """A continuous session's training blocks neither another's pool preparation (its job
+    runs before the next slice) nor its training (the open sessions take turns)."""
+    worker = _worker(client)
+    first = new_session(client, training="continuous")["id"]
+    assert worker.work_once()  # round 0 of the first session prepared
+    post_judgement(client, first, ["b0", "b1"], ["b2"])
+    assert worker.work_once()  # its first slice: fit and a rollout
+    second = new_session(client, training="continuous")["id"]
+    assert worker.work_once()  # the second session's preparation, before any more training
+    assert client.get(f"/api/sessions/{second}").json()["phase"] == "ready"
+    assert worker.live._live[first].run.agent.num_timesteps == ROLLOUT
+    post_judgement(client, second, ["b3"], ["b4", "b5"])
+    for _ in range(4):
+        assert worker.work_once()
+    steps = {sid: worker.live._live[sid].run.agent.num_timesteps for sid in (first, second)}
+    assert steps == {first: 3 * ROLLOUT, second: 2 * ROLLOUT}  # turn by turn
