@@ -24,11 +24,13 @@ On PostgreSQL (``--db postgresql``: a throw-away cluster of the installed server
 tests/postgres.py, with fsync on; or ``--db postgresql+psycopg://…``, an existing one) the
 same load runs against ``groupwise serve --db URL``; every write transaction takes the one
 write lock there too (storage/database.py), so the latency is queueing on it as well.
-Measured one after the other on 2 cores shared with other work (load average 8–13, so only
-the comparison holds), SQLite → PostgreSQL 15: one client p50 55 → 94 ms, 20 clients p50
-740 → 1,224 ms, p99 2.4 → 2.1 s, 23 → 16 judgements/s while the worker was idle; with the
-worker's round trained (the session ready again) one client 29 → 42 ms, 20 clients p50
-563 → 535 ms, p99 1.7 → 1.3 s, 32 judgements/s on both; no errors on either.
+Measured twice each, one after the other, on 2 cores shared with other work (load average
+6–13, so only the comparison holds; PostgreSQL's server processes share those cores),
+SQLite → PostgreSQL 15 over its unix socket, worker idle: one client p50 45–55 → 64–94 ms;
+20 clients p50 307–740 → 849–1,224 ms, p99 1.2–2.4 → 1.8–2.1 s, 23–45 → 16–22
+judgements/s; no errors on either. (The "training" rows ran with the other session's round
+already trained and the session ready again; one client 25–29 → 33–42 ms, 20 clients p50
+379–563 → 535–882 ms.)
 
     python -m benchmarks submit_latency            # SQLite, as part of `make bench`
     python -m benchmarks.submit_latency [--clients 20] [--requests 25] [--env GridWorld]
