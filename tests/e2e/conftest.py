@@ -43,8 +43,12 @@ CHROMIUM_ARGS = [
     "--disable-sync",
     "--no-first-run",
 ]
-# Small, quick rounds: 16 behaviours, tiny clips, no PPO or evaluation between rounds.
+# Small, quick rounds: 16 behaviours, tiny clips, no PPO or evaluation between rounds. The
+# shared server's sessions train in rounds: in the app's default (continuous) every open
+# session would keep the one worker busy by turns for the rest of the run; the continuous
+# tests ask for it (test_training_curve.py).
 SETTINGS: dict[str, Any] = {
+    "training": "rounds",
     "pool_size": 16,
     "rounds": 2,
     "round_seconds": 0,

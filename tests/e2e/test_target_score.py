@@ -83,7 +83,10 @@ def test_a_target_sessions_results_show_its_episode_score_in_its_unit(
     video_score = format_value(summary["video"]["target_score"])
     expect(page.locator(".agent-caption")).to_contain_text(f"backward turns {video_score}")
     expect(page.locator(".agent-caption")).to_contain_text("rad/s")
-    expect(page.locator(".chart-title").first).to_have_text("Backward turns per episode, per round")
+    results = page.get_by_role("region", name="Session results")
+    expect(results.locator(".chart-title").first).to_have_text(
+        "Backward turns per episode, per round"
+    )
     # the session's learning curve is of the per-step sum, and says so
     expect(page.locator(".learning-title")).to_have_text(
         "Per-step score sum (rad/s) over the session"

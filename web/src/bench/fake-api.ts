@@ -147,6 +147,7 @@ export function fakeApi(
       pair_derivation: "cover",
       pair_oversample: 1,
       training: "rounds",
+      stage_after_s: 60,
     },
     round: 1,
     rounds: 5,
