@@ -72,9 +72,9 @@ def test_an_id_the_server_cannot_make_says_why_and_creates_nothing(
     assert own_server.api("GET", "/api/sessions") == before
 
     # a refused setting is named as the form labels it, not by its place in the body
-    page.get_by_label("Pool size", exact=True).fill("500")
+    page.get_by_label("Pool size", exact=True).fill("1500")
     form_error = page.locator("#start-form-error")
-    expect(form_error).to_have_text("Pool size: Input should be less than or equal to 200")
+    expect(form_error).to_have_text("Pool size: Input should be less than or equal to 1000")
     assert own_server.api("GET", "/api/sessions") == before
 
 

@@ -54,7 +54,7 @@ describe("settingFields", () => {
   });
 
   it("takes the bounds, kinds and nullability from the schema", () => {
-    expect(field("pool_size")).toMatchObject({ kind: "integer", min: 8, max: 200, step: 1, nullable: false });
+    expect(field("pool_size")).toMatchObject({ kind: "integer", min: 8, max: 1000, step: 1, nullable: false });
     expect(field("clip_seconds")).toMatchObject({ kind: "number", min: 0, max: 20, step: "any", nullable: true });
     expect(field("final_steps")).toMatchObject({ kind: "integer", min: 0, max: 10_000_000, nullable: true });
     expect(field("frame_size").step).toBe(2);
@@ -126,8 +126,8 @@ describe("chosenSettings", () => {
 
 describe("refusalText", () => {
   it("names a refused field by the label the form shows, not its place in the body", () => {
-    expect(refusalText("settings.pool_size: Input should be less than or equal to 200", fields)).toBe(
-      "Pool size: Input should be less than or equal to 200",
+    expect(refusalText("settings.pool_size: Input should be less than or equal to 1000", fields)).toBe(
+      "Pool size: Input should be less than or equal to 1000",
     );
     expect(refusalText("settings.ppo.batch_size: Input should be greater than or equal to 2", fields)).toBe(
       "Batch size (PPO): Input should be greater than or equal to 2",

@@ -65,7 +65,7 @@ class SessionSettings(BaseModel):
 
     model_config = ConfigDict(frozen=True, extra="forbid")
 
-    pool_size: int = Field(default=100, ge=8, le=200, description="behaviours per round")
+    pool_size: int = Field(default=100, ge=8, le=1000, description="behaviours per round")
     fragment_length: int | None = Field(
         default=None,
         ge=MIN_FRAGMENT_LENGTH,

@@ -49,7 +49,7 @@ def test_a_new_session_waits_for_its_first_pool(client):
 @pytest.mark.parametrize(
     ("body", "field"),
     [
-        ({"env": "GridWorld", "settings": {"pool_size": 500}}, "settings.pool_size"),
+        ({"env": "GridWorld", "settings": {"pool_size": 5000}}, "settings.pool_size"),
         ({"env": "GridWorld", "settings": {"fragment_length": 2}}, "settings.fragment_length"),
         ({"env": "GridWorld", "settings": {"clip_seconds": 0}}, "settings.clip_seconds"),
         ({"env": "Hopper", "settings": {"clip_seconds": 20}}, "horizon"),  # 2500 steps

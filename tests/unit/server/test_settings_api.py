@@ -69,7 +69,7 @@ def test_resolve_fills_what_follows_from_the_chosen_settings(client):
         # episodes that end before one behaviour (random: 3-20 steps of 25; issue 23)
         ("InvertedPendulum-v5", {}, "none long enough for one window of 25 steps"),
         ("Hopper", {"fragment_length": 30, "clip_seconds": 1}, "disagree"),
-        ("Hopper", {"pool_size": 500}, "settings.pool_size"),
+        ("Hopper", {"pool_size": 5000}, "settings.pool_size"),
     ],
 )
 def test_what_the_server_would_refuse_is_one_sentence_and_creates_nothing(
