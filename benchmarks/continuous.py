@@ -77,7 +77,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     waits: list[float] = []
     with tempfile.TemporaryDirectory() as tmp:
         data = Path(tmp) / "data"
-        process, url, first = start_server(data, args.env)
+        process, url, first = start_server(data, args.env, None)
         try:
             with httpx.Client(base_url=url, timeout=60) as http:
                 wait_for(http, first, "ready")  # the server is up (its CLI session ready)
