@@ -2,12 +2,14 @@
  * Dev-only entry (bench.html, built by `npm run build:bench`, never shipped in dist/):
  * - default: `window.bench.run(n)` times the exploration view on a synthetic round
  *   (benchmarks/web_render.py drives it in Chromium);
- * - `?demo=groupwise` / `?demo=pairwise`: the whole app on an in-memory fake server.
+ * - `?demo=groupwise` / `?demo=pairwise`: the whole app on an in-memory fake server
+ *   (`&n=1000` behaviours; `&clips=served`: clips and posters as files under clips/).
  */
 import "../styles.css";
 import type { SessionState } from "../api";
 import { startApp } from "../app";
 import { DEFAULT_BETA } from "../lib/edges";
+import { guideKey } from "../lib/guide";
 import { type Groups, EMPTY_GROUPS } from "../lib/selection";
 import { buildTree } from "../lib/tree";
 import { comparedLeaves } from "../state";
@@ -143,6 +145,117 @@ async function run(n: number, suggestions = 100, history = 400, updates = 40): P
   };
 }
 
+export interface AppBenchResult {
+  leaves: number;
+  /** From starting the app on the fake server to the frame with arcs and edges painted (ms). */
+  onScreenMs: number;
+  /** A click that fills a group: the app's render in the next frame plus style/layout (ms). */
+  selectMedianMs: number;
+  selectP95Ms: number;
+  /** A pointer entering a leaf arc: the same for the hover render (ms). */
+  hoverMedianMs: number;
+  /** Video elements on the page once the round is on screen (clips load lazily: 0). */
+  videosAtLoad: number;
+  /** The most video elements with a source at any moment of the run. */
+  videosMax: number;
+  /** Video elements with a source in the preview of a hovered leaf, then of a hovered cluster. */
+  previewLeafVideos: number;
+  previewClusterVideos: number;
+  /** … and after the pointer left the chart. */
+  videosAfterLeave: number;
+}
+
+/** Video elements that hold a source (a loaded or loading clip). */
+const loadedVideos = () => [...document.querySelectorAll("video")].filter((v) => v.getAttribute("src") || v.src).length;
+
+/**
+ * The whole app on the fake server with an n-behaviour round: time to the chart on screen,
+ * a click's and a hover's render (the app renders once per frame, so each is timed from the
+ * start of the frame after the event to the end of its style/layout), and how many clips
+ * are loaded along the way (posters only until a clip is hovered or in a group).
+ */
+async function runApp(n: number, updates = 30): Promise<AppBenchResult> {
+  const synth = syntheticRound(n, { suggestions: 100, history: 400, seed: n });
+  const host = document.getElementById("app")!;
+  host.replaceChildren();
+  localStorage.setItem(guideKey("groupwise"), "1");
+  await afterPaint();
+  let videosMax = 0;
+  const watch = () => (videosMax = Math.max(videosMax, loadedVideos()));
+  const t0 = performance.now();
+  // Clips and posters as the server gives them: files by URL (benchmarks/web_render.py serves
+  // one real clip and poster under clips/, and counts the requests), not the demo's inline SVG.
+  const api = { ...fakeApi(synth, "groupwise"), clipUrl: (clip: string) => `clips/${clip}` };
+  startApp(host, { api, search: "?session=s-demo" });
+  const arcCount = () => host.querySelectorAll(".chart-svg .arc.leaf").length;
+  while (arcCount() < n) await frame();
+  const canvas = host.querySelector<HTMLCanvasElement>("canvas.chart-edges")!;
+  while (!canvas.dataset.drawnAt) await frame();
+  await afterPaint();
+  const onScreenMs = performance.now() - t0;
+  const videosAtLoad = host.querySelectorAll("video").length + document.querySelectorAll(".preview video").length;
+  watch();
+
+  /** Runs `act` and times the app's render in the next frame (it was scheduled by `act`). */
+  const timed = (act: () => void) =>
+    new Promise<number>((resolve) => {
+      let start = 0;
+      requestAnimationFrame(() => (start = performance.now()));
+      act();
+      requestAnimationFrame(() => {
+        void document.body.offsetHeight;
+        resolve(performance.now() - start);
+      });
+    });
+  const svg = host.querySelector<SVGSVGElement>(".chart-svg")!;
+  const arcEl = (id: string) => svg.querySelector<SVGPathElement>(`[data-id="${id}"]`)!;
+  const rand = rng(11);
+  const cands = synth.candidates;
+  const selects: number[] = [];
+  for (let i = 0; i < updates; i++) {
+    const c = cands[Math.floor(rand() * cands.length)]!;
+    const el = arcEl(c.id);
+    selects.push(await timed(() => el.dispatchEvent(new MouseEvent("click", { bubbles: true, altKey: i % 2 === 1 }))));
+    watch();
+    await frame();
+  }
+  const hovers: number[] = [];
+  for (let i = 0; i < updates; i++) {
+    const el = arcEl(synth.leaves[Math.floor(rand() * n)]!);
+    const r = el.getBoundingClientRect();
+    const at = { bubbles: true, clientX: r.x + r.width / 2, clientY: r.y + r.height / 2 };
+    hovers.push(await timed(() => el.dispatchEvent(new PointerEvent("pointerover", at))));
+    watch();
+    await frame();
+  }
+  const settle = () => new Promise((r) => setTimeout(r, 200));
+  const hoverOn = async (id: string) => {
+    const el = arcEl(id);
+    const r = el.getBoundingClientRect();
+    el.dispatchEvent(new PointerEvent("pointerover", { bubbles: true, clientX: r.x + r.width / 2, clientY: r.y + r.height / 2 }));
+    await settle();
+    watch();
+    return [...document.querySelectorAll(".preview video")].filter((v) => v.getAttribute("src") || (v as HTMLVideoElement).src).length;
+  };
+  const previewLeafVideos = await hoverOn(synth.leaves[0]!);
+  const previewClusterVideos = await hoverOn(cands[0]!.id);
+  svg.dispatchEvent(new PointerEvent("pointerleave"));
+  await settle();
+  const videosAfterLeave = document.querySelectorAll(".preview video").length;
+  return {
+    leaves: n,
+    onScreenMs,
+    selectMedianMs: quantile(selects, 0.5),
+    selectP95Ms: quantile(selects, 0.95),
+    hoverMedianMs: quantile(hovers, 0.5),
+    videosAtLoad,
+    videosMax,
+    previewLeafVideos,
+    previewClusterVideos,
+    videosAfterLeave,
+  };
+}
+
 if (demo === "groupwise" || demo === "pairwise") {
   const n = Number(params.get("n") ?? 120);
   const synth = syntheticRound(n, { suggestions: 100, history: Number(params.get("history") ?? 24), seed: 3 });
@@ -151,8 +264,12 @@ if (demo === "groupwise" || demo === "pairwise") {
   const state: Partial<SessionState> = phase ? { phase } : {};
   if (phase === "failed") state.error = "training round 1 failed: CUDA out of memory (see the server log)";
   if (phase === "training") state.progress = { phase: "reward", fraction: 0.35, message: "reward model epoch 7 / 20" };
-  startApp(document.getElementById("app")!, { api: fakeApi(synth, demo, state), search: "?session=s-demo" });
+  const api = fakeApi(synth, demo, state);
+  // ?clips=served: clips and posters as files under clips/ (a test serves them and counts
+  // the requests), instead of inline SVG posters.
+  if (params.get("clips") === "served") api.clipUrl = (clip) => `clips/${clip}`;
+  startApp(document.getElementById("app")!, { api, search: "?session=s-demo" });
 } else {
-  (window as unknown as { bench: { run: typeof run } }).bench = { run };
+  (window as unknown as { bench: { run: typeof run; app: typeof runApp } }).bench = { run, app: runApp };
   document.title = "groupwise bench (ready)";
 }

@@ -50,6 +50,7 @@ export function createLegend(onChange: (patch: Partial<ViewSettings>) => void): 
   k.addEventListener("input", () => onChange({ k: Number(k.value) }));
   beta.addEventListener("input", () => onChange({ beta: Number(beta.value) }));
 
+  let counted: readonly HistoryEdge[] | null = null;
   return {
     element,
     update(view, maxK, suggestions, history) {
@@ -64,8 +65,12 @@ export function createLegend(onChange: (patch: Partial<ViewSettings>) => void): 
       const b = String(view.beta);
       if (beta.value !== b) beta.value = b;
       text(suggestionCount, `(${suggestions})`);
-      // Given comparisons counted as distinct behaviour pairs (an edge each).
-      text(historyCount, `(${new Set(history.map((e) => `${e.a}|${e.b}`)).size})`);
+      // Given comparisons counted as distinct behaviour pairs (an edge each); counted again
+      // only when the history changed, not on every hover or selection.
+      if (history !== counted) {
+        counted = history;
+        text(historyCount, `(${new Set(history.map((e) => `${e.a}|${e.b}`)).size})`);
+      }
     },
   };
 }
