@@ -46,6 +46,7 @@ VARIANTS: dict[str, dict[str, dict[str, Any]]] = {
     # imitation's reward for PPO: running per-step centring and scaling, no return scaling
     "std-step": {"ppo": {"standardise_reward": True, "normalize_reward": False}},
     "std-step-ret": {"ppo": {"standardise_reward": True}},
+    "joint": {"reward": {"action_term": "joint"}},  # SPEC §3's one MLP, the old default
     "additive": {"reward": {"action_term": "additive"}},
     "cost": {"reward": {"action_term": "cost"}},
 }

@@ -1079,14 +1079,15 @@ export interface components {
         RewardConfig: {
             /**
              * Action Term
-             * @description How the action enters each member's reward (with `use_actions`): "joint", one MLP over
-             *     [obs ; act] (SPEC §3); "additive", f(obs) + g(act), two MLPs summed; "cost",
-             *     f(obs) − Σ_i c_i (a_i / rms_i)², a learned control cost c_i ≥ 0. "additive" and "cost" have
-             *     the form of every SPEC env's true reward (a state term and a control cost) and cannot
-             *     pay an action only in some states, which PPO, setting the action, exploits: a joint
-             *     reward learnt from 30-step sums credits the torque that keeps a pendulum near the top
-             *     (braking) and PPO, braking everywhere, cannot swing up (docs/results/peer).
-             * @default joint
+             * @description How the action enters each member's reward (with `use_actions`): "cost" (default),
+             *     f(obs) − Σ_i c_i (a_i / rms_i)², a learned control cost c_i ≥ 0; "additive", f(obs) +
+             *     g(act), two MLPs summed; "joint", one MLP over [obs ; act] (SPEC §3). A joint reward
+             *     learnt from 30-step sums credits the torque that keeps a pendulum near the top (braking,
+             *     0.5 sd of the reward, where the true cost is 0.001 sd) and PPO, braking everywhere, cannot
+             *     swing up; a cost has the form of every SPEC env's true reward and cannot pay an action
+             *     only in some states. Pendulum-v1 at SPEC noise, 5 seeds: −166 ± 68 against −564 ± 290
+             *     for "joint" (docs/results/peer).
+             * @default cost
              * @enum {string}
              */
             action_term: "joint" | "additive" | "cost";
@@ -1293,7 +1294,7 @@ export interface components {
              *       "ppo_steps_per_round": 20000,
              *       "render_workers": 2,
              *       "reward": {
-             *         "action_term": "joint",
+             *         "action_term": "cost",
              *         "activation": "relu",
              *         "batch_size": 4,
              *         "bootstrap": true,

@@ -106,7 +106,12 @@ def test_bootstrap_makes_members_differ():
     data = make_dataset(12)
 
     def member_spread(bootstrap: bool) -> float:
-        cfg = RewardConfig(batch_size=100, bootstrap=bootstrap, min_pairs_for_validation=100)
+        cfg = RewardConfig(
+            batch_size=100,
+            bootstrap=bootstrap,
+            min_pairs_for_validation=100,
+            action_term="joint",  # one StackedMLP, whose layers are set equal below
+        )
         ens = _ensemble(cfg=cfg)
         for weight, bias in ens.net.mlp._layers:
             weight.data[:] = weight.data[0]
@@ -130,7 +135,12 @@ def test_normaliser_is_set_from_the_dataset():
     ens = _ensemble()
     fit(ens, data, CFG, np.random.default_rng(0), epochs=0)
     steps = np.concatenate([data.obs, data.acts], axis=-1).reshape(-1, OBS_DIM + ACT_DIM)
-    np.testing.assert_allclose(ens.net.norm.mean.numpy(), steps.mean(axis=0), rtol=1e-5)
+    mean, var = ens.net.norm.mean.numpy(), ens.net.norm.var.numpy()
+    np.testing.assert_allclose(mean[:OBS_DIM], steps[:, :OBS_DIM].mean(axis=0), rtol=1e-5)
+    # the control cost's actions (the default action term) are scaled, not centred
+    np.testing.assert_allclose(mean[OBS_DIM:], 0.0)
+    second_moment = (steps[:, OBS_DIM:] ** 2).mean(axis=0)
+    np.testing.assert_allclose(var[OBS_DIM:], second_moment, rtol=1e-5)
     fit(ens, data, CFG, np.random.default_rng(0), epochs=0)  # refit, not counted twice
     assert float(ens.net.norm.count) == steps.shape[0]
 
