@@ -112,7 +112,9 @@ def begin_round(
     sample_s = time.perf_counter() - tick
     tree = None
     if len(pool) >= 2:
-        pool.measure_distances(lambda done, total: callback.on_phase("dtw", done, total))
+        pool.measure_distances(  # with the tree's DTW band and time step, as it is built
+            lambda done, total: callback.on_phase("dtw", done, total), cfg=run.cfg.tree
+        )
         tree = pool.tree(run.cfg.tree)
     wanted = budget if n_queries is None else n_queries
     queries = strategy.propose(pool, wanted, streams.feedback) if wanted > 0 else []
