@@ -256,8 +256,8 @@ class UI:
     def __init__(self, page: Any) -> None:
         self.page = page
 
-    def click_arc(self, node_id: str, modifiers: tuple[str, ...] = (), **kwargs: Any) -> None:
-        """Clicks inside an arc's shape (an annulus' bounding-box centre may lie outside it)."""
+    def point_in(self, node_id: str) -> tuple[float, float]:
+        """A point inside an arc's shape (an annulus' bounding-box centre may lie outside it)."""
         point = self.page.evaluate(
             """(id) => {
                 const el = document.querySelector(`.arc[data-id="${id}"]`);
@@ -273,6 +273,11 @@ class UI:
             node_id,
         )
         assert point is not None, f"arc {node_id} is not clickable"
+        return point[0], point[1]
+
+    def click_arc(self, node_id: str, modifiers: tuple[str, ...] = (), **kwargs: Any) -> None:
+        """Clicks inside an arc's shape (`point_in`)."""
+        point = self.point_in(node_id)
         for key in modifiers:
             self.page.keyboard.down(key)
         self.page.mouse.click(point[0], point[1], **kwargs)

@@ -30,26 +30,6 @@ def _clip_of(leaf: str) -> str:
     return f"clip{leaf.removeprefix('b')}.mp4"
 
 
-def _point_in(page: Any, node_id: str) -> tuple[float, float]:
-    """A point inside an arc's shape (an annulus' bounding-box centre may lie outside it)."""
-    point = page.evaluate(
-        """(id) => {
-            const el = document.querySelector(`.arc[data-id="${id}"]`);
-            const r = el.getBoundingClientRect();
-            for (let fy = 0.5; fy < 1; fy += 0.05) for (const s of [1, -1])
-              for (let fx = 0.5; fx < 1; fx += 0.05) for (const t of [1, -1]) {
-                const x = r.left + r.width * (t > 0 ? fx : 1 - fx);
-                const y = r.top + r.height * (s > 0 ? fy : 1 - fy);
-                if (document.elementFromPoint(x, y) === el) return [x, y];
-              }
-            return null;
-        }""",
-        node_id,
-    )
-    assert point is not None, f"arc {node_id} cannot be pointed at"
-    return point[0], point[1]
-
-
 def test_a_round_of_1000_behaviours_loads_only_the_clips_asked_for(
     demo_url: str, page: Any, ui: Any
 ) -> None:
@@ -70,7 +50,7 @@ def test_a_round_of_1000_behaviours_loads_only_the_clips_asked_for(
     # a hovered behaviour's clip plays in the preview, and is requested then
     leaf = next(f"b{i}" for i in range(N // 2, N) if f"b{i}" not in members)
     with page.expect_request(lambda r: r.url.endswith(f"/clips/{_clip_of(leaf)}")):
-        page.mouse.move(*_point_in(page, leaf))
+        page.mouse.move(*ui.point_in(leaf))
     preview = page.locator(".preview video")
     expect(preview).to_have_count(1)
     expect(preview).to_have_attribute("aria-label", f"clip of behaviour {leaf}")
