@@ -11,7 +11,12 @@ after the session's `stage_after_s` (60 s), so a round should last longer than t
 staging). It measures PPO's single-core throughput the same way as `ppo_throughput` (CPU
 time, learned reward) and prints a Markdown table.
 
-    python -m benchmarks continuous [--env Hopper] [--rounds 10] [--minutes 1.5] [--pace 5]
+    python -m benchmarks.continuous [--env Hopper] [--rounds 10] [--minutes 1.5] [--pace 5]
+
+Measured 2026-12-02, Hopper, defaults, 2 cores at load average 1.6: End round → next round
+open 1.0 s median, 3.2 s p95 (3.8 s max) over 10 rounds; PPO 62,106 steps per minute of
+session time against 83,225 per CPU-minute on one core (0.75×); judgement answers 19 ms
+median, 919 ms p99. At load 5 (other work on the machine): 7.6 / 22.6 s, 0.37×, 35 / 2,434 ms.
 """
 
 import argparse
