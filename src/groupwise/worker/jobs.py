@@ -33,7 +33,7 @@ from groupwise.pool.files import load_pool
 from groupwise.pool.publish import PublishConfig, publish_pool
 from groupwise.query.strategies import Query, QueryStrategy
 from groupwise.run.agent_package import SETTINGS_FILE
-from groupwise.run.checkpoint import checkpoint_dir
+from groupwise.run.checkpoint import STATE_FILE, checkpoint_dir
 from groupwise.run.progress import RunCallback
 from groupwise.run.records import RoundRecord
 from groupwise.run.round import Offer, begin_round, end_round
@@ -279,6 +279,17 @@ def train(
 def checkpoint_of(session_id: str, round_index: int) -> str:
     """The checkpoint directory of a session's round, relative to the data directory."""
     return str(checkpoint_dir(Path(session_directory(session_id)), round_index))
+
+
+def committed_record(data_dir: Path, session_id: str, round_index: int) -> RoundRecord | None:
+    """The record of round `round_index` from its checkpoint on disk, when `end_round`
+    wrote it (None when it did not: the round is still to be committed)."""
+    state = data_dir / checkpoint_of(session_id, round_index) / STATE_FILE
+    try:
+        row = json.loads(state.read_text())["records"][-1]
+    except (OSError, ValueError, KeyError, IndexError):
+        return None
+    return RoundRecord(**row) if row.get("round") == round_index else None
 
 
 def open_staged(job: Job, db: Database, data_dir: Path) -> bool:

@@ -49,6 +49,7 @@ from groupwise.worker.jobs import (
     Job,
     checkpoint_of,
     commit_round,
+    committed_record,
     open_run,
     publish_staged,
     published_offer,
@@ -230,18 +231,18 @@ class LiveSessions:
             log.warning(
                 "session %s: round %d was not committed; committing it", job.session_id, pending
             )
-            earlier = dataclasses.replace(job, round=pending, phase=TRAINING, elapsed_s=math.nan)
-            record = commit_round(
-                earlier, self.db, self.data_dir, None, self._resume_round(earlier)
-            )
-            with self.db.write() as s:
-                record_training(
-                    s,
-                    job.session_id,
-                    pending,
-                    checkpoint_of(job.session_id, pending),
-                    record.stats(),
+            # end_round may have written its checkpoint (and dropped the live one) before
+            # the kill: then only the record is missing, and training again would lose PPO
+            record = committed_record(self.data_dir, job.session_id, pending)
+            if record is None:
+                earlier = dataclasses.replace(
+                    job, round=pending, phase=TRAINING, elapsed_s=math.nan
                 )
+                training = self._resume_round(earlier)
+                record = commit_round(earlier, self.db, self.data_dir, None, training)
+            with self.db.write() as s:
+                checkpoint = checkpoint_of(job.session_id, pending)
+                record_training(s, job.session_id, pending, checkpoint, record.stats())
 
     def _resume_round(self, job: Job) -> LiveTraining:
         run = open_run(job, self.data_dir, job.round - 1)

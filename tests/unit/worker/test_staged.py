@@ -92,3 +92,22 @@ def test_a_worker_killed_between_opening_and_committing_commits_on_resume(client
     assert (checkpoint / "state.json").is_file()
     training = resumed.live._live[sid]
     assert training.round == 1 and len(training.run.dataset) > stats["pairs_total"]
+
+
+def test_a_round_checkpointed_but_not_recorded_keeps_its_checkpoint_on_resume(client):
+    """Killed after `end_round` wrote round 0's checkpoint (and dropped the live one) but
+    before its record was stored: the resumed worker records it from the checkpoint instead
+    of training round 0 again from round −1 (which would lose its PPO steps)."""
+    sid, worker = _staged_session(client)
+    client.post(f"/api/sessions/{sid}/end-round")
+    context = context_of(client)
+    job = jobs_module.job_of(context.db, sid)
+    assert job is not None
+    training = worker.live.take(job)
+    assert jobs_module.open_staged(job, context.db, context.data_dir)
+    record = jobs_module.commit_round(job, context.db, context.data_dir, None, training)
+    assert record.env_steps > 0 and _round_stats(client, sid, 0) is None  # killed here
+
+    resumed = Worker(context.db, context.data_dir, poll_s=0.1)
+    assert resumed.train_live()
+    assert _round_stats(client, sid, 0) == record.stats()
