@@ -100,3 +100,20 @@ def apply_teacher_options(
         training=dataclasses.replace(cfg.training, mode=mode),
         teacher=dataclasses.replace(cfg.teacher, pace_s=pace, label_error=error),
     )
+
+
+def add_takeaway_arguments(parser: argparse.ArgumentParser) -> None:
+    """--takeaway and --takeaway-episodes (`groupwise.run.takeaway.TakeawayConfig`)."""
+    parser.add_argument(
+        "--takeaway",
+        choices=("teacher", "last"),
+        default="teacher",
+        help="which round's policy the run hands over (agent.zip): the one the simulated "
+        "teacher prefers when it compares every round's greedy episodes (default), or the last",
+    )
+    parser.add_argument(
+        "--takeaway-episodes",
+        type=int_at_least(1),
+        default=3,
+        help="greedy episodes of each round's policy the teacher compares (default 3)",
+    )

@@ -7,6 +7,7 @@ from pathlib import Path
 
 from groupwise.commands.arguments import (
     UsageError,
+    add_takeaway_arguments,
     add_training_arguments,
     apply_teacher_options,
     non_negative_int,
@@ -67,6 +68,7 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
     case.add_argument("--out", type=Path, required=True, help="output directory")
     case.add_argument("--no-video", action="store_true", help="skip the video and the strip")
     add_training_arguments(case)
+    add_takeaway_arguments(case)
     case.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
     case.set_defaults(handler=run)
 
@@ -75,6 +77,8 @@ def run(args: argparse.Namespace) -> int:
     from groupwise.clips.timing import clip_timing, default_clip_seconds, env_step_seconds
     from groupwise.config import LoopConfig, RunConfig
     from groupwise.oracles import ORACLES
+    from groupwise.run.agent_package import AGENT_ZIP
+    from groupwise.run.takeaway import TakeawayConfig
     from groupwise.study.case_study import CASE_FILE, STRIP_FILE, VIDEO_FILE, run_case_study
 
     if args.dm not in ORACLES:
@@ -111,8 +115,14 @@ def run(args: argparse.Namespace) -> int:
         eval_episodes=args.eval_episodes,
         film=not args.no_video,
         show_progress=not args.quiet,
+        takeaway=TakeawayConfig(by=args.takeaway, episodes=args.takeaway_episodes),
     )
     last = study.records[-1]
+    chosen = study.records[study.choice.round]
+    kept = (
+        f"{study.choice.describe()}: target score {chosen.target_score_mean:.2f} "
+        f"± {chosen.target_score_std:.2f}, success {chosen.success_rate:.0%} → {out / AGENT_ZIP}\n"
+    )
     films = ""
     if study.filmed is not None:
         films = f"\nvideo: {out / VIDEO_FILE}, strip: {out / STRIP_FILE}"
@@ -121,6 +131,6 @@ def run(args: argparse.Namespace) -> int:
         f"comparisons in {last.wall_s:.0f} s; target score {last.target_score_mean:.2f} "
         f"± {last.target_score_std:.2f} {target.unit} (success ≥ {target.threshold:g}: "
         f"{last.success_rate:.0%}, stretch ≥ {target.stretch:g}: {last.stretch_rate:.0%})\n"
-        f"per round: {out / CASE_FILE}{films}"
+        f"{kept}per round: {out / CASE_FILE}{films}"
     )
     return 0

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from groupwise.commands.arguments import (
     UsageError,
+    add_takeaway_arguments,
     add_training_arguments,
     apply_teacher_options,
     non_negative_int,
@@ -71,6 +72,7 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
         "place, from its latest checkpoint: --steps N or --rounds N --dm NAME",
     )
     add_training_arguments(train)
+    add_takeaway_arguments(train)
     train.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
     train.set_defaults(handler=run)
 
@@ -81,8 +83,10 @@ def run(args: argparse.Namespace) -> int:
     from groupwise.config import LoopConfig, RunConfig
     from groupwise.envs import make_env
     from groupwise.oracles import ORACLES
+    from groupwise.run.agent_package import AGENT_ZIP
     from groupwise.run.headless import run_session
     from groupwise.run.run import RESULTS_FILE, ConfigMismatchError
+    from groupwise.run.takeaway import TakeawayConfig, read_choice
 
     if args.env is None or args.out is None:
         raise UsageError("train needs --env and --out (or --from-session DIR)")
@@ -113,14 +117,19 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(str(error)) from None
     out = writable_dir(args.out)
     try:
-        records = run_session(cfg, out, resume=args.resume, show_progress=not args.quiet)
+        takeaway = TakeawayConfig(by=args.takeaway, episodes=args.takeaway_episodes)
+        records = run_session(
+            cfg, out, resume=args.resume, show_progress=not args.quiet, takeaway=takeaway
+        )
     except ConfigMismatchError as error:
         raise UsageError(str(error)) from None
     last = records[-1]
+    choice = read_choice(out)
     print(
         f"{len(records)} rounds, {last.pairs_total} preference pairs, "
         f"true return {last.true_return_mean:.2f} ± {last.true_return_std:.2f}\n"
-        f"results: {out / RESULTS_FILE}\ncheckpoints: {out / 'checkpoints'}\n"
+        + ("" if choice is None else f"{choice.describe()}: {out / AGENT_ZIP}\n")
+        + f"results: {out / RESULTS_FILE}\ncheckpoints: {out / 'checkpoints'}\n"
         f"tensorboard: tensorboard --logdir {out / 'tb'}"
     )
     return 0

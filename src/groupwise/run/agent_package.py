@@ -20,8 +20,8 @@ import json
 import math
 import os
 import zipfile
-from collections.abc import Sequence
-from dataclasses import asdict, dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 from typing import Any
 
@@ -43,6 +43,15 @@ EPSILON = 1e-8
 
 ZIP_POLICY, ZIP_NORMALISER, ZIP_REWARD = "policy.zip", "vecnormalize.npz", "reward.pt"
 ZIP_CONFIG, ZIP_ROUNDS = "config.json", "rounds.csv"
+ROUND_VIDEOS = "agent-rounds"
+"""Each round's greedy policy filmed, in a session's directory (`round_video_path`)."""
+CHECKPOINTS = "checkpoints"
+"""`groupwise.run.checkpoint.CHECKPOINTS` (this module imports no RL)."""
+
+
+def round_video_path(directory: Path, round_index: int) -> Path:
+    """Where round `round_index`'s clip lies in a run's directory."""
+    return directory / ROUND_VIDEOS / f"round-{round_index:04d}.mp4"
 
 
 @dataclass(frozen=True)
@@ -62,6 +71,9 @@ class RoundSummary:
     """A target env's episode score after the round, in `TargetSummary.unit`; None for
     other envs, rounds not evaluated, and summaries written before it was recorded."""
     target_score_std: float | None = None
+    video: "VideoSummary | None" = None
+    """The round's greedy policy filmed (``agent-rounds/round-NNNN.mp4``), the clip a person
+    picks the take-away agent by; None where it was not filmed."""
 
 
 @dataclass(frozen=True)
@@ -69,6 +81,7 @@ class VideoSummary:
     """The agent's video (`clips.episode_video.EpisodeVideo`) and its episode's return."""
 
     file: str
+    """Its path in the run's directory."""
     seconds: float
     fps: float
     frames: int
@@ -112,7 +125,8 @@ class AgentSummary:
     format: str
     env: str
     round: int
-    """The round whose checkpoint this is (the last row of ``rounds.csv``)."""
+    """The round whose checkpoint this is: the last row of ``rounds.csv`` unless a teacher
+    or a person chose another (`chosen_by`)."""
     env_steps: int
     measure: str
     """What `true_return_mean` measures (`measure_of`): "true return", or in a target env
@@ -130,6 +144,13 @@ class AgentSummary:
     """The last round's episode score in the target's unit (mean, sd over the evaluation
     episodes): whether teaching worked. None where `RoundSummary.target_score_mean` is."""
     target_score_std: float | None = None
+    chosen_by: str = "last"
+    """Who chose `round`: "last" (nobody: the last round), "teacher" (the run's simulated
+    teacher, `groupwise.run.takeaway`) or "person" (on the app's results page)."""
+
+    @property
+    def last_round(self) -> int:
+        return self.rounds[-1].round if self.rounds else self.round
 
     def to_json(self) -> str:
         return json.dumps(asdict(self), indent=1)
@@ -148,10 +169,18 @@ class AgentSummary:
         return cls(
             **{k: v for k, v in data.items() if k not in ("rounds", "video", "target", "measure")},
             measure=measure,
-            rounds=tuple(RoundSummary(**r) for r in data["rounds"]),
+            rounds=tuple(_round_summary(r) for r in data["rounds"]),
             video=None if video is None else VideoSummary(**video),
             target=None if target is None else TargetSummary(**target),
         )
+
+
+def _round_summary(data: dict[str, Any]) -> RoundSummary:
+    video = data.get("video")
+    return RoundSummary(
+        **{k: v for k, v in data.items() if k != "video"},
+        video=None if video is None else VideoSummary(**video),
+    )
 
 
 OLD_TARGET_MEASURE = "target score ("
@@ -224,15 +253,27 @@ def summarise(
     records: Sequence[Any],
     frozen: set[int],
     video: VideoSummary | None,
+    *,
+    round_index: int | None = None,
+    chosen_by: str = "last",
+    round_videos: Mapping[int, VideoSummary] | None = None,
 ) -> AgentSummary:
-    """The summary of a run whose rounds are `records` (`loop.RoundRecord`s); `frozen`
-    holds the indices of rounds without feedback."""
-    last = records[-1]
+    """The summary of a run whose rounds are `records` (`loop.RoundRecord`s) handing over
+    round `round_index`'s policy (default: the last round's); `frozen` holds the indices of
+    rounds without feedback, `round_videos` each round's clip.
+
+    Raises:
+        KeyError: no record of `round_index`.
+    """
+    by_round = {int(r.round): r for r in records}
+    last = records[-1] if round_index is None else by_round[round_index]
     target = target_of(cfg.loop.env)
+    films = round_videos or {}
     return AgentSummary(
         format=FORMAT,
         env=cfg.loop.env,
         round=int(last.round),
+        chosen_by=chosen_by,
         env_steps=int(last.env_steps),
         measure=measure_of(cfg.loop.env),
         true_return_mean=_finite(last.true_return_mean),
@@ -254,6 +295,7 @@ def summarise(
                 true_return_std=_finite(r.true_return_std),
                 target_score_mean=_finite(r.target_score_mean),
                 target_score_std=_finite(r.target_score_std),
+                video=films.get(int(r.round)),
             )
             for r in records
         ),
@@ -267,6 +309,68 @@ def read_summary(directory: Path) -> AgentSummary | None:
         return AgentSummary.from_dict(json.loads((directory / SUMMARY_FILE).read_text()))
     except FileNotFoundError:
         return None
+
+
+def write_summary(directory: Path, summary: AgentSummary) -> None:
+    """``agent.json`` in `directory`, replaced atomically."""
+    partial = directory / f".{SUMMARY_FILE}.partial"
+    partial.write_text(summary.to_json() + "\n")
+    partial.replace(directory / SUMMARY_FILE)
+
+
+class UnknownRoundError(LookupError):
+    """The run has no round of that index."""
+
+
+class NoCheckpointError(LookupError):
+    """The round's checkpoint is not (or no longer) in the run's directory."""
+
+
+def pick_round(directory: Path, round_index: int, chosen_by: str = "person") -> AgentSummary:
+    """Hand over round `round_index`'s policy instead: ``agent.zip`` repacked from that
+    round's checkpoint and ``agent.json`` rewritten (its round, steps and scores; `chosen_by`;
+    the video is the round's clip when it was filmed). The rounds' records are the
+    summary's, so nothing is evaluated again.
+
+    Raises:
+        FileNotFoundError: the run has no summary (no agent published).
+        UnknownRoundError: the summary has no round `round_index`.
+        NoCheckpointError: its checkpoint is missing (the reason in the message).
+    """
+    summary = read_summary(directory)
+    if summary is None:
+        raise FileNotFoundError(f"{directory} has no {SUMMARY_FILE}")
+    rounds = {r.round: r for r in summary.rounds}
+    if round_index not in rounds:
+        raise UnknownRoundError(
+            f"no round {round_index}: the run has rounds {min(rounds)} to {max(rounds)}"
+        )
+    checkpoint = directory / CHECKPOINTS / f"round-{round_index:04d}"
+    missing = [
+        n for n in (ZIP_POLICY, ZIP_NORMALISER, ZIP_REWARD) if not (checkpoint / n).is_file()
+    ]
+    if missing:
+        raise NoCheckpointError(
+            f"round {round_index}'s checkpoint has no {', '.join(missing)} (it was not kept, "
+            "or the session was imported without its checkpoints): its policy cannot be "
+            "packaged"
+        )
+    chosen = rounds[round_index]
+    video = chosen.video or (summary.video if summary.round == round_index else None)
+    picked = replace(
+        summary,
+        round=round_index,
+        chosen_by=chosen_by,
+        env_steps=chosen.env_steps,
+        true_return_mean=chosen.true_return_mean,
+        true_return_std=chosen.true_return_std,
+        target_score_mean=chosen.target_score_mean,
+        target_score_std=chosen.target_score_std,
+        video=video,
+    )
+    write_agent_zip(directory / AGENT_ZIP, checkpoint, picked, directory)
+    write_summary(directory, picked)
+    return picked
 
 
 def write_agent_zip(

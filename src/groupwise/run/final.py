@@ -13,34 +13,52 @@ The app's worker runs both after a session's last round, after "Finish now" and 
 simulated decision-maker, then the final phase again).
 """
 
+import dataclasses
 import json
 import logging
 import math
+import shutil
+from collections.abc import Iterator, Sequence
+from contextlib import contextmanager
 from pathlib import Path
+
+import numpy as np
 
 from groupwise.clips.episode_video import write_episode_video
 from groupwise.clips.replay import FrameSettings
 from groupwise.config import RunConfig
 from groupwise.envs import DEFAULT_FRAME_SIZE
 from groupwise.oracles import ORACLES
+from groupwise.oracles.base import Teacher
+from groupwise.pool.fragments import Trajectory
+from groupwise.rl.policy import Policy
+from groupwise.rl.ppo import POLICY_FILE, PPOAgent
 from groupwise.rl.rollout import sample_trajectories
 from groupwise.run.agent_package import (
     AGENT_VIDEO,
     AGENT_ZIP,
     SETTINGS_FILE,
-    SUMMARY_FILE,
     AgentSummary,
     VideoSummary,
     read_summary,
+    round_video_path,
     summarise,
     write_agent_zip,
+    write_summary,
 )
 from groupwise.run.checkpoint import checkpoint_dir, latest_checkpoint
 from groupwise.run.progress import CallbackList, ProgressBars, RunCallback, as_callback
 from groupwise.run.records import RoundRecord
 from groupwise.run.round import run_round, train_frozen
 from groupwise.run.run import CONFIG_FILE, Run
-from groupwise.run.streams import eval_rng
+from groupwise.run.streams import eval_rng, takeaway_streams
+from groupwise.run.takeaway import (
+    TakeawayChoice,
+    TakeawayConfig,
+    choose_round,
+    last_round,
+    write_choice,
+)
 
 log = logging.getLogger(__name__)
 
@@ -51,40 +69,154 @@ def publish_agent(
     *,
     frame_size: int = DEFAULT_FRAME_SIZE[0],
     callback: RunCallback | None = None,
+    choice: TakeawayChoice | None = None,
+    video: bool = True,
+    round_videos: bool = True,
 ) -> AgentSummary:
     """Film the run's greedy policy for one episode (``agent.mp4`` in the run's directory)
     and pack its latest checkpoint (`Run.commit`) into ``agent.zip``, with the summary
-    ``agent.json`` written last. `frozen`: the rounds without feedback."""
-    loop, out, callback = run.cfg.loop, run.directory, as_callback(callback)
-    callback.on_phase("video", 0, 1)
-    episode = sample_trajectories(
-        run.make_env, run.agent.policy(deterministic=True), 1, eval_rng(loop.seed)
-    )[0]
-    video = write_episode_video(
-        FrameSettings(loop.env, frame_size, frame_size), episode, out / AGENT_VIDEO
-    )
+    ``agent.json`` written last. `frozen`: the rounds without feedback.
+
+    `choice` hands over another round's policy (`groupwise.run.takeaway`; default: the
+    last round's, chosen by nobody); `video` off writes no ``agent.mp4``; `round_videos`
+    films every round's greedy policy too (``agent-rounds/round-NNNN.mp4``), the clips a
+    person picks the take-away agent by on the results page (`agent_package.pick_round`)."""
+    out, callback = run.directory, as_callback(callback)
+    last = run.next_round - 1
+    choice = choice or last_round([last])
+    filmed = None
+    if video:
+        callback.on_phase("video", 0, 1)
+        if choice.round == last:
+            filmed = _film(run, run.agent.policy(deterministic=True), out / AGENT_VIDEO, frame_size)
+        else:
+            with _scratch(run) as scratch:
+                scratch.load(checkpoint_dir(out, choice.round))
+                filmed = _film(
+                    run, scratch.policy(deterministic=True), out / AGENT_VIDEO, frame_size
+                )
+    films = {}
+    if round_videos:
+        known = {choice.round: filmed} if filmed is not None else {}
+        films = _film_rounds(run, frame_size, callback, known)
     callback.on_phase("package", 0, 1)
     summary = summarise(
         run.cfg,
         run.records,
         frozen,
-        VideoSummary(
-            file=AGENT_VIDEO,
-            seconds=round(video.seconds, 6),
-            fps=round(video.fps, 6),
-            frames=video.frames,
-            width=video.width,
-            height=video.height,
-            episode_return=float(episode.true_rewards.sum()),
-            target_score=None if math.isnan(episode.episode_score) else episode.episode_score,
-        ),
+        filmed,
+        round_index=choice.round,
+        chosen_by=choice.by,
+        round_videos=films,
     )
-    round_index = run.next_round - 1
-    write_agent_zip(out / AGENT_ZIP, checkpoint_dir(out, round_index), summary, out)
-    partial = out / f".{SUMMARY_FILE}.partial"
-    partial.write_text(summary.to_json() + "\n")
-    partial.replace(out / SUMMARY_FILE)
+    write_agent_zip(out / AGENT_ZIP, checkpoint_dir(out, choice.round), summary, out)
+    write_summary(out, summary)
     return summary
+
+
+def choose_takeaway(
+    run: Run,
+    teacher: Teacher,
+    cfg: TakeawayConfig,
+    callback: RunCallback | None = None,
+) -> TakeawayChoice:
+    """The round whose greedy policy `teacher` prefers among the run's rounds with a
+    checkpoint (`takeaway.choose_round`), written to ``takeaway.json``; the last round
+    without asking when `cfg.by` is "last" or only one round has a checkpoint. Each
+    round's `cfg.episodes` episodes start from the same reset seeds; the episodes and the
+    teacher draw from streams of their own (`streams.takeaway_streams`)."""
+    out, callback = run.directory, as_callback(callback)
+    rounds = [
+        r.round for r in run.records if (checkpoint_dir(out, r.round) / POLICY_FILE).is_file()
+    ]
+    if cfg.by == "last" or len(rounds) < 2:
+        choice = last_round(rounds or [run.next_round - 1])
+    else:
+        episodes_seed, teacher_rng = takeaway_streams(run.cfg.loop.seed)
+        episodes = round_episodes(run, rounds, cfg.episodes, episodes_seed, callback)
+        choice = choose_round(episodes, teacher, teacher_rng)
+    write_choice(out, choice, cfg)
+    return choice
+
+
+def round_episodes(
+    run: Run,
+    rounds: Sequence[int],
+    n_episodes: int,
+    seed: np.random.SeedSequence,
+    callback: RunCallback | None = None,
+) -> dict[int, list[Trajectory]]:
+    """`n_episodes` greedy episodes of each round's checkpointed policy, every round's from
+    the same reset seeds (a generator from `seed` each). `callback` hears "takeaway"."""
+    callback = as_callback(callback)
+    episodes = {}
+    with _scratch(run) as scratch:
+        for done, r in enumerate(rounds):
+            callback.on_phase("takeaway", done, len(rounds))
+            scratch.load(checkpoint_dir(run.directory, r))
+            episodes[r] = sample_trajectories(
+                run.make_env,
+                scratch.policy(deterministic=True),
+                n_episodes,
+                np.random.default_rng(seed),
+            )
+        callback.on_phase("takeaway", len(rounds), len(rounds))
+    return episodes
+
+
+@contextmanager
+def _scratch(run: Run) -> Iterator[PPOAgent]:
+    """A PPO agent of the run's settings (one env, no logs) to load checkpoints into."""
+    scratch = PPOAgent(
+        run.make_env,
+        dataclasses.replace(run.cfg.ppo, n_envs=1, tensorboard=False),
+        seed=run.cfg.loop.seed,
+    )
+    try:
+        yield scratch
+    finally:
+        scratch.close()
+
+
+def _film(run: Run, policy: Policy, path: Path, frame_size: int) -> VideoSummary:
+    """One greedy episode of `policy` (the evaluation's first reset seed) as a video."""
+    loop = run.cfg.loop
+    episode = sample_trajectories(run.make_env, policy, 1, eval_rng(loop.seed))[0]
+    video = write_episode_video(FrameSettings(loop.env, frame_size, frame_size), episode, path)
+    return VideoSummary(
+        file=path.relative_to(run.directory).as_posix(),
+        seconds=round(video.seconds, 6),
+        fps=round(video.fps, 6),
+        frames=video.frames,
+        width=video.width,
+        height=video.height,
+        episode_return=float(episode.true_rewards.sum()),
+        target_score=None if math.isnan(episode.episode_score) else episode.episode_score,
+    )
+
+
+def _film_rounds(
+    run: Run, frame_size: int, callback: RunCallback, known: dict[int, VideoSummary]
+) -> dict[int, VideoSummary]:
+    """Each checkpointed round's greedy policy filmed (``agent-rounds/round-NNNN.mp4``);
+    `known`: rounds filmed already (their video is copied, not filmed again)."""
+    out = run.directory
+    rounds = [
+        r.round for r in run.records if (checkpoint_dir(out, r.round) / POLICY_FILE).is_file()
+    ]
+    films = {}
+    with _scratch(run) as scratch:
+        for done, r in enumerate(rounds):
+            callback.on_phase("round videos", done, len(rounds))
+            path = round_video_path(out, r)
+            path.parent.mkdir(exist_ok=True)
+            if r in known:
+                shutil.copyfile(out / known[r].file, path)
+                films[r] = dataclasses.replace(known[r], file=path.relative_to(out).as_posix())
+                continue
+            scratch.load(checkpoint_dir(out, r))
+            films[r] = _film(run, scratch.policy(deterministic=True), path, frame_size)
+    return films
 
 
 def continue_run(

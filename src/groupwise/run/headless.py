@@ -13,10 +13,12 @@ from groupwise.config import LoopConfig, RunConfig
 from groupwise.oracles import ORACLES, Feedback
 from groupwise.query.schedule import comparisons_per_round
 from groupwise.run.continuous import continuous_round
+from groupwise.run.final import choose_takeaway, publish_agent
 from groupwise.run.progress import CallbackList, ProgressBars, RunCallback, as_callback
 from groupwise.run.records import RoundRecord
 from groupwise.run.round import run_round, train_frozen
 from groupwise.run.run import Run
+from groupwise.run.takeaway import TakeawayChoice, TakeawayConfig
 
 log = logging.getLogger(__name__)
 
@@ -72,13 +74,15 @@ def run_session(
     show_progress: bool = True,
     feedback: Feedback | None = None,
     callback: RunCallback | None = None,
+    takeaway: TakeawayConfig | None = None,
 ) -> list[RoundRecord]:
     """Run (or continue, with `resume`) a whole RLHF run, writing it into `out`.
 
     Writes `config.json`, `rounds.csv` (rewritten after every round), TensorBoard logs and
     one checkpoint per round. Rounds 0 … R−1 gather feedback from `feedback` (default: the
     decision-maker `cfg.loop.oracle`); when `final_steps` > 0 a last row (round R, no
-    comparisons) trains PPO further on the frozen learned reward.
+    comparisons) trains PPO further on the frozen learned reward. With `takeaway` the run
+    then hands over an agent (`hand_over`: ``takeaway.json``, ``agent.zip``, ``agent.json``).
 
     Raises:
         ConfigMismatchError: `resume` and `out` was written by another configuration.
@@ -94,10 +98,26 @@ def run_session(
             bars = ProgressBars(len(round_plan(cfg.loop)), run.next_round, cfg.loop.env)
             callbacks.append(bars)
         try:
-            return run_rounds(run, feedback, CallbackList(callbacks))
+            records = run_rounds(run, feedback, CallbackList(callbacks))
+            if takeaway is not None:
+                hand_over(run, feedback, takeaway, CallbackList(callbacks))
+            return records
         finally:
             if bars is not None:
                 bars.close()
+
+
+def hand_over(
+    run: Run, feedback: Feedback, cfg: TakeawayConfig, callback: RunCallback | None = None
+) -> TakeawayChoice:
+    """After a headless run's last round: the round `feedback`'s teacher prefers
+    (`final.choose_takeaway`, ``takeaway.json``) packed as the take-away agent
+    (``agent.zip`` and ``agent.json``, no videos)."""
+    choice = choose_takeaway(run, feedback.teacher, cfg, callback)
+    frozen = {run.cfg.loop.rounds} if run.cfg.loop.final_steps > 0 else set()
+    publish_agent(run, frozen, callback=callback, choice=choice, video=False, round_videos=False)
+    log.info("%s", choice.describe())
+    return choice
 
 
 class _RoundLog(RunCallback):

@@ -41,3 +41,11 @@ def round_streams(seed: int, round_index: int) -> RoundStreams:
     """Round `round_index`'s streams, independent of how earlier rounds were run."""
     rng = np.random.default_rng(np.random.SeedSequence([seed, round_index]))
     return RoundStreams(*rng.spawn(5))
+
+
+def takeaway_streams(seed: int) -> tuple[np.random.SeedSequence, np.random.Generator]:
+    """The take-away choice's streams (`groupwise.run.takeaway`): the seed of every round's
+    episodes (each round's generator starts from it, so all rounds play the same reset
+    seeds) and the teacher's generator."""
+    episodes, teacher = np.random.SeedSequence([seed, 2**22]).spawn(2)
+    return episodes, np.random.default_rng(teacher)

@@ -29,11 +29,12 @@ from groupwise.oracles import Feedback
 from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.rl.policy import Policy
 from groupwise.rl.rollout import EnvFactory
-from groupwise.run.headless import feedback_of, round_plan, run_rounds
+from groupwise.run.headless import feedback_of, hand_over, round_plan, run_rounds
 from groupwise.run.progress import CallbackList, OnRoundEnd, ProgressBars
 from groupwise.run.records import RoundRecord
 from groupwise.run.run import Run
 from groupwise.run.streams import eval_rng
+from groupwise.run.takeaway import TakeawayChoice, TakeawayConfig
 from groupwise.study.case_study_film import Film, film_episode, write_film
 from groupwise.types import FloatArray
 
@@ -181,9 +182,11 @@ class CaseStudy:
 
     records: list[CaseRecord]
     evaluation: TargetEvaluation
-    """The last round's evaluation."""
+    """The take-away round's evaluation."""
     filmed: int | None
     """Index in `evaluation` of the filmed episode (None: not filmed)."""
+    choice: TakeawayChoice
+    """Which round's policy the run handed over (``agent.zip``)."""
 
 
 def run_case_study(
@@ -195,8 +198,11 @@ def run_case_study(
     film: bool = True,
     show_progress: bool = True,
     feedback: Feedback | None = None,
+    takeaway: TakeawayConfig | None = None,
 ) -> CaseStudy:
-    """Run `cfg` (its env must be `target.env`) into `out` (module docstring).
+    """Run `cfg` (its env must be `target.env`) into `out` (module docstring). The round
+    handed over (``agent.zip``, `run.headless.hand_over`) is the one the teacher prefers
+    by default (`takeaway`), and the film shows its best evaluated episode.
 
     Raises:
         ValueError: the config's env is not the target's, its decision-maker is unknown, or
@@ -232,12 +238,14 @@ def run_case_study(
             _write_rows(out / CASE_FILE, rows)
 
         bars = ProgressBars(len(round_plan(cfg.loop)), desc=target.name) if show_progress else None
+        callback = CallbackList([OnRoundEnd(scored), *([bars] if bars else [])])
         try:
-            run_rounds(run, feedback, CallbackList([OnRoundEnd(scored), *([bars] if bars else [])]))
+            run_rounds(run, feedback, callback)
+            choice = hand_over(run, feedback, takeaway or TakeawayConfig(), callback)
         finally:
             if bars is not None:
                 bars.close()
-    evaluation = evaluations[-1]
+    evaluation = evaluations[[r.round for r in rows].index(choice.round)]
     best = int(np.argmax(evaluation.scores))
     movie = None
     if film:
@@ -248,9 +256,21 @@ def run_case_study(
             evaluation.step_scores[best],
         )
         write_film(movie, out / VIDEO_FILE, out / STRIP_FILE)
-    summary = _summary(cfg, target, rows, evaluation, best if film else None, movie)
+    summary = _summary(
+        cfg, target, rows, evaluations[-1], evaluation, best if film else None, movie
+    )
+    chosen = rows[[r.round for r in rows].index(choice.round)]
+    summary["takeaway"] = {
+        **choice.to_dict(),
+        "score_mean": chosen.target_score_mean,
+        "success_rate": chosen.success_rate,
+        "stretch_rate": chosen.stretch_rate,
+        "why": "the round whose greedy episodes the teacher preferred (takeaway.json)",
+    }
+    if "filmed" in summary:
+        summary["filmed"]["round"] = choice.round
     (out / SUMMARY_FILE).write_text(json.dumps(summary, indent=2) + "\n")
-    return CaseStudy(rows, evaluation, best if film else None)
+    return CaseStudy(rows, evaluation, best if film else None, choice)
 
 
 def _write_rows(path: Path, rows: list[CaseRecord]) -> None:
@@ -266,10 +286,12 @@ def _summary(
     cfg: RunConfig,
     target: Target,
     rows: list[CaseRecord],
+    final: TargetEvaluation,
     evaluation: TargetEvaluation,
     filmed: int | None,
     movie: Film | None,
 ) -> dict[str, Any]:
+    """`final`: the last round's evaluation; `evaluation`: the filmed (take-away) round's."""
     last = rows[-1]
     summary: dict[str, Any] = {
         "target": {
@@ -286,7 +308,7 @@ def _summary(
         "env_steps": last.env_steps,
         "wall_s": last.wall_s,
         "final": {
-            "scores": evaluation.scores.tolist(),
+            "scores": final.scores.tolist(),
             "score_mean": last.target_score_mean,
             "success_rate": last.success_rate,
             "stretch_rate": last.stretch_rate,
@@ -297,7 +319,7 @@ def _summary(
             "episode": filmed,
             "reset_seed": evaluation.reset_seeds[filmed],
             "score": float(evaluation.scores[filmed]),
-            "why": "the final evaluation's episode with the highest target score",
+            "why": "the take-away round's evaluated episode with the highest target score",
             "video": VIDEO_FILE,
             "fps": movie.fps,
             "strip": STRIP_FILE,
