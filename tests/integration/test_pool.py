@@ -76,7 +76,7 @@ def test_gridworld_pool_writes_every_file(grid_pool: PreparedPool) -> None:
     # the config as before issue 19: how the pool was sampled, then how it was published
     assert list(manifest["config"]) == [
         "env", "size", "length", "oversample", "exploration_fraction", "width", "height",
-        "video", "tree", "candidate_levels", "max_group", "medoids", "workers",
+        "video", "tree", "candidate_levels", "max_group", "medoids", "workers", "clips",
     ]  # fmt: skip
     sampled = {k: manifest["config"][k] for k in ("size", "length", "oversample")}
     assert sampled == {"size": 20, "length": 30, "oversample": 1.0}

@@ -27,7 +27,14 @@ from typing import Any
 import gymnasium as gym
 from tqdm.auto import tqdm
 
-from groupwise.clips.render_jobs import ClipJob, JobReport, run_job, warm_up
+from groupwise.clips.render_jobs import (
+    ClipJob,
+    JobReport,
+    PosterJob,
+    run_job,
+    run_poster_job,
+    warm_up,
+)
 from groupwise.clips.replay import FrameSettings, make_render_env
 from groupwise.clips.store import ClipStore
 from groupwise.types import ProgressFn
@@ -45,9 +52,20 @@ def _start_worker(clips_done: "multiprocessing.Queue[int]") -> None:
     clips_done.cancel_join_thread()
 
 
-def _run_job_in_worker(job: ClipJob, root: Path, batch: int) -> JobReport:
+Job = ClipJob | PosterJob
+"""What a `RenderPool` runs: a pool's clips rendered now, or their posters only."""
+
+
+def _run_job_in_worker(job: Job, root: Path, batch: int) -> JobReport:
     done = _CLIPS_DONE
-    return run_job(job, ClipStore(root), on_clip=None if done is None else lambda: done.put(batch))
+    on_clip = None if done is None else lambda: done.put(batch)
+    if isinstance(job, PosterJob):
+        return run_poster_job(job, ClipStore(root), on_clip)
+    return run_job(job, ClipStore(root), on_clip=on_clip)
+
+
+def _clips(job: Job) -> int:
+    return job.clips if isinstance(job, PosterJob) else len(job.starts)
 
 
 class RenderPool:
@@ -95,7 +113,7 @@ class RenderPool:
         if self._executor is not None:
             self._warming = [self._executor.submit(warm_up, settings) for _ in range(self.workers)]
 
-    def start(self, jobs: Sequence[ClipJob], store: ClipStore) -> "PendingClips":
+    def start(self, jobs: Sequence[Job], store: ClipStore) -> "PendingClips":
         """Hand every job to the workers and return at once; `wait` collects the reports.
         (With `workers=0` the jobs run in `wait`.)"""
         warming, self._warming = self._warming, []
@@ -110,7 +128,7 @@ class RenderPool:
 
     def render(
         self,
-        jobs: Sequence[ClipJob],
+        jobs: Sequence[Job],
         store: ClipStore,
         show_progress: bool = True,
         progress: ProgressFn | None = None,
@@ -124,7 +142,7 @@ class PendingClips:
 
     def __init__(
         self,
-        jobs: list[ClipJob],
+        jobs: list[Job],
         store: ClipStore,
         warming: list[Future[float]],
         futures: Mapping[Future[JobReport], int],
@@ -148,7 +166,7 @@ class PendingClips:
         `RenderingUnavailableError`, `VideoEncodingError`); the other jobs are cancelled.
         """
         jobs = self._jobs
-        total = sum(len(job.starts) for job in jobs)
+        total = sum(_clips(job) for job in jobs)
         reports: dict[int, JobReport] = {}
         with tqdm(total=total, unit="clip", desc="clips", disable=not show_progress) as bar:
             counter = _ClipCounter(total, bar, progress)
@@ -188,6 +206,9 @@ class PendingClips:
         reports = {}
         try:
             for i, job in enumerate(self._jobs):
+                if isinstance(job, PosterJob):
+                    reports[i] = run_poster_job(job, self._store, lambda: counter.add(1))
+                    continue
                 if job.settings not in envs:
                     envs[job.settings] = make_render_env(job.settings)
                 reports[i] = run_job(

@@ -1,6 +1,8 @@
 """A clip job: one episode's selected windows, replayed, rendered and encoded (`run_job`),
-and how a pool's windows are cut into jobs (`plan_jobs`). `render.RenderPool` runs them in
-worker processes; `run_job` also runs in this process (`workers=0`).
+and how a pool's windows are cut into jobs (`plan_jobs`); a poster job: windows whose clips
+are rendered on demand, their recipes kept in the store and only their posters rendered now
+(`run_poster_job`, `plan_poster_jobs`). `render.RenderPool` runs both in worker processes;
+they also run in this process (`workers=0`).
 """
 
 import logging
@@ -14,8 +16,10 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from groupwise.clips.recipe import ClipRecipe, render_recipe, window_recipe
 from groupwise.clips.replay import FrameSettings, even_crop, make_render_env, replay_windows
 from groupwise.clips.store import ClipStore
+from groupwise.clips.timing import ClipTiming
 from groupwise.clips.video import DEFAULT_FPS, ClipEncoder, poster_bytes, poster_frame
 from groupwise.pool.fragments import Fragment, Trajectory
 
@@ -147,7 +151,7 @@ def run_job(
     while the next is rendered. Without `env`, uses this process's cached rendering env.
     `on_clip` is called as each window's frames and poster are done.
     """
-    env = env if env is not None else _cached_env(job.settings)
+    env = env if env is not None else cached_env(job.settings)
     timings: dict[str, float] = {}
     encode_s = 0.0
     cpu_before = _children_cpu_s()
@@ -205,6 +209,75 @@ def run_job(
     )
 
 
+@dataclass(frozen=True)
+class PosterJob:
+    """Windows whose clips are rendered on demand: keep each one's recipe in the store and
+    render its poster now (`run_poster_job`)."""
+
+    windows: tuple[tuple[int, ClipRecipe], ...]  # (episode, recipe) of each window
+
+    @property
+    def clips(self) -> int:
+        return len(self.windows)
+
+
+def plan_poster_jobs(
+    trajectories: Sequence[Trajectory],
+    fragments: Sequence[Fragment],
+    settings: FrameSettings,
+    timing: ClipTiming,
+    workers: int,
+) -> list[PosterJob]:
+    """The recipes of `fragments` (`recipe.window_recipe`), in about `JOBS_PER_WORKER` jobs
+    per worker.
+
+    Raises:
+        ValueError: a fragment's episode is missing, or it does not fit the timing.
+    """
+    by_episode = {t.episode: t for t in trajectories}
+    windows = []
+    for fragment in fragments:
+        traj = by_episode.get(fragment.episode)
+        if traj is None:
+            raise ValueError(f"fragment {fragment.key} has no trajectory to replay")
+        windows.append((fragment.episode, window_recipe(traj, fragment, settings, timing)))
+    per_job = max(1, math.ceil(len(windows) / (JOBS_PER_WORKER * max(workers, 1))))
+    return [PosterJob(tuple(windows[i : i + per_job])) for i in range(0, len(windows), per_job)]
+
+
+def run_poster_job(
+    job: PosterJob, store: ClipStore, on_clip: Callable[[], None] | None = None
+) -> JobReport:
+    """Keep every window's recipe in `store` and render its poster (unless stored); the
+    reported clip and poster ids are the recipe's (``key.mp4``, ``key.jpg``)."""
+    rendered = []
+    render_s = encode_s = 0.0
+    cpu_before = _children_cpu_s()
+    for episode, recipe in job.windows:
+        tick = time.perf_counter()
+        key = recipe.key
+        store.put_recipe(key, recipe.to_bytes())
+        poster = recipe.poster_id()
+        mark = time.perf_counter()
+        encode_s += mark - tick
+        if poster not in store:
+            media = render_recipe(recipe, clip=False)
+            tick = time.perf_counter()
+            render_s += tick - mark
+            store.put_as(media.poster, poster)
+            encode_s += time.perf_counter() - tick
+        rendered.append(RenderedClip(episode, recipe.start, recipe.clip_id(), poster))
+        if on_clip is not None:
+            on_clip()
+    return JobReport(
+        clips=tuple(rendered),
+        replay_s=0.0,
+        render_s=render_s,
+        encode_s=encode_s,
+        ffmpeg_cpu_s=_children_cpu_s() - cpu_before,
+    )
+
+
 def _children_cpu_s() -> float:
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
     return usage.ru_utime + usage.ru_stime
@@ -214,7 +287,8 @@ _ENVS: dict[FrameSettings, gym.Env[Any, Any]] = {}
 """This process's rendering envs, one per settings (a worker renders many jobs)."""
 
 
-def _cached_env(settings: FrameSettings) -> gym.Env[Any, Any]:
+def cached_env(settings: FrameSettings) -> gym.Env[Any, Any]:
+    """This process's rendering env for `settings`, made on first use and kept."""
     env = _ENVS.get(settings)
     if env is None:
         env = _ENVS[settings] = make_render_env(settings)
@@ -224,7 +298,7 @@ def _cached_env(settings: FrameSettings) -> gym.Env[Any, Any]:
 def warm_up(settings: FrameSettings) -> float:
     """Make (and cache) this worker's env and render one frame; returns the seconds it took."""
     start = time.perf_counter()
-    env = _cached_env(settings)
+    env = cached_env(settings)
     env.reset(seed=0)
     env.render()
     return time.perf_counter() - start

@@ -148,7 +148,7 @@ def replay_windows(
     obs, _ = env.reset(seed=int(reset_seed))
     for t in range(end):
         if observations is not None:
-            _check_observation(obs, observations[t], t, reset_seed)
+            check_observation(obs, observations[t], t, reset_seed)
         if t in wanted:
             now = time.perf_counter()
             clock["replay_s"] += now - tick
@@ -209,7 +209,9 @@ def episode_actions(arrays: Mapping[str, np.ndarray], episode: int) -> np.ndarra
     return actions
 
 
-def _check_observation(obs: Any, stored: np.ndarray, t: int, reset_seed: int) -> None:
+def check_observation(obs: Any, stored: np.ndarray, t: int, reset_seed: int) -> None:
+    """Raise `ReplayMismatchError` unless `obs` is the stored observation of step `t` (within
+    `OBS_TOLERANCE`)."""
     replayed = np.asarray(obs, dtype=np.float32).reshape(-1)
     expected = np.asarray(stored, dtype=np.float32).reshape(-1)
     if replayed.shape != expected.shape or not np.allclose(

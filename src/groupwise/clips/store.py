@@ -1,11 +1,15 @@
-"""The clip store: a directory of clips and posters, each under an id derived from its bytes.
+"""The clip store: a directory of clips and posters, each under an id that names its bytes.
 
-An id is the SHA-256 of a file's bytes in lower-case hex followed by its kind's suffix, e.g.
-``"9f86d0…0a08.mp4"``; `ID_PATTERN` is the only form `ClipStore.path` accepts. Equal bytes
-get one id (stored once), so an id names its content forever and can be cached by a browser
-without revalidation. Only ids can address a file: a traversal (``"../x"``), an absolute
-path, or anything else that does not match the pattern is rejected before the file system
-is touched (the prototype served any path as a "video", SPEC §10).
+An id is a SHA-256 in lower-case hex followed by its kind's suffix, e.g.
+``"9f86d0…0a08.mp4"``; `ID_PATTERN` is the only form `ClipStore.path` accepts. It is the hash
+either of the file's bytes (a clip rendered with its pool: equal bytes get one id, stored
+once) or of a *recipe*, everything that renders the file (a clip rendered on demand,
+`clips.recipe`: the store keeps the recipe under ``.recipes/`` until, or after, the file is
+made). Rendering is deterministic, so either way an id names its content forever and can be
+cached by a browser without revalidation. Only ids can address a file: a traversal
+(``"../x"``), an absolute path, or anything else that does not match the pattern is
+rejected before the file system is touched (the prototype served any path as a "video",
+SPEC §10).
 
 Files are written to a temporary file inside the store and renamed into place, so a reader
 never sees half a clip, and several processes (the render workers) can write at once.
@@ -24,7 +28,9 @@ ID_PATTERN = re.compile(r"[0-9a-f]{64}\.(?:mp4|jpg|png)")
 """A clip or poster id: 64 lower-case hex digits, a dot, a suffix of `MEDIA_TYPES`."""
 
 _TMP = ".tmp"
+_RECIPES = ".recipes"
 _CHUNK = 1 << 20
+_KEY = re.compile(r"[0-9a-f]{64}")
 
 
 class InvalidClipIdError(ValueError):
@@ -61,6 +67,7 @@ class ClipStore:
         self.root = Path(root).resolve()
         self.root.mkdir(parents=True, exist_ok=True)
         (self.root / _TMP).mkdir(exist_ok=True)
+        (self.root / _RECIPES).mkdir(exist_ok=True)
 
     def __repr__(self) -> str:
         return f"ClipStore({str(self.root)!r})"
@@ -125,9 +132,58 @@ class ClipStore:
             self._place(tmp, clip_id)
         return clip_id
 
+    def put_as(self, data: bytes, clip_id: str) -> None:
+        """Store `data` under `clip_id` (the hash of its recipe, not of `data`: a file
+        rendered on demand), written to a temporary file and renamed into place, so a reader
+        never sees part of it; a no-op if already stored.
+
+        Raises:
+            InvalidClipIdError: not a well-formed id.
+        """
+        if not is_valid_id(clip_id):
+            raise InvalidClipIdError(f"not a clip id: {clip_id!r}")
+        if clip_id in self:
+            return
+        tmp = self.temporary_file(clip_id.rsplit(".", 1)[1])
+        try:
+            tmp.write_bytes(data)
+            self._place(tmp, clip_id)
+        finally:
+            tmp.unlink(missing_ok=True)
+
+    def put_recipe(self, key: str, data: bytes) -> None:
+        """Keep the recipe `data` (`clips.recipe`) of the files with ids ``key.<suffix>``.
+
+        Raises:
+            InvalidClipIdError: `key` is not 64 lower-case hex digits.
+        """
+        path = self._recipe(key)
+        if path.is_file():
+            return
+        tmp = self.temporary_file("npz")
+        try:
+            tmp.write_bytes(data)
+            os.chmod(tmp, 0o644)
+            os.replace(tmp, path)
+        finally:
+            tmp.unlink(missing_ok=True)
+
+    def recipe(self, clip_id: str) -> Path | None:
+        """The recipe file of an id rendered on demand, None when the store has none (an id
+        of a file stored with its pool, or unknown).
+
+        Raises:
+            InvalidClipIdError: not a well-formed id.
+        """
+        if not is_valid_id(clip_id):
+            raise InvalidClipIdError(f"not a clip id: {clip_id!r}")
+        path = self._recipe(clip_id.rsplit(".", 1)[0])
+        return path if path.is_file() and not path.is_symlink() else None
+
     def temporary_file(self, suffix: str) -> Path:
         """A fresh, empty file inside the store's temporary folder, named ``*.suffix``."""
-        _check_suffix(suffix)
+        if suffix != "npz":
+            _check_suffix(suffix)
         fd, name = tempfile.mkstemp(suffix=f".{suffix}", dir=self.root / _TMP)
         os.close(fd)
         return Path(name)
@@ -138,6 +194,11 @@ class ClipStore:
 
     def _file(self, clip_id: str) -> Path:
         return self.root / clip_id
+
+    def _recipe(self, key: str) -> Path:
+        if _KEY.fullmatch(key) is None:
+            raise InvalidClipIdError(f"not a recipe key: {key!r}")
+        return self.root / _RECIPES / f"{key}.npz"
 
     def _place(self, tmp: Path, clip_id: str) -> None:
         os.chmod(tmp, 0o644)

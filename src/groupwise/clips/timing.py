@@ -20,6 +20,7 @@ from typing import Any
 
 import gymnasium as gym
 
+from groupwise.clips.video import poster_frame
 from groupwise.envs import env_entry, make_env
 
 TARGET_FPS = 30.0
@@ -51,6 +52,18 @@ class ClipTiming:
     def frames(self) -> int:
         """Frames per clip, ⌈L / k⌉."""
         return -(-self.steps // self.stride)
+
+    @property
+    def poster_offset(self) -> int:
+        """Steps into the window of the poster's frame (`clips.video.poster_frame`)."""
+        return poster_frame(self.frames) * self.stride
+
+    @property
+    def snapshot_offsets(self) -> tuple[int, ...]:
+        """Steps into a window whose physics state before them renders the window without
+        its episode's replay (`rl.rollout.sample_episodes_for_windows`): the first frame's
+        (the clip) and the poster's."""
+        return (0, self.poster_offset) if self.poster_offset else (0,)
 
     @property
     def fps(self) -> float:

@@ -68,6 +68,7 @@ def run(args: argparse.Namespace) -> int:
             height=args.size,
             workers=args.workers,
             video=VideoConfig(preset=args.preset),
+            clips="eager",  # no server renders them later: the directory is the product
         )
         policy = load_policy(args.policy, args.env)
     except (ValueError, OSError) as error:

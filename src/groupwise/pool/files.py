@@ -62,7 +62,7 @@ class PoolTimings:
     replay_s: float  # worker-seconds stepping and checking replays, summed over workers
     workers: int
     behaviours: int
-    frames: int  # frames rendered (N × ⌈L / k⌉)
+    frames: int  # frames rendered (N × ⌈L / k⌉; N posters when clips are rendered on demand)
 
 
 @dataclass(frozen=True)

@@ -6,8 +6,8 @@ window, which we do not repeat.
 """
 
 import math
-from collections.abc import Sequence
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -32,6 +32,10 @@ class Trajectory:
     """The env's score of the whole episode where it reports one: a target env's
     ``info["target_total"]`` at the last step, in the target's unit (not the sum of the
     per-step `true_rewards`); nan for other envs."""
+    snapshots: Mapping[int, FloatArray] = field(default_factory=dict, compare=False, repr=False)
+    """Step t → the physics state (S,) before step t, for the steps the sampler was asked to
+    capture (MuJoCo envs only, `envs.physics_state`): a window's frames are rendered from
+    there instead of replaying the episode from its reset (`clips.recipe`)."""
 
     def __post_init__(self) -> None:
         t = self.obs.shape[0]

@@ -7,7 +7,9 @@ frame size, encoding, tree, candidates, render workers) and, readable top to bot
 1. **clips**: hands the windows to the render workers (`clips.render`), which replay each
    episode from its reset seed, render exactly the pool's windows (at real speed, a frame
    every k-th step: `clips.timing`), and encode each as an MP4 and a poster into the clip
-   store, while the parent computes
+   store — or, with ``clips="on_demand"``, keep each window's recipe in the store and render
+   only its poster (`clips.recipe`; the server renders a clip when the page first asks for
+   it, `clips.on_demand`) — while the parent computes
 2. the pool's **DTW** distances (`BehaviourPool.distances`), the **tree**, its group
    candidates and medoids (`behaviour`);
 3. **writes** the directory (`files`) and returns a `PreparedPool` with per-phase
@@ -24,7 +26,7 @@ import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -34,7 +36,7 @@ from groupwise.behaviour import (
     medoids,
 )
 from groupwise.clips.render import RenderPool
-from groupwise.clips.render_jobs import plan_jobs
+from groupwise.clips.render_jobs import ClipJob, PosterJob, plan_jobs, plan_poster_jobs
 from groupwise.clips.replay import FrameSettings, make_render_env
 from groupwise.clips.store import ClipStore
 from groupwise.clips.timing import clip_timing, step_seconds
@@ -85,6 +87,13 @@ class PublishConfig:
     """Representative clips kept per inner tree node (hover previews, SPEC §9)."""
     workers: int = 2
     """Render worker processes (0: render in this process)."""
+    clips: Literal["eager", "on_demand"] = "on_demand"
+    """"on_demand": render a poster per behaviour now and keep each clip's recipe, so that
+    a clip is rendered when it is first asked for (`clips.on_demand`, served by the app);
+    "eager": render and encode every clip now (`groupwise pool`: a directory to use without
+    a server). On demand by default: rendering every clip was 85 % of a 1,000-behaviour
+    Hopper pool's CPU time and ~0.25 CPU-s a clip whatever the pool's size, while a person
+    watches a few dozen clips a round (issue 22)."""
 
     def __post_init__(self) -> None:
         if self.width < 2 or self.height < 2 or self.width % 2 or self.height % 2:
@@ -184,14 +193,18 @@ def publish_pool(
     try:
         workers.warm_up(settings)
         tick = time.perf_counter()
-        jobs = plan_jobs(
-            trajectories,
-            fragments,
-            settings,
-            workers.workers,
-            stride=timing.stride,
-            fps=timing.fps,
-        )
+        jobs: list[ClipJob] | list[PosterJob]
+        if cfg.clips == "on_demand":
+            jobs = plan_poster_jobs(trajectories, fragments, settings, timing, workers.workers)
+        else:
+            jobs = plan_jobs(
+                trajectories,
+                fragments,
+                settings,
+                workers.workers,
+                stride=timing.stride,
+                fps=timing.fps,
+            )
         pending = workers.start(jobs, store)
         mark = time.perf_counter()
         distances = pool.measure_distances(cfg=cfg.tree)
@@ -230,7 +243,7 @@ def publish_pool(
         replay_s=sum(r.replay_s for r in reports),
         workers=workers.workers,
         behaviours=len(fragments),
-        frames=len(fragments) * timing.frames,
+        frames=len(fragments) * (timing.frames if cfg.clips == "eager" else 1),
     )
     prepared = PreparedPool(
         directory=out,

@@ -7,10 +7,12 @@ about are kept (a uniformly random N without an ensemble). The headless loop, th
 """
 
 import math
+from collections.abc import Sequence
 from typing import Literal
 
 import numpy as np
 
+from groupwise.clips.timing import clip_timing, step_seconds
 from groupwise.pool.behaviours import BehaviourPool
 from groupwise.pool.fragments import most_uncertain, stack_fragments, tile_fragments
 from groupwise.query.groups import step_variance
@@ -33,6 +35,7 @@ def sample_pool(
     ensemble: RewardEnsemble | None = None,
     select: Literal["uncertain", "random"] = "uncertain",
     progress: ProgressFn | None = None,
+    snapshot_offsets: Sequence[int] | None = None,
 ) -> BehaviourPool:
     """A pool of (up to) `size` behaviours of `length` steps (module docstring).
 
@@ -40,12 +43,22 @@ def sample_pool(
     keeps the windows it is most uncertain about (`select="random"`: a random subset);
     without one the predicted returns are an empty (N, 0) array. `progress` hears the
     steps sampled towards the windows (`rl.rollout.sample_episodes_for_windows`).
+    `snapshot_offsets` are the steps into each window whose physics state the episodes keep
+    (MuJoCo envs); by default those a window's clip and poster are rendered from
+    (`ClipTiming.snapshot_offsets`: two states of a few hundred bytes a window), so a clip can
+    be rendered on demand without replaying its episode (`clips.recipe`).
 
     Raises:
         ValueError: `size` < 1 or `oversample` < 1, or episodes too short for a window.
     """
     if size < 1 or oversample < 1.0:
         raise ValueError(f"need size >= 1 and oversample >= 1, got {size} and {oversample}")
+    if snapshot_offsets is None:
+        probe = make_env()
+        try:
+            snapshot_offsets = clip_timing(step_seconds(probe), steps=length).snapshot_offsets
+        finally:
+            probe.close()
     episodes = sample_episodes_for_windows(
         make_env,
         policy,
@@ -54,6 +67,7 @@ def sample_pool(
         rng,
         exploration_fraction,
         progress=progress,
+        snapshot_offsets=snapshot_offsets,
     )
     windows = tile_fragments(episodes, length)
     if ensemble is None:

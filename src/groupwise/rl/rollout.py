@@ -13,7 +13,7 @@ env instances, never the ones PPO trains on.
 """
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -21,6 +21,7 @@ import gymnasium as gym
 import numpy as np
 
 from groupwise.envs.episodes import GIVE_UP_EPISODES, too_short_message
+from groupwise.envs.physics_state import physics_state
 from groupwise.envs.spaces import encode_actions
 from groupwise.envs.targets import TARGET_TOTAL_KEY
 from groupwise.envs.true_reward import TRUE_REWARD_KEY
@@ -99,6 +100,7 @@ def sample_episodes_for_windows(
     max_episodes: int | None = None,
     max_steps: int | None = None,
     progress: ProgressFn | None = None,
+    snapshot_offsets: Sequence[int] = (),
 ) -> list[Trajectory]:
     """Sample episodes until tiling them into `length`-step windows gives >= `n_windows`.
 
@@ -115,6 +117,11 @@ def sample_episodes_for_windows(
     `progress` hears (steps sampled towards the windows, `n_windows` × `length`) as the
     steps are taken, never decreasing: an ended episode's steps count in whole windows, a
     running one's all (they may all become windows), at most the total.
+
+    `snapshot_offsets` (steps into a window, each in [0, `length`)): for every window and
+    offset o, the physics state before step ``start + o − 1`` goes into the episode's
+    `Trajectory.snapshots` (MuJoCo envs; a window's frame o is rendered from it,
+    `clips.recipe`).
 
     Raises:
         ValueError: a non-positive count; the env has no time limit and `max_steps` is not
@@ -139,6 +146,14 @@ def sample_episodes_for_windows(
             f"episodes of {env_name} last at most {limit} steps, fewer than one window of "
             f"{length} steps"
         )
+    if any(not 0 <= o < length for o in snapshot_offsets):
+        raise ValueError(f"snapshot offsets must lie in [0, {length}), got {snapshot_offsets}")
+    snapshot_steps = frozenset(
+        start + o - 1
+        for start in range(0, limit - length + 1, length)
+        for o in snapshot_offsets
+        if start + o >= 1
+    )
     trajectories: list[Trajectory] = []
     windows = 0
     target, reported = n_windows * length, 0
@@ -169,6 +184,7 @@ def sample_episodes_for_windows(
             max_steps,
             len(trajectories),
             on_step if progress is not None else None,
+            snapshot_steps,
         )
         windows = sum(len(t) // length for t in trajectories)
         if windows == 0:
@@ -229,11 +245,14 @@ def _sample_batch(
     max_steps: int | None,
     first_episode: int,
     on_step: StepFn | None = None,
+    snapshot_steps: frozenset[int] = frozenset(),
 ) -> list[Trajectory]:
     envs = [make_env() for _ in range(n_episodes)]
     try:
         limit = _step_limit(envs[0], max_steps)
-        return _run(envs, policy, rng, exploration_fraction, limit, first_episode, on_step)
+        return _run(
+            envs, policy, rng, exploration_fraction, limit, first_episode, on_step, snapshot_steps
+        )
     finally:
         for env in envs:
             env.close()
@@ -247,6 +266,7 @@ def _run(
     limit: int,
     first_episode: int,
     on_step: StepFn | None = None,
+    snapshot_steps: frozenset[int] = frozenset(),
 ) -> list[Trajectory]:
     space = envs[0].action_space
     seeds = rng.integers(0, 2**31 - 1, size=len(envs))
@@ -256,6 +276,7 @@ def _run(
     actions: list[list[Any]] = [[] for _ in envs]
     rewards: list[list[float]] = [[] for _ in envs]
     scores = np.full(len(envs), np.nan)  # an env's episode score so far, where it has one
+    snapshots: list[dict[int, FloatArray]] = [{} for _ in envs]  # step → state before it
     running = np.arange(len(envs))  # the envs whose episodes have not ended, in order
     for t in range(limit):
         action = np.asarray(policy.act(current.astype(np.float32), rng))
@@ -264,7 +285,10 @@ def _run(
             action = action.copy()
             action[random] = random_actions(space, int(random.sum()), rng)
         still, following = [], []
+        snapshot = t in snapshot_steps
         for i, before, a in zip(running.tolist(), current, action, strict=True):
+            if snapshot and (state := physics_state(envs[i])) is not None:
+                snapshots[i][t] = state
             after, reward, terminated, truncated, info = envs[i].step(a)
             obs[i].append(before)
             actions[i].append(a)
@@ -291,6 +315,7 @@ def _run(
                 reset_seed=int(seed),
                 episode=first_episode + i,
                 episode_score=float(scores[i]),
+                snapshots=snapshots[i],
             )
         )
     return trajectories

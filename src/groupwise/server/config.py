@@ -45,6 +45,10 @@ class AppConfig:
     """How often the supervisor checks the worker and the round timers."""
     worker_poll_s: float = 0.25
     """How often an idle worker polls the database for work."""
+    clip_workers: int = 2
+    """Processes of the server that render clips on demand (`clips.on_demand`)."""
+    ray_address: str | None = None
+    """Render clips on demand as tasks on this Ray cluster instead (``serve --ray``)."""
 
     @property
     def db_url(self) -> str:

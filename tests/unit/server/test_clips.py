@@ -55,3 +55,62 @@ def test_a_link_planted_under_an_id_name_is_not_followed(stored, tmp_path):
     planted = "1" * 64 + ".mp4"
     (store.root / planted).symlink_to(secret)
     assert client.get(f"/clips/{planted}").status_code == 404
+
+
+class _Backend:
+    """Renders every recipe at once into fixed bytes, or fails with `error`."""
+
+    capacity = 1
+
+    def __init__(self, error: Exception | None = None) -> None:
+        self.error, self.calls = error, 0
+
+    def submit(self, recipe, clip):
+        from concurrent.futures import Future
+
+        from groupwise.clips.recipe import RenderedMedia
+
+        self.calls += 1
+        future = Future()
+        if self.error is not None:
+            future.set_exception(self.error)
+        else:
+            future.set_result(RenderedMedia(b"clip of " + recipe if clip else None, b"poster"))
+        return future
+
+    def warm(self, recipe):
+        pass
+
+    def close(self):
+        pass
+
+
+def _on_demand(client, backend):
+    from groupwise.clips.on_demand import OnDemandClips
+
+    store = context_of(client).clips
+    client.app.state.clip_renderer = OnDemandClips(store, backend)
+    key = "7" * 64
+    store.put_recipe(key, b"recipe")
+    return store, key
+
+
+def test_a_clip_published_on_demand_is_rendered_on_the_first_request(client):
+    backend = _Backend()
+    store, key = _on_demand(client, backend)
+    for _ in range(2):
+        response = client.get(f"/clips/{key}.mp4")
+        assert response.status_code == 200
+        assert response.content == b"clip of recipe"
+        assert "immutable" in response.headers["cache-control"]
+    assert backend.calls == 1 and store.path(f"{key}.jpg").read_bytes() == b"poster"
+
+
+def test_a_clip_that_cannot_be_rendered_is_a_clear_500_and_stores_nothing(client):
+    store, key = _on_demand(client, _Backend(RuntimeError("no GL context")))
+    response = client.get(f"/clips/{key}.mp4")
+    assert response.status_code == 500
+    assert response.json()["detail"] == (
+        f"{key}.mp4 could not be rendered: RuntimeError: no GL context"
+    )
+    assert f"{key}.mp4" not in store and store.ids() == []

@@ -1,8 +1,23 @@
-"""Clips and posters, by clip-store id only (HTTP Range supported for video seeking)."""
+"""Clips and posters, by clip-store id only (HTTP Range supported for video seeking).
 
-from fastapi import APIRouter, HTTPException
+An id published on demand (`clips.on_demand`) is rendered from its recipe on the first
+request, by render processes of the server (or Ray tasks with ``serve --ray``), and is a
+file from then on.
+"""
+
+import threading
+from typing import Annotated
+
+from fastapi import APIRouter, Depends, HTTPException, Request
 from fastapi.responses import FileResponse
 
+from groupwise.clips.on_demand import (
+    OnDemandClips,
+    RenderBusyError,
+    RenderFailedError,
+    local_renderer,
+    ray_renderer,
+)
 from groupwise.clips.store import ClipNotFoundError, InvalidClipIdError
 from groupwise.server.deps import Context
 from groupwise.server.routes import ERRORS
@@ -10,7 +25,29 @@ from groupwise.server.routes import ERRORS
 router = APIRouter(prefix="/clips", tags=["clips"], responses=ERRORS)
 
 IMMUTABLE = "public, max-age=31536000, immutable"
-"""An id names its bytes forever (content-addressed), so browsers may cache for good."""
+"""An id names its bytes forever (content- or recipe-addressed), so browsers may cache for
+good."""
+
+_MAKING = threading.Lock()
+
+
+def renderer(request: Request, context: Context) -> OnDemandClips:
+    """The app's on-demand renderer, made on first use (its processes start only when a clip
+    is rendered) and kept in ``app.state``; stopped with the process."""
+    state = request.app.state
+    with _MAKING:
+        made: OnDemandClips | None = getattr(state, "clip_renderer", None)
+        if made is None:
+            config = context.config
+            if config.ray_address is not None:
+                made = ray_renderer(context.clips, config.ray_address, config.clip_workers)
+            else:
+                made = local_renderer(context.clips, config.clip_workers)
+            state.clip_renderer = made
+    return made
+
+
+Renderer = Annotated[OnDemandClips, Depends(renderer)]
 
 
 @router.get(
@@ -19,13 +56,20 @@ IMMUTABLE = "public, max-age=31536000, immutable"
     responses={
         200: {"content": {"video/mp4": {}, "image/jpeg": {}, "image/png": {}}},
         206: {"description": "a byte range of the clip"},
+        500: {"description": "the clip could not be rendered"},
+        503: {"description": "too many clips asked for at once; ask again"},
     },
 )
-def clip(clip_id: str, context: Context) -> FileResponse:
-    """The MP4, JPEG or PNG stored under `clip_id`; 404 for anything else."""
+async def clip(clip_id: str, clips: Renderer) -> FileResponse:
+    """The MP4, JPEG or PNG stored under `clip_id` (rendered first when it is published on
+    demand); 404 for anything else."""
     try:
-        path = context.clips.path(clip_id)
-        media_type = context.clips.media_type(clip_id)
+        path = await clips.file(clip_id)
+        media_type = clips.store.media_type(clip_id)
     except (InvalidClipIdError, ClipNotFoundError):
         raise HTTPException(404, "there is no such clip") from None
+    except RenderBusyError as error:
+        raise HTTPException(503, str(error)) from None
+    except RenderFailedError as error:
+        raise HTTPException(500, str(error)) from None
     return FileResponse(path, media_type=media_type, headers={"Cache-Control": IMMUTABLE})
