@@ -75,6 +75,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--rounds", type=int, default=10, help="rounds ended")
     parser.add_argument("--minutes", type=float, default=1.5, help="minutes a round")
     parser.add_argument("--pace", type=float, default=5.0, help="seconds per comparison")
+    parser.add_argument("--log", type=Path, help="write the server's and worker's log here")
     args = parser.parse_args([] if argv is None else list(argv))
     rng = np.random.default_rng(0)
     latencies: list[float] = []
@@ -82,7 +83,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     waits: list[float] = []
     with tempfile.TemporaryDirectory() as tmp:
         data = Path(tmp) / "data"
-        process, url, first = start_server(data, args.env, None)
+        process, url, first = start_server(data, args.env, None, args.log)
         try:
             with httpx.Client(base_url=url, timeout=60) as http:
                 wait_for(http, first, "ready")  # the server is up (its CLI session ready)
@@ -123,6 +124,11 @@ def main(argv: Sequence[str] | None = None) -> None:
                     http.post(f"/api/sessions/{session}/end-round").raise_for_status()
                     _wait_open(http, session, round_index + 1)
                     waits.append(time.perf_counter() - tick)
+                    print(
+                        f"{time.strftime('%H:%M:%S')} round {round_index + 1} open "
+                        f"{waits[-1]:.2f} s after End round",
+                        file=sys.stderr,
+                    )
                 done.set()
                 watcher.join()
         finally:

@@ -99,8 +99,11 @@ def database(db: str) -> Iterator[tuple[str | None, str]]:
         yield db, "PostgreSQL"
 
 
-def start_server(data: Path, env: str, db: str | None) -> tuple[subprocess.Popen, str, str]:
-    """`groupwise serve` on a free port; (process, base URL, session id)."""
+def start_server(
+    data: Path, env: str, db: str | None, log: Path | None = None
+) -> tuple[subprocess.Popen, str, str]:
+    """`groupwise serve` on a free port; (process, base URL, session id). The server's and
+    its worker's log go to `log`, or nowhere."""
     process = subprocess.Popen(
         [
             sys.executable, "-m", "groupwise.cli", "serve",
@@ -108,7 +111,7 @@ def start_server(data: Path, env: str, db: str | None) -> tuple[subprocess.Popen
             "--settings", json.dumps(SETTINGS), *(["--db", db] if db else []),
         ],
         stdout=subprocess.PIPE,
-        stderr=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL if log is None else log.open("a"),
         text=True,
         env={**os.environ, "PYTHONWARNINGS": "ignore"},
     )  # fmt: skip

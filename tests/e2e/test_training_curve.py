@@ -81,8 +81,9 @@ def test_a_continuous_round_shows_ppo_steps_and_the_true_return_growing(
 
 def test_end_round_shows_the_round_prepared_ahead(server: Server, page: Page) -> None:
     """The next round is prepared while the person compares (`stage_after_s`), so "End
-    round" brings its chart without a preparing phase: the worker opens it before it commits
-    the ended round (how long that takes: `python -m benchmarks continuous`)."""
+    round" brings its chart without a preparing phase: the round's end opens it, and the
+    worker commits the ended round after (how long that takes: `python -m benchmarks
+    continuous`)."""
     sid = server.new_session("groupwise", **CONTINUOUS, rounds=3, stage_after_s=0)
     page.goto(f"{server.url}/?session={sid}")
     expect(page.locator(".arc.leaf")).to_have_count(16)
@@ -90,9 +91,9 @@ def test_end_round_shows_the_round_prepared_ahead(server: Server, page: Page) ->
     expect(button).to_be_enabled()
     button.click()
     expect(page.locator(".toast")).to_contain_text("Saved")
-    staged = server.data / "sessions" / sid / "round-0001" / "staged.json"
+    staged_sql = "SELECT round_index FROM staged_rounds WHERE session_id = ?"
     deadline = time.monotonic() + 120
-    while not staged.is_file():  # PPO started with the answer; the next round follows it
+    while server.db_rows(staged_sql, sid) != [(1,)]:  # PPO started; the next round follows
         assert time.monotonic() < deadline, f"round 1 was not prepared ahead\n{server.tail()}"
         time.sleep(0.2)
 
@@ -104,7 +105,7 @@ def test_end_round_shows_the_round_prepared_ahead(server: Server, page: Page) ->
     waited = time.monotonic() - tick
     print(f"End round → round 1's chart: {waited:.2f} s")
     server.wait_phase(sid, "ready", round_index=1)
-    assert not staged.exists()  # opened from it (a preparing job would have left it there)
+    assert server.db_rows(staged_sql, sid) == []  # opened from it, with the round's end
     # round 0 is committed after round 1 opened: its record arrives in the background
     sql = (
         "SELECT count(*) FROM checkpoints c JOIN rounds r ON r.id = c.round_id "

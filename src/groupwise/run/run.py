@@ -182,13 +182,23 @@ class Run:
         tmp = final.with_name(final.name + ".tmp")
         shutil.rmtree(tmp, ignore_errors=True)
         tmp.mkdir(parents=True)
-        self.ppo.save(tmp)
-        self.ensemble.save(tmp / REWARD_FILE)
+        self.save_policy(tmp)
         state = {"round": round_index, "env_steps": self.agent.num_timesteps}
         (tmp / STATE_FILE).write_text(json.dumps(state))
         shutil.rmtree(final, ignore_errors=True)
         os.replace(tmp, final)
         return final
+
+    def save_policy(self, directory: Path) -> None:
+        """Write the policy and the reward ensemble as they are now into `directory` (a
+        live checkpoint's part; a snapshot another process samples the next round from)."""
+        self.ppo.save(directory)
+        self.ensemble.save(directory / REWARD_FILE)
+
+    def load_policy(self, directory: Path) -> None:
+        """Load what `save_policy` wrote."""
+        self.ppo.load(directory)
+        self.ensemble.load_state(directory / REWARD_FILE)
 
     def restore_live(self, round_index: int) -> bool:
         """Load the live checkpoint of round `round_index` over the restored run (policy and
@@ -200,8 +210,7 @@ class Run:
             return False
         if state.get("round") != round_index:
             return False
-        self.ppo.load(directory)
-        self.ensemble.load_state(directory / REWARD_FILE)
+        self.load_policy(directory)
         log.info(
             "%s resumed round %d at %d PPO steps", self.directory, round_index, state["env_steps"]
         )

@@ -53,12 +53,22 @@ def open_round(s: DbSession, session: SessionRow, now: datetime | None = None) -
 
 
 def close_round(
-    s: DbSession, session: SessionRow, reason: str, now: datetime | None = None
+    s: DbSession,
+    session: SessionRow,
+    reason: str,
+    now: datetime | None = None,
+    *,
+    open_next: bool = True,
 ) -> RoundRow:
-    """End the open round (`reason`: "user", "comparisons" or "time"); phase ``training``.
+    """End the open round (`reason`: "user", "comparisons" or "time"); phase ``training``,
+    or, with `open_next` and the next round prepared ahead (continuous training,
+    `storage.staging`), that round open at once (phase ``ready``) while the worker records
+    this one's training.
 
     Raises ConflictError unless the session is ready.
     """
+    from groupwise.storage.staging import open_staged  # staging stores rounds: a cycle
+
     now = now or utcnow()
     require_ready(session, "end the round")
     row = get_round(s, session.id, session.round)
@@ -69,6 +79,8 @@ def close_round(
     session.phase = TRAINING
     write_progress(session, "queued", 0.0, "waiting for the training worker")
     touch(session, now)
+    if open_next:
+        open_staged(s, session.id, row.index)
     return row
 
 

@@ -40,7 +40,7 @@ from groupwise.run.round import Offer, begin_round, end_round
 from groupwise.run.run import Run
 from groupwise.storage import Database, SessionSettings
 from groupwise.storage.judgements import round_judgements
-from groupwise.storage.lifecycle import advance_before_commit, finish_training, record_training
+from groupwise.storage.lifecycle import finish_training, record_training
 from groupwise.storage.phases import WORK_PHASES
 from groupwise.storage.rounds import PreparedRound, store_prepared_round
 from groupwise.storage.sessions import (
@@ -50,8 +50,10 @@ from groupwise.storage.sessions import (
     session_directory,
     settings_of,
 )
+from groupwise.storage.staging import open_staged as stage_opened
+from groupwise.storage.staging import stage_round
 from groupwise.storage.timer import elapsed
-from groupwise.worker.offers import drop_staged, prepared_round, read_staged, write_staged
+from groupwise.worker.offers import prepared_round
 from groupwise.worker.progress import JobProgress
 
 if TYPE_CHECKING:
@@ -213,18 +215,24 @@ def stage_next(job: Job, run: Run) -> Offer:
 
 
 def publish_staged(
-    job: Job, offer: Offer, data_dir: Path, render: RenderPool, ppo_steps: int
+    job: Job, offer: Offer, db: Database, data_dir: Path, render: RenderPool, ppo_steps: int
 ) -> None:
     """Publish an offer prepared ahead (`stage_next`: clips, tree, candidates) into its
-    round's directory and keep it there (`offers.write_staged`) until round `job.round`
-    ends (`train`). Touches no run: the worker calls it on a thread of its own while PPO
-    goes on."""
+    round's directory and stage it in the database (`storage.staging`): the round's end
+    opens it in the same transaction. Touches no run: the stager process calls it
+    (`worker.staging`) while PPO goes on in the worker."""
     prepared = published_round(
         data_dir, job.session_id, job.env, job.settings, offer.pool, offer.queries, render,
         sample_s=offer.sample_s, ppo_steps=ppo_steps,
     )  # fmt: skip
-    write_staged(data_dir / round_directory(job.session_id, job.round + 1), prepared)
-    log.info("session %s: round %d staged", job.session_id, job.round + 1)
+    with db.write() as s:
+        staged = stage_round(s, job.session_id, job.round + 1, prepared)
+    log.info(
+        "session %s: round %d %s",
+        job.session_id,
+        job.round + 1,
+        "staged" if staged else "prepared ahead too late (the session moved on)",
+    )
 
 
 def sampled_at(directory: Path) -> int | None:
@@ -258,7 +266,7 @@ def train(
     round is committed: the person compares again while the worker fits, evaluates and
     checkpoints (a worker killed meanwhile commits it when it resumes: `worker.live`)."""
     r = job.round
-    opened = live is not None and open_staged(job, db, data_dir)
+    opened = live is not None and open_staged(job, db)
     record = commit_round(job, db, data_dir, progress, live)
     checkpoint = checkpoint_of(job.session_id, r)
     with db.write() as s:
@@ -292,18 +300,12 @@ def committed_record(data_dir: Path, session_id: str, round_index: int) -> Round
     return RoundRecord(**row) if row.get("round") == round_index else None
 
 
-def open_staged(job: Job, db: Database, data_dir: Path) -> bool:
+def open_staged(job: Job, db: Database) -> bool:
     """Open round `job.round + 1` from the offer prepared ahead (`stage_next`), before round
-    `job.round` is committed; False when none was prepared (or the session moved on)."""
-    directory = data_dir / round_directory(job.session_id, job.round + 1)
-    staged = read_staged(directory)
-    if staged is None:
-        return False
+    `job.round` is committed, when the round ended before it was staged; False when none
+    was prepared (or the session moved on)."""
     with db.write() as s:
-        opened = advance_before_commit(s, job.session_id, job.round) and (
-            store_prepared_round(s, job.session_id, job.round + 1, staged)
-        )
-    drop_staged(directory)
+        opened = stage_opened(s, job.session_id, job.round)
     if opened:
         log.info("session %s: round %d opened (prepared ahead)", job.session_id, job.round + 1)
     return opened

@@ -16,25 +16,28 @@ learning curve (PPO steps, pairs, validation accuracy), and so does each evaluat
 greedy policy's true return, the first before the round's first rollout, then whenever the
 slices have trained long enough (`curve.EVAL_MIN_S`, `curve.EVAL_COST`).
 
-When the person ends the round, the training job ends it through `end_round` on the live
-run (`take`), with no PPO steps of its own: the policy trained all along. The next round's
-offer was prepared ahead, `stage_after_s` seconds into the round (a session setting), from
-the policy as it was then (`jobs.stage_next`); it opens first, and the ended round is
-committed (final fit, evaluation, checkpoint) while the person already compares again. A
-worker killed in between commits that round when it resumes. A round ended sooner has its
-next pool sampled then, as in rounds mode.
+The next round is prepared ahead, `stage_after_s` seconds into the round (a session
+setting), from a snapshot of the policy as it was then, in the stager process
+(`worker.staging`) while PPO goes on here, and waits in the database (`storage.staging`).
+The round's end (the person, its budget or its timer) opens it in the same transaction, so
+"End round" answers with the next round; this worker then commits the ended round on the
+run that trained all along (`end_round` with no PPO steps of its own: final fit,
+evaluation, checkpoint) before its next slice. A worker killed in between commits that
+round when it resumes. A round ended before its successor was staged goes to the training
+job (`take`), which waits for the staging, opens it and commits; a round ended before the
+staging began has its next pool sampled then, as in rounds mode.
 """
 
 import dataclasses
 import logging
 import math
+import shutil
 import time
-from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
+from groupwise.run.checkpoint import CHECKPOINTS
 from groupwise.run.continuous import LiveRound
 from groupwise.run.run import Run
 from groupwise.run.streams import round_streams
@@ -51,20 +54,18 @@ from groupwise.worker.jobs import (
     commit_round,
     committed_record,
     open_run,
-    publish_staged,
     published_offer,
     sampled_at,
-    stage_next,
 )
-
-if TYPE_CHECKING:
-    from groupwise.clips.render import RenderPool
+from groupwise.worker.staging import SNAPSHOT_DIR, Stager
 
 log = logging.getLogger(__name__)
 
 CHECKPOINT_S = 30.0
 """Seconds between a continuous round's live checkpoints."""
 CONTINUOUS = "continuous"
+SLOW_SLICE_S = 1.5
+"""A slice longer than this is logged: a training job waits for the slice in progress."""
 
 
 @dataclass
@@ -96,16 +97,15 @@ class LiveSessions:
     """The worker's continuous rounds, one `LiveTraining` per open session (module
     docstring)."""
 
-    def __init__(self, db: Database, data_dir: Path, render: "Callable[[int], RenderPool]") -> None:
+    def __init__(self, db: Database, data_dir: Path) -> None:
         self.db = db
         self.data_dir = data_dir
-        self.render = render
         self._live: dict[str, LiveTraining] = {}
         self._turns: dict[str, int] = {}
         self._turn = 0
+        self._stager: Stager | None = None
         self._staging = ThreadPoolExecutor(max_workers=1, thread_name_prefix="staging")
-        """Publishes next rounds prepared ahead (`jobs.publish_staged`): rendering waits on
-        the render processes, so PPO goes on meanwhile."""
+        """Waits on the stager process (`worker.staging`), one next round at a time."""
         self._broken: dict[str, int] = {}
         """Sessions whose continuous training failed, and the round: left alone until the
         round ends (its training job then tries once more and fails visibly if it must)."""
@@ -123,6 +123,7 @@ class LiveSessions:
         job = min(jobs, key=lambda j: self._turns.get(j.session_id, -1))
         self._turn += 1
         self._turns[job.session_id] = self._turn
+        tick = time.perf_counter()
         try:
             self._slice(job)
         except Exception:
@@ -132,6 +133,8 @@ class LiveSessions:
             self._broken[job.session_id] = job.round
             if (training := self._live.pop(job.session_id, None)) is not None:
                 training.run.close()
+        if (took := time.perf_counter() - tick) > SLOW_SLICE_S:
+            log.info("session %s: a slice took %.1f s", job.session_id, took)
         return True
 
     def _slice(self, job: Job) -> None:
@@ -156,19 +159,24 @@ class LiveSessions:
         self._stage(job, training)
 
     def _stage(self, job: Job, training: LiveTraining) -> None:
-        """Prepare the next round's offer ahead once the round trained `stage_after_s`: the
-        pool sampled and its queries chosen here, its clips rendered and published on the
-        staging thread while the slices go on."""
+        """Prepare the next round ahead once the round trained `stage_after_s`: from a
+        snapshot of the policy, in the stager process (`worker.staging`), while the slices
+        go on."""
         last = job.round + 1 >= job.settings.rounds
         waited = time.monotonic() - training.started
         if training.staged is not None or last or waited < job.settings.stage_after_s:
             return
-        offer = stage_next(job, training.run)
-        render = self.render(job.settings.render_workers)
+        snapshot = training.run.directory / CHECKPOINTS / SNAPSHOT_DIR
+        shutil.rmtree(snapshot, ignore_errors=True)
+        snapshot.mkdir(parents=True)
+        training.run.save_policy(snapshot)
         steps = training.run.agent.num_timesteps
-        training.staged = self._staging.submit(
-            publish_staged, job, offer, self.data_dir, render, steps
-        )
+        training.staged = self._staging.submit(self._stage_in_process, job, snapshot, steps)
+
+    def _stage_in_process(self, job: Job, snapshot: Path, steps: int) -> None:
+        if self._stager is None:
+            self._stager = Stager(self.db.url, self.data_dir)
+        self._stager.submit(job, snapshot, steps).result()
 
     def _point(self, training: LiveTraining, *, evaluate: bool) -> None:
         """Store a point of the learning curve: the steps and last fit now, and the greedy
@@ -198,7 +206,15 @@ class LiveSessions:
         being published ahead is waited for: it opens as soon as it is ready."""
         training = self._live.pop(job.session_id, None)
         if training is not None and training.round == job.round:
+            tick = time.perf_counter()
             _wait_staged(training)
+            if (waited := time.perf_counter() - tick) > 0.1:
+                log.info(
+                    "session %s: waited %.1f s for round %d's clips",
+                    job.session_id,
+                    waited,
+                    job.round + 1,
+                )
             return training
         if training is not None:
             training.run.close()
@@ -209,14 +225,44 @@ class LiveSessions:
             training.run.close()
         self._live.clear()
         self._staging.shutdown(wait=True, cancel_futures=True)
+        if self._stager is not None:
+            self._stager.close()
 
     def _training(self, job: Job) -> LiveTraining:
         training = self._live.get(job.session_id)
         if training is None or training.round != job.round:
             if training is not None:
+                if training.round < job.round:  # its end opened the staged round at once
+                    self._commit(job, training)
                 training.run.close()
             training = self._live[job.session_id] = self._resume(job)
         return training
+
+    def _commit(self, job: Job, training: LiveTraining) -> None:
+        """Commit round `training.round`, ended by the person (or its budget or timer) while
+        the round after it opened from its staged offer (`storage.staging`): `end_round` on
+        the run that trained all along, then its record (module docstring)."""
+        _wait_staged(training)
+        with self.db.read() as s:
+            pending = uncommitted_round(s, job.session_id)
+            row = get_round(s, job.session_id, training.round)
+            closed, shown_at = row.closed_at, row.shown_at
+            shown = (closed - shown_at).total_seconds() if closed and shown_at else math.nan
+        if pending != training.round:
+            return  # committed already, or another round is (`_resume` sees to it)
+        # the round's time shown, pauses included (its timer was reset when the next opened)
+        ended = dataclasses.replace(job, round=pending, phase=TRAINING, elapsed_s=shown)
+        record = commit_round(ended, self.db, self.data_dir, None, training)
+        with self.db.write() as s:
+            checkpoint = checkpoint_of(job.session_id, pending)
+            record_training(s, job.session_id, pending, checkpoint, record.stats())
+        log.info(
+            "session %s: round %d committed (%d pairs, true return %.1f)",
+            job.session_id,
+            pending,
+            record.pairs_total,
+            record.true_return_mean,
+        )
 
     def _resume(self, job: Job) -> LiveTraining:
         """The round as the last checkpoint (the round before, or this round's live one)

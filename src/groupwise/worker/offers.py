@@ -5,10 +5,7 @@ single behaviours), and the exploration view's top-k pairwise edges (SPEC §5).
 Nothing here chooses queries: that is the query strategy's (`groupwise.run.round.begin_round`).
 """
 
-import dataclasses
-import json
 from collections.abc import Sequence
-from pathlib import Path
 
 import numpy as np
 
@@ -86,37 +83,3 @@ def pairwise_edges(returns: FloatArray, k: int) -> tuple[PairInput, ...]:
         PairInput(behaviour_id(a), behaviour_id(b), float(max(s, 1e-6)))
         for (a, b), s in zip(pairs.tolist(), scaled.tolist(), strict=True)
     )
-
-
-STAGED_FILE = "staged.json"
-"""A round prepared ahead (continuous training): what `prepared_round` gave, in its pool's
-directory, until the round before it ends and it opens."""
-
-
-def write_staged(directory: Path, prepared: PreparedRound) -> None:
-    """Keep a round prepared ahead beside its pool (atomically)."""
-    tmp = directory / (STAGED_FILE + ".tmp")
-    tmp.write_text(json.dumps(dataclasses.asdict(prepared)))
-    tmp.replace(directory / STAGED_FILE)
-
-
-def read_staged(directory: Path) -> PreparedRound | None:
-    """The round prepared ahead in `directory`, or None."""
-    try:
-        data = json.loads((directory / STAGED_FILE).read_text())
-    except (OSError, ValueError):
-        return None
-    return PreparedRound(
-        behaviours=tuple(BehaviourInput(**b) for b in data["behaviours"]),
-        suggestions=tuple(
-            GroupSuggestionInput(**{**g, "left": tuple(g["left"]), "right": tuple(g["right"])})
-            for g in data["suggestions"]
-        ),
-        edges=tuple(PairInput(**e) for e in data["edges"]),
-        queue=tuple(PairInput(**q) for q in data["queue"]),
-    )
-
-
-def drop_staged(directory: Path) -> None:
-    """The round prepared ahead was opened: forget it."""
-    (directory / STAGED_FILE).unlink(missing_ok=True)

@@ -99,7 +99,7 @@ class Worker:
         if self._live is None:
             from groupwise.worker.live import LiveSessions
 
-            self._live = LiveSessions(self.db, self.data_dir, self._render_pool)
+            self._live = LiveSessions(self.db, self.data_dir)
         return self._live
 
     def run(self) -> None:
