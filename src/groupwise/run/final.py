@@ -207,7 +207,7 @@ def _film_rounds(
     films = {}
     with _scratch(run) as scratch:
         for done, r in enumerate(rounds):
-            callback.on_phase("round videos", done, len(rounds))
+            callback.on_phase("video", done, len(rounds))
             path = round_video_path(out, r)
             path.parent.mkdir(exist_ok=True)
             if r in known:

@@ -8,7 +8,7 @@ unit: PPO steps, pairs, episodes) and each finished round (`on_round_end`). The 
 """
 
 from collections.abc import Callable, Sequence
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, ClassVar
 
 from tqdm.auto import tqdm
 
@@ -53,17 +53,20 @@ class OnRoundEnd(RunCallback):
 
 
 class ProgressBars(RunCallback):
-    """tqdm bars: the rounds of a run, and each round's PPO steps."""
+    """tqdm bars: the rounds of a run, each round's PPO steps, and the rounds' policies the
+    take-away choice samples (`groupwise.run.takeaway`)."""
+
+    _BARS: ClassVar[dict[str, str]] = {"ppo": "step", "takeaway": "round"}
 
     def __init__(self, rounds: int, done: int = 0, desc: str = "rounds") -> None:
         self._rounds = tqdm(total=rounds, initial=done, desc=desc, unit="round")
         self._ppo: tqdm | None = None
 
     def on_phase(self, phase: str, done: int, total: int) -> None:
-        if phase != "ppo":
+        if phase not in self._BARS:
             return
         if self._ppo is None:
-            self._ppo = tqdm(total=total, desc="ppo", unit="step", leave=False)
+            self._ppo = tqdm(total=total, desc=phase, unit=self._BARS[phase], leave=False)
         self._ppo.n = done
         self._ppo.refresh()
         if done >= total:
