@@ -1,0 +1,178 @@
+"""Rounds against continuous training with a timed teacher: the table and figure of
+``docs/results/continuous`` (issue 24).
+
+    python -m groupwise.study.continuous_table RUN_DIR [RUN_DIR ...] [--figure PNG]
+
+Each RUN_DIR is a ``groupwise case-study … --teacher-pace S`` run (`--training rounds` or
+`continuous`). Its rounds carry the teacher's virtual clock (``clock_s`` in ``rounds.csv``:
+the teacher's seconds, plus in rounds mode the seconds the teacher waited for PPO at
+`ppo_steps_per_s`) and the greedy policy's target score and success rate after the round
+(``case-study.csv``). Printed: one row per run (score after each round at its minute), then
+per target and mode the minutes until the target was passed — the first round whose
+success rate reaches `SUCCESS_SHARE` of the evaluation episodes, as the case studies count
+success — or that it was not, and within how many minutes.
+"""
+
+import argparse
+import csv
+import json
+import math
+import statistics
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+SUCCESS_SHARE = 0.6
+"""A round passes when at least this share of its evaluation episodes reach the threshold
+(3 of 5, as `case_study_table` counts success)."""
+
+
+@dataclass(frozen=True)
+class TimedRun:
+    """One timed case-study run: per round the teacher's clock, score and success rate."""
+
+    target: str
+    unit: str
+    threshold: float
+    mode: str
+    seed: int
+    minutes: tuple[float, ...]
+    scores: tuple[float, ...]
+    success: tuple[float, ...]
+    env_steps: int
+
+    @property
+    def passed_at(self) -> float | None:
+        """Minutes of the teacher's clock at the first passing round, or None."""
+        return minutes_to_pass(self.minutes, self.success)
+
+
+def minutes_to_pass(minutes: Sequence[float], success: Sequence[float]) -> float | None:
+    """The clock (minutes) of the first round whose success rate reaches `SUCCESS_SHARE`,
+    or None when no round does."""
+    for clock, rate in zip(minutes, success, strict=True):
+        if rate >= SUCCESS_SHARE - 1e-9:
+            return clock
+    return None
+
+
+def read_run(run: Path) -> TimedRun:
+    """A run directory's `TimedRun`.
+
+    Raises:
+        ValueError: the run had no timed teacher (no ``clock_s``).
+    """
+    summary = json.loads((run / "summary.json").read_text())
+    config = json.loads((run / "config.json").read_text())
+    with (run / "rounds.csv").open() as handle:
+        rounds = list(csv.DictReader(handle))
+    with (run / "case-study.csv").open() as handle:
+        scored = list(csv.DictReader(handle))
+    clocks = [float(r.get("clock_s") or "nan") for r in rounds]
+    if not clocks or any(math.isnan(c) for c in clocks):
+        raise ValueError(f"{run}: no teacher clock (run it with --teacher-pace)")
+    return TimedRun(
+        target=summary["target"]["name"],
+        unit=summary["target"]["unit"],
+        threshold=float(summary["target"]["threshold"]),
+        mode=config["training"]["mode"],
+        seed=int(config["loop"]["seed"]),
+        minutes=tuple(c / 60.0 for c in clocks),
+        scores=tuple(float(r["target_score_mean"]) for r in scored),
+        success=tuple(float(r["success_rate"]) for r in scored),
+        env_steps=int(summary["env_steps"]),
+    )
+
+
+def run_rows(runs: Sequence[TimedRun]) -> list[str]:
+    """The per-run table (Markdown lines)."""
+    lines = [
+        "| target | training | seed | PPO steps | target score after each round "
+        "(at the teacher's minute) | passed at |",
+        "|---|---|---:|---:|---|---:|",
+    ]
+    for run in runs:
+        points = ", ".join(
+            f"{score:.2f} ({clock:.1f})"
+            for score, clock in zip(run.scores, run.minutes, strict=True)
+        )
+        passed = "–" if run.passed_at is None else f"{run.passed_at:.1f} min"
+        lines.append(
+            f"| {run.target} | {run.mode} | {run.seed} | {run.env_steps:,} | {points} | {passed} |"
+        )
+    return lines
+
+
+def summary_rows(runs: Sequence[TimedRun]) -> list[str]:
+    """Per target and mode: runs, final score (mean ± sd), runs passed and the minutes
+    they needed (Markdown lines)."""
+    lines = [
+        "| target | training | runs | PPO steps (mean) | final score, mean ± sd "
+        "| passed | minutes to pass |",
+        "|---|---|---:|---:|---|---:|---|",
+    ]
+    groups: dict[tuple[str, str], list[TimedRun]] = {}
+    for run in runs:
+        groups.setdefault((run.target, run.mode), []).append(run)
+    for (target, mode), members in groups.items():
+        finals = [m.scores[-1] for m in members]
+        sd = statistics.stdev(finals) if len(finals) > 1 else 0.0
+        passed = [m.passed_at for m in members if m.passed_at is not None]
+        horizon = max(m.minutes[-1] for m in members)
+        when = (
+            ", ".join(f"{p:.1f}" for p in passed)
+            if passed
+            else f"not passed within {horizon:.1f} min"
+        )
+        steps = statistics.mean(m.env_steps for m in members)
+        lines.append(
+            f"| {target} | {mode} | {len(members)} | {steps:,.0f} "
+            f"| {statistics.mean(finals):.2f} ± {sd:.2f} {members[0].unit} "
+            f"| {len(passed)}/{len(members)} | {when} |"
+        )
+    return lines
+
+
+def figure(runs: Sequence[TimedRun], path: Path) -> Path:
+    """Target score against the teacher's minutes, one panel per target, one line per run
+    (colour: training mode), the success threshold dashed. Needs Matplotlib."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    targets = list(dict.fromkeys(run.target for run in runs))
+    modes = list(dict.fromkeys(run.mode for run in runs))
+    fig = Figure(figsize=(4.2 * len(targets), 3.4), dpi=120, layout="constrained")
+    FigureCanvasAgg(fig)
+    axes = fig.subplots(1, len(targets), squeeze=False)[0]
+    for ax, target in zip(axes, targets, strict=True):
+        shown: set[str] = set()
+        for run in (r for r in runs if r.target == target):
+            colour = f"C{modes.index(run.mode)}"
+            label = None if run.mode in shown else run.mode
+            ax.plot(run.minutes, run.scores, marker="o", ms=3, color=colour, label=label)
+            shown.add(run.mode)
+            ax.axhline(run.threshold, color="0.4", ls="--", lw=0.8)
+        ax.set_title(target)
+        ax.set_xlabel("minutes of the teacher's time")
+        ax.set_ylabel("target score (greedy policy)")
+        ax.legend(frameon=False, fontsize=8)
+    fig.savefig(path)
+    return path
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0] if __doc__ else None)
+    parser.add_argument("runs", nargs="+", type=Path, help="timed case-study directories")
+    parser.add_argument("--figure", type=Path, help="also draw the curves into this PNG")
+    args = parser.parse_args(argv)
+    runs = sorted((read_run(run) for run in args.runs), key=lambda r: (r.target, r.mode, r.seed))
+    if args.figure:
+        figure(runs, args.figure)
+    print("\n".join(summary_rows(runs)))
+    print()
+    print("\n".join(run_rows(runs)))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

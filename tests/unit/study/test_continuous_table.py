@@ -1,0 +1,69 @@
+"""The continuous-vs-rounds table reads timed case-study runs (`study.continuous_table`)."""
+
+import csv
+import json
+from pathlib import Path
+
+import pytest
+
+from groupwise.study.continuous_table import main, minutes_to_pass, read_run
+
+
+def test_minutes_to_pass_is_the_first_round_with_enough_successful_episodes():
+    assert minutes_to_pass([1.0, 2.0, 3.0], [0.2, 0.6, 1.0]) == 2.0
+    assert minutes_to_pass([1.0, 2.0], [0.4, 0.4]) is None
+    assert minutes_to_pass([], []) is None
+
+
+def _run(tmp: Path, name: str, mode: str, clocks: list[str], success: list[float]) -> Path:
+    run = tmp / name
+    run.mkdir()
+    target = {"name": "hopper-backflip", "unit": "turns", "threshold": 1.0}
+    (run / "summary.json").write_text(json.dumps({"target": target, "env_steps": 4096}))
+    config = {"training": {"mode": mode}, "loop": {"seed": 3}}
+    (run / "config.json").write_text(json.dumps(config))
+    for file, rows in (
+        ("rounds.csv", [{"round": i, "clock_s": c} for i, c in enumerate(clocks)]),
+        (
+            "case-study.csv",
+            [
+                {"round": i, "target_score_mean": 0.5 + i, "success_rate": s}
+                for i, s in enumerate(success)
+            ],
+        ),
+    ):
+        with (run / file).open("w", newline="") as handle:
+            writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
+            writer.writeheader()
+            writer.writerows(rows)
+    return run
+
+
+def test_a_run_is_read_with_its_clock_in_minutes(tmp_path):
+    run = read_run(_run(tmp_path, "a", "continuous", ["60", "180"], [0.0, 0.8]))
+    assert (run.mode, run.seed, run.minutes, run.scores) == (
+        "continuous",
+        3,
+        (1.0, 3.0),
+        (0.5, 1.5),
+    )
+    assert run.passed_at == 3.0
+
+
+def test_a_run_without_a_timed_teacher_is_refused(tmp_path):
+    with pytest.raises(ValueError, match="teacher-pace"):
+        read_run(_run(tmp_path, "a", "rounds", ["", ""], [0.0, 0.0]))
+
+
+def test_the_table_says_when_a_mode_did_not_pass(tmp_path, capsys):
+    runs = [
+        _run(tmp_path, "c", "continuous", ["60", "120"], [0.0, 1.0]),
+        _run(tmp_path, "r", "rounds", ["90", "300"], [0.0, 0.2]),
+    ]
+    assert main([str(r) for r in runs]) == 0
+    out = capsys.readouterr().out
+    assert "| hopper-backflip | continuous | 1 | 4,096 | 1.50 ± 0.00 turns | 1/1 | 2.0 |" in out
+    assert (
+        "| hopper-backflip | rounds | 1 | 4,096 | 1.50 ± 0.00 turns | 0/1 | not passed within 5.0 min |"
+        in out
+    )
