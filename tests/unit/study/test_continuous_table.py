@@ -63,7 +63,5 @@ def test_the_table_says_when_a_mode_did_not_pass(tmp_path, capsys):
     assert main([str(r) for r in runs]) == 0
     out = capsys.readouterr().out
     assert "| hopper-backflip | continuous | 1 | 4,096 | 1.50 ± 0.00 turns | 1/1 | 2.0 |" in out
-    assert (
-        "| hopper-backflip | rounds | 1 | 4,096 | 1.50 ± 0.00 turns | 0/1 | not passed within 5.0 min |"
-        in out
-    )
+    rounds = "| hopper-backflip | rounds | 1 | 4,096 | 1.50 ± 0.00 turns | 0/1 |"
+    assert f"{rounds} not passed within 5.0 min |" in out
