@@ -171,6 +171,49 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/sessions/{session_id}/agent/round": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        /**
+         * Pick Agent
+         * @description Hand over another round's policy: agent.zip and the summary are repacked from that
+         *     round's checkpoint (404 for no such round, 409 before the session is finished or when
+         *     the round's checkpoint is gone, with the reason). Default: the last round.
+         */
+        put: operations["pick_agent_api_sessions__session_id__agent_round_put"];
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/sessions/{session_id}/agent/rounds/{round_index}.mp4": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Round Video
+         * @description Round `round_index`'s greedy policy filmed for one episode: the clip the person picks
+         *     the take-away agent by.
+         */
+        get: operations["round_video_api_sessions__session_id__agent_rounds__round_index__mp4_get"];
+        put?: never;
+        post?: never;
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/sessions/{session_id}/continue": {
         parameters: {
             query?: never;
@@ -555,7 +598,8 @@ export interface paths {
         };
         /**
          * Clip
-         * @description The MP4, JPEG or PNG stored under `clip_id`; 404 for anything else.
+         * @description The MP4, JPEG or PNG stored under `clip_id` (rendered first when it is published on
+         *     demand); 404 for anything else.
          */
         get: operations["clip_clips__clip_id__get"];
         put?: never;
@@ -575,6 +619,13 @@ export interface components {
          * @description The finished session's agent: what the download holds and how it came about.
          */
         AgentOut: {
+            /**
+             * Chosen By
+             * @description who chose `round`: "last" (nobody: the last round, the default), "teacher" (a simulated teacher, headless) or "person" (PUT …/agent/round)
+             * @default last
+             * @enum {string}
+             */
+            chosen_by: "last" | "teacher" | "person";
             /** Env */
             env: string;
             /** Env Steps */
@@ -607,10 +658,27 @@ export interface components {
             video: components["schemas"]["AgentVideo"] | null;
         };
         /**
+         * AgentPickIn
+         * @description The round whose policy the session hands over (its agent.zip and agent.json).
+         */
+        AgentPickIn: {
+            /**
+             * Round
+             * @description a round of the session with a checkpoint
+             */
+            round: number;
+        };
+        /**
          * AgentRound
          * @description One round of the session, as the finished page's chart shows it.
          */
         AgentRound: {
+            /**
+             * Checkpoint
+             * @description the round's checkpoint is there: the person may pick it as the take-away agent
+             * @default false
+             */
+            checkpoint: boolean;
             /** Env Steps */
             env_steps: number;
             /**
@@ -638,6 +706,12 @@ export interface components {
             true_return_mean: number | null;
             /** True Return Std */
             true_return_std: number | null;
+            /**
+             * Video
+             * @description the round's greedy policy was filmed (GET …/agent/rounds/{round}.mp4)
+             * @default false
+             */
+            video: boolean;
         };
         /**
          * AgentTarget
@@ -2393,6 +2467,190 @@ export interface operations {
                 content: {
                     "application/zip": unknown;
                 };
+            };
+            /** @description bad request */
+            400: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description missing or wrong token */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description unknown session, round or judgement */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not possible in the session's current phase */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description body too large */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description invalid input */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+        };
+    };
+    pick_agent_api_sessions__session_id__agent_round_put: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description a session id */
+                session_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["AgentPickIn"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["AgentOut"];
+                };
+            };
+            /** @description bad request */
+            400: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description missing or wrong token */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description a state change from another site (Sec-Fetch-Site or Origin) */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description unknown session, round or judgement */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not possible in the session's current phase */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description body too large */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description a body that is not application/json */
+            415: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description invalid input */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+        };
+    };
+    round_video_api_sessions__session_id__agent_rounds__round_index__mp4_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description a session id */
+                session_id: string;
+                round_index: number;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "video/mp4": unknown;
+                };
+            };
+            /** @description a byte range */
+            206: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
             };
             /** @description bad request */
             400: {
@@ -4258,6 +4516,20 @@ export interface operations {
                 content: {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
+            };
+            /** @description the clip could not be rendered */
+            500: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
+            };
+            /** @description too many clips asked for at once; ask again */
+            503: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
             };
         };
     };

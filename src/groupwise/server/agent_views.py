@@ -4,7 +4,16 @@ final agent (its summary, video and download; `groupwise.run.final` writes them)
 from dataclasses import asdict
 from pathlib import Path
 
-from groupwise.run.agent_package import AGENT_VIDEO, AGENT_ZIP, AgentSummary, read_summary
+from groupwise.run.agent_package import (
+    AGENT_VIDEO,
+    AGENT_ZIP,
+    AgentSummary,
+    NoCheckpointError,
+    UnknownRoundError,
+    pick_round,
+    read_summary,
+)
+from groupwise.run.checkpoint import checkpoint_dir
 from groupwise.server import schemas
 from groupwise.server.context import AppContext
 from groupwise.server.state import read_state
@@ -53,7 +62,33 @@ def _summary(context: AppContext, session_id: str) -> tuple[AgentSummary, Path]:
 
 def agent(context: AppContext, session_id: str) -> schemas.AgentOut:
     """The finished session's agent summary. Raises NotFoundError, ConflictError."""
-    summary, _ = _summary(context, session_id)
+    summary, directory = _summary(context, session_id)
+    return _agent_out(summary, directory)
+
+
+def pick(context: AppContext, session_id: str, round_index: int) -> schemas.AgentOut:
+    """Hand over round `round_index`'s policy (`agent_package.pick_round`). Raises
+    NotFoundError (no such round), ConflictError (not finished, or no checkpoint)."""
+    _, directory = _summary(context, session_id)
+    try:
+        summary = pick_round(directory, round_index)
+    except UnknownRoundError as error:
+        raise NotFoundError(f"session {session_id} has {error}") from None
+    except NoCheckpointError as error:
+        raise ConflictError(str(error)) from None
+    return _agent_out(summary, directory)
+
+
+def round_video(context: AppContext, session_id: str, round_index: int) -> Path:
+    """The path of round `round_index`'s clip. Raises NotFoundError, ConflictError."""
+    summary, directory = _summary(context, session_id)
+    video = next((r.video for r in summary.rounds if r.round == round_index), None)
+    if video is None or not (directory / video.file).is_file():
+        raise NotFoundError(f"session {session_id} has no clip of round {round_index}")
+    return directory / video.file
+
+
+def _agent_out(summary: AgentSummary, directory: Path) -> schemas.AgentOut:
     data = asdict(summary)
     return schemas.AgentOut(
         env=summary.env,
@@ -66,7 +101,15 @@ def agent(context: AppContext, session_id: str) -> schemas.AgentOut:
         target_score_mean=summary.target_score_mean,
         target_score_std=summary.target_score_std,
         video=None if summary.video is None else schemas.AgentVideo(**data["video"]),
-        rounds=[schemas.AgentRound(**r) for r in data["rounds"]],
+        rounds=[
+            schemas.AgentRound(
+                **{k: v for k, v in r.items() if k != "video"},
+                video=r["video"] is not None,
+                checkpoint=(checkpoint_dir(directory, r["round"]) / "policy.zip").is_file(),
+            )
+            for r in data["rounds"]
+        ],
+        chosen_by=summary.chosen_by,
     )
 
 
@@ -75,6 +118,8 @@ def agent_file(context: AppContext, session_id: str, name: str) -> tuple[Path, A
     NotFoundError, ConflictError."""
     summary, directory = _summary(context, session_id)
     path = directory / name
+    if name == AGENT_VIDEO and summary.video is not None:
+        path = directory / summary.video.file  # a picked round's clip, or agent.mp4
     if name not in (AGENT_VIDEO, AGENT_ZIP) or not path.is_file():
         raise NotFoundError(f"session {session_id} has no {name}")
     return path, summary

@@ -306,6 +306,14 @@ class AgentRound(_Out):
         "null for other envs, rounds not evaluated and agents published before it was recorded"
     )
     target_score_std: float | None
+    video: bool = Field(
+        default=False,
+        description="the round's greedy policy was filmed (GET …/agent/rounds/{round}.mp4)",
+    )
+    checkpoint: bool = Field(
+        default=False,
+        description="the round's checkpoint is there: the person may pick it as the take-away agent",
+    )
 
 
 class AgentVideo(_Out):
@@ -358,6 +366,17 @@ class AgentOut(_Out):
     target_score_std: float | None
     video: AgentVideo | None
     rounds: list[AgentRound]
+    chosen_by: Literal["last", "teacher", "person"] = Field(
+        default="last",
+        description='who chose `round`: "last" (nobody: the last round, the default), "teacher" '
+        '(a simulated teacher, headless) or "person" (PUT …/agent/round)',
+    )
+
+
+class AgentPickIn(_In):
+    """The round whose policy the session hands over (its agent.zip and agent.json)."""
+
+    round: int = Field(ge=0, description="a round of the session with a checkpoint")
 
 
 # ------------------------------------------------------------------ training

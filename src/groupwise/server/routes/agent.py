@@ -7,7 +7,7 @@ from groupwise.run.agent_package import AGENT_VIDEO, AGENT_ZIP
 from groupwise.server import agent_views
 from groupwise.server.deps import Context, SessionId
 from groupwise.server.routes import ERRORS
-from groupwise.server.schemas import AgentOut, ContinueIn, SessionState
+from groupwise.server.schemas import AgentOut, AgentPickIn, ContinueIn, SessionState
 
 router = APIRouter(prefix="/api/sessions", tags=["agent"], responses=ERRORS)
 
@@ -34,6 +34,26 @@ def agent(session_id: SessionId, context: Context) -> AgentOut:
     """The finished session's agent: its round, steps and true return per round (409
     before the session is finished, 404 for a session without one)."""
     return agent_views.agent(context, session_id)
+
+
+@router.put("/{session_id}/agent/round")
+def pick_agent(session_id: SessionId, request: AgentPickIn, context: Context) -> AgentOut:
+    """Hand over another round's policy: agent.zip and the summary are repacked from that
+    round's checkpoint (404 for no such round, 409 before the session is finished or when
+    the round's checkpoint is gone, with the reason). Default: the last round."""
+    return agent_views.pick(context, session_id, request.round)
+
+
+@router.get(
+    "/{session_id}/agent/rounds/{round_index}.mp4",
+    response_class=FileResponse,
+    responses={200: {"content": {"video/mp4": {}}}, 206: {"description": "a byte range"}},
+)
+def round_video(session_id: SessionId, round_index: int, context: Context) -> FileResponse:
+    """Round `round_index`'s greedy policy filmed for one episode: the clip the person picks
+    the take-away agent by."""
+    path = agent_views.round_video(context, session_id, round_index)
+    return FileResponse(path, media_type="video/mp4", headers={"Cache-Control": NO_STORE})
 
 
 @router.get(
