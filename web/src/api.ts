@@ -268,6 +268,15 @@ export function createApi(options: ApiOptions = {}) {
     /** The finished session's agent (409 before it is finished, 404 when it has none). */
     agent: (sid: string) => read<AgentOut>("agent", "GET", `${s(sid)}/agent`),
 
+    /** Round `round`'s policy becomes the take-away agent (the download, its summary and
+     * video): 404 for no such round, 409 before the session is finished or when the round's
+     * checkpoint is gone (the reason in the message). */
+    async pickAgent(sid: string, round: number) {
+      const agent = await request<AgentOut>("PUT", `${s(sid)}/agent/round`, { body: { round } });
+      latest.invalidate("agent");
+      return agent;
+    },
+
     /** The session's learning curve: PPO steps, true returns, refits, the pool's age. */
     training: (sid: string) => read<TrainingCurve>("training", "GET", `${s(sid)}/training`),
 
@@ -284,6 +293,9 @@ export function createApi(options: ApiOptions = {}) {
     /** The final agent's video; `round` names the agent, so a newer one is fetched anew. */
     agentVideoUrl: (sid: string, round: number) => url(`${s(sid)}/agent.mp4`, { v: round }, true),
     agentZipUrl: (sid: string, round: number) => url(`${s(sid)}/agent.zip`, { v: round }, true),
+    /** Round `round`'s greedy policy filmed for one episode (the clips the agent is picked by). */
+    agentRoundVideoUrl: (sid: string, round: number) =>
+      url(`${s(sid)}/agent/rounds/${round}.mp4`, {}, true),
 
     /** Subscribes to the session's event stream; returns a function that closes it. */
     events(sid: string, handlers: EventHandlers): () => void {

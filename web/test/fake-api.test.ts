@@ -160,11 +160,13 @@ async function exercise(mode: "groupwise" | "pairwise") {
   await call("finish", sid);
   await call("continueTraining", sid, { steps: 1000 });
   await call("agent", sid);
+  await call("pickAgent", sid, 0);
   await call("training", sid);
   await call("clipUrl", "b1.mp4");
   await call("exportUrl", sid);
   await call("agentVideoUrl", sid, 1);
   await call("agentZipUrl", sid, 1);
+  await call("agentRoundVideoUrl", sid, 0);
   const close = await call("events", sid, {});
   close();
   return { api, served, answered };

@@ -13,7 +13,7 @@ import type { Api, EnvInfo, JudgementOut, OpenApiDocument, PairQuery, SessionSta
 import type { paths } from "../api-types";
 import type { SyntheticRound } from "./synthetic";
 
-type Method = "get" | "post" | "delete";
+type Method = "get" | "post" | "put" | "delete";
 
 /** Every operation of the server's schema, as "method path": "get /api/envs", … */
 export type Route = {
@@ -60,6 +60,7 @@ export const FAKE_ROUTES = [
   "post /api/sessions/{session_id}/finish",
   "post /api/sessions/{session_id}/continue",
   "get /api/sessions/{session_id}/agent",
+  "put /api/sessions/{session_id}/agent/round",
   "get /api/sessions/{session_id}/training",
 ] as const satisfies readonly Route[];
 export type FakeRoute = (typeof FAKE_ROUTES)[number];
@@ -70,6 +71,7 @@ export const FAKE_URL_ROUTES = {
   exportUrl: "get /api/sessions/{session_id}/export",
   agentVideoUrl: "get /api/sessions/{session_id}/agent.mp4",
   agentZipUrl: "get /api/sessions/{session_id}/agent.zip",
+  agentRoundVideoUrl: "get /api/sessions/{session_id}/agent/rounds/{round_index}.mp4",
   events: "get /api/sessions/{session_id}/events",
 } as const satisfies Partial<Record<keyof Api, Route>>;
 
@@ -165,6 +167,43 @@ export function fakeApi(
     return reply;
   }
 
+  /** The round the person picked as the take-away agent; null: the last (the default). */
+  let picked: number | null = null;
+  const agentOut = (): Reply<"get /api/sessions/{session_id}/agent"> => ({
+    env: session.env,
+    round: picked ?? session.round,
+    chosen_by: picked === null ? "last" : "person",
+    env_steps: 140_000,
+    measure: "true return",
+    true_return_mean: 41.5,
+    true_return_std: 3.2,
+    target: null,
+    target_score_mean: null,
+    target_score_std: null,
+    video: {
+      seconds: 3.3,
+      fps: 30,
+      frames: 100,
+      width: 240,
+      height: 240,
+      episode_return: 43,
+      target_score: null,
+    },
+    rounds: [12, 18, 25, 31, 36, 41.5].map((value, i) => ({
+      round: i,
+      feedback: i < 5,
+      checkpoint: true,
+      video: false,
+      judgements: i < 5 ? 6 : 0,
+      pairs_total: 20 * Math.min(i + 1, 5),
+      env_steps: 20_000 * (i + 1),
+      true_return_mean: value,
+      true_return_std: 3,
+      target_score_mean: null,
+      target_score_std: null,
+    })),
+  });
+
   const api: Api = {
     invalidate: () => undefined,
     envs: async () => answer("get /api/envs", ENVS),
@@ -246,42 +285,16 @@ export function fakeApi(
       session.round += 1;
       return answer("post /api/sessions/{session_id}/continue", { ...session });
     },
-    agent: async () =>
-      answer("get /api/sessions/{session_id}/agent", {
-        env: session.env,
-        round: session.round,
-        env_steps: 140_000,
-        measure: "true return",
-        true_return_mean: 41.5,
-        true_return_std: 3.2,
-        target: null,
-        target_score_mean: null,
-        target_score_std: null,
-        video: {
-          seconds: 3.3,
-          fps: 30,
-          frames: 100,
-          width: 240,
-          height: 240,
-          episode_return: 43,
-          target_score: null,
-        },
-        rounds: [12, 18, 25, 31, 36, 41.5].map((value, i) => ({
-          round: i,
-          feedback: i < 5,
-          judgements: i < 5 ? 6 : 0,
-          pairs_total: 20 * Math.min(i + 1, 5),
-          env_steps: 20_000 * (i + 1),
-          true_return_mean: value,
-          true_return_std: 3,
-          target_score_mean: null,
-          target_score_std: null,
-        })),
-      }),
+    agent: async () => answer("get /api/sessions/{session_id}/agent", agentOut()),
+    pickAgent: async (_sid, r) => {
+      picked = r;
+      return answer("put /api/sessions/{session_id}/agent/round", agentOut());
+    },
     clipUrl: (clip) => (clip.endsWith(".jpg") || clip.endsWith(".mp4") ? poster(clip) : clip),
     exportUrl: () => "#",
     agentVideoUrl: () => "",
     agentZipUrl: () => "#",
+    agentRoundVideoUrl: () => "",
     training: async () => {
       const start = Date.parse(session.created_at);
       const points = [-40, -31, -22, -18, -9, -4].map((value, i) => ({
