@@ -28,7 +28,7 @@ def finish_now(context: AppContext, session_id: str) -> schemas.SessionState:
     with context.db.write() as s:
         ending.finish_now(s, session_id)
     context.supervisor.ensure_worker_soon()
-    return read_state(context.db, session_id)
+    return read_state(context.db, session_id, context.viewer())
 
 
 def continue_training(
@@ -39,7 +39,7 @@ def continue_training(
     with context.db.write() as s:
         ending.continue_training(s, session_id, steps=request.steps, rounds=request.rounds)
     context.supervisor.ensure_worker_soon()
-    return read_state(context.db, session_id)
+    return read_state(context.db, session_id, context.viewer())
 
 
 def _summary(context: AppContext, session_id: str) -> tuple[AgentSummary, Path]:

@@ -29,6 +29,7 @@ from groupwise.server.config import AppConfig
 from groupwise.server.context import AppContext
 from groupwise.server.routes import (
     agent,
+    annotators,
     clips,
     events,
     judgements,
@@ -48,11 +49,18 @@ from groupwise.server.security import (
     trusted_hosts,
 )
 from groupwise.server.transfer import UnsupportedMediaError
-from groupwise.storage import ConflictError, InvalidError, NotFoundError, StorageError
+from groupwise.storage import (
+    ConflictError,
+    ForbiddenError,
+    InvalidError,
+    NotFoundError,
+    StorageError,
+)
 
 log = logging.getLogger(__name__)
 
 STATUS: dict[type[StorageError], int] = {
+    ForbiddenError: 403,
     NotFoundError: 404,
     ConflictError: 409,
     UnsupportedMediaError: 415,
@@ -95,6 +103,7 @@ def create_app(config: AppConfig) -> FastAPI:
         transfer_routes,
         rounds,
         judgements,
+        annotators,
         pairwise,
         events,
         training,
@@ -108,6 +117,7 @@ def create_app(config: AppConfig) -> FastAPI:
         token=config.token,
         max_body_bytes=config.max_body_bytes,
         own_body_types=own_body_types(app),
+        identify=context.identify,
     )
     # Added last, so it runs first: a foreign Host is refused before anything else is checked.
     app.add_middleware(

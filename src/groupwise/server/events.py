@@ -5,9 +5,12 @@ second on a worker thread (a read of one row, so streams never block other reque
 when it moved, sends:
 
 - ``judgement``: each judgement stored or undone since the last revision sent
-  (`JudgementOut`, with ``"undone": true`` for an undo);
-- ``state``: the `SessionState`, when phase, round, progress, counts, error or the timer's
-  pause changed (not for the timer's ticking: the page counts seconds itself);
+  (`JudgementOut`, with ``"undone": true`` for an undo), whoever made it: its
+  ``annotator`` says who, its ``suggestion_id`` the suggestion it answered (a page drops
+  that suggestion if it shows it);
+- ``state``: the `SessionState` as the stream's viewer sees it, when phase, round,
+  progress, counts, error, the timer's pause or the team's members and counts changed (not
+  for the timer's ticking: the page counts seconds itself);
 - ``round``: ``{"round": r}`` when round r has become ready (the page re-fetches);
 - ``training``: each point of the learning curve the worker wrote since
   (`TrainingPointOut`, `groupwise.storage.training`).
@@ -26,11 +29,14 @@ from typing import Any
 import anyio
 from pydantic import BaseModel
 
+from groupwise.server.context import Viewer
 from groupwise.server.schemas import RoundEvent, SessionState
 from groupwise.server.state import close_if_due, judgement_out, read_state
 from groupwise.server.training_views import point_out
 from groupwise.storage import Database
+from groupwise.storage.annotators import display_names
 from groupwise.storage.judgements import list_judgements
+from groupwise.storage.sessions import get_session
 from groupwise.storage.training import list_points
 
 RETRY_MS = 2000
@@ -53,6 +59,7 @@ def _key(state: SessionState) -> tuple[Any, ...]:
         state.error,
         state.timer.paused,
         state.timer.running,
+        tuple((a.id, a.name, a.comparisons, a.pairs) for a in state.annotators),
     )
 
 
@@ -62,10 +69,12 @@ async def session_events(
     poll_s: float,
     keepalive_s: float,
     last_event_id: int | None = None,
+    viewer: Viewer | None = None,
 ) -> AsyncIterator[bytes]:
-    """The stream of one session (module docstring). Ends when the client disconnects."""
+    """The stream of one session as `viewer` sees it (module docstring). Ends when the
+    client disconnects."""
     revision = await anyio.to_thread.run_sync(close_if_due, db, session_id)
-    state = await anyio.to_thread.run_sync(read_state, db, session_id)
+    state = await anyio.to_thread.run_sync(read_state, db, session_id, viewer)
     yield f"retry: {RETRY_MS}\n\n".encode()
     yield format_event("state", state, revision)
     sent_judgements = last_event_id if last_event_id is not None else revision
@@ -91,7 +100,7 @@ async def session_events(
         for _, chunk in sorted(chunks + points, key=lambda c: c[0]):
             yield chunk
         revision = now_revision
-        state = await anyio.to_thread.run_sync(read_state, db, session_id)
+        state = await anyio.to_thread.run_sync(read_state, db, session_id, viewer)
         if _key(state) != key:
             key = _key(state)
             yield format_event("state", state, revision)
@@ -112,8 +121,10 @@ async def _judgements(db: Database, session_id: str, after: int) -> tuple[Chunks
     def read() -> tuple[Chunks, int]:
         with db.read() as s:
             records = list_judgements(s, session_id, include_undone=True, after_revision=after)
+            names = display_names(s, get_session(s, session_id)) if records else {}
         chunks = [
-            (r.revision, format_event("judgement", judgement_out(r), r.revision)) for r in records
+            (r.revision, format_event("judgement", judgement_out(r, names), r.revision))
+            for r in records
         ]
         return chunks, max([after, *(r.revision for r in records)])
 

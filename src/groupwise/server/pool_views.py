@@ -16,9 +16,10 @@ from groupwise.server import schemas
 from groupwise.server.context import AppContext
 from groupwise.storage import ConflictError, Database, InvalidError, NotFoundError
 from groupwise.storage import rounds as repo
+from groupwise.storage.annotators import OWNER_CALLER, Caller, list_annotators
 from groupwise.storage.models import RoundRow
 from groupwise.storage.phases import READY, ROUND_PREPARING
-from groupwise.storage.sessions import get_round, get_session
+from groupwise.storage.sessions import get_round, get_session, settings_of
 
 
 def _prepared_round(db: Database, session_id: str, index: int) -> RoundRow:
@@ -107,22 +108,38 @@ def round_edges(db: Database, session_id: str, index: int, k: int) -> list[schem
         return [schemas.Edge(a=e.a, b=e.b, score=e.score) for e in repo.edges(s, row.id, k)]
 
 
+def _lease_s(db: Database, session_id: str) -> float:
+    """Seconds a query is leased to one person: the session's `lease_s` once it is shared
+    with an annotator, else 0 (one person alone: nothing to lease, nothing written)."""
+    with db.read() as s:
+        session = get_session(s, session_id)
+        return settings_of(session).lease_s if list_annotators(s, session_id) else 0.0
+
+
 def next_suggestion(
-    db: Database, session_id: str, index: int, exclude: Sequence[Sequence[str]] | None
+    db: Database,
+    session_id: str,
+    index: int,
+    exclude: Sequence[Sequence[str]] | None,
+    caller: Caller = OWNER_CALLER,
 ) -> schemas.SuggestionOut:
-    """The best unused group suggestion of the round, skipping `exclude` (consecutive
-    [left], [right] lists). Raises InvalidError for an odd number of lists."""
+    """The best unused group suggestion of the round for `caller`, skipping `exclude`
+    (consecutive [left], [right] lists) and what is leased to others; in a shared session
+    leased to `caller` (`storage.rounds.next_suggestion`). Raises InvalidError for an odd
+    number of lists."""
     lists = list(exclude or [])
     if len(lists) % 2:
         raise InvalidError("exclude must hold pairs of lists: [left ids], [right ids], …")
     queries = [(lists[i], lists[i + 1]) for i in range(0, len(lists), 2)]
     row = _prepared_round(db, session_id, index)
-    with db.read() as s:
-        found = repo.next_suggestion(s, row.id, queries)
+    lease_s = _lease_s(db, session_id)
+    with db.write() if lease_s > 0 else db.read() as s:
+        found = repo.next_suggestion(s, row.id, queries, holder=caller.id, lease_s=lease_s)
         if found is None:
             return schemas.SuggestionOut(suggestion=None)
         return schemas.SuggestionOut(
             suggestion=schemas.Suggestion(
+                id=found.id,
                 left=list(found.left),
                 right=list(found.right),
                 left_node=found.left_node,
@@ -140,12 +157,16 @@ def _open_round(db: Database, session_id: str) -> RoundRow:
         return get_round(s, session_id, session.round)
 
 
-def pairwise_next(context: AppContext, session_id: str) -> schemas.PairwiseNext:
-    """The pair to ask now and the one after it (the page preloads both clips)."""
+def pairwise_next(
+    context: AppContext, session_id: str, caller: Caller = OWNER_CALLER
+) -> schemas.PairwiseNext:
+    """The pair to ask `caller` now and the one after it (the page preloads both clips);
+    in a shared session the first is leased to them."""
     db = context.db
     row = _open_round(db, session_id)
-    with db.read() as s:
-        queue = repo.pairwise_next(s, row.id, 2)
+    lease_s = _lease_s(db, session_id)
+    with db.write() if lease_s > 0 else db.read() as s:
+        queue = repo.pairwise_next(s, row.id, 2, holder=caller.id, lease_s=lease_s)
         clips = {b.name: b for b in repo.behaviours(s, row.id)}
 
     def query(entry: Any) -> schemas.PairQuery:
@@ -171,9 +192,11 @@ def pairwise_next(context: AppContext, session_id: str) -> schemas.PairwiseNext:
     )
 
 
-def skip_pair(context: AppContext, session_id: str, skip: schemas.PairSkip) -> schemas.PairwiseNext:
+def skip_pair(
+    context: AppContext, session_id: str, skip: schemas.PairSkip, caller: Caller = OWNER_CALLER
+) -> schemas.PairwiseNext:
     """Skip a pair of the open round's queue; the next pairs. Raises NotFoundError."""
     row = _open_round(context.db, session_id)
     with context.db.write() as s:
         repo.skip_pair(s, row.id, skip.left, skip.right)
-    return pairwise_next(context, session_id)
+    return pairwise_next(context, session_id, caller)

@@ -113,6 +113,61 @@ class Counts(_Out):
     pairs_total: int
 
 
+class AgreementOut(_Out):
+    """An annotator's agreement with the others on the preference pairs they share (the
+    same unordered pair of a round's behaviours), docs/teams.md."""
+
+    kappa: float | None = Field(
+        description="Cohen's κ over the shared pairs; null when n = 0 (or when chance "
+        "agreement is certain: both used one label throughout)"
+    )
+    share: float | None = Field(description="share of the n pairs labelled alike; null: n = 0")
+    n: int = Field(description="the shared pairs the numbers rest on")
+
+
+class ModelAgreementOut(_Out):
+    """An annotator's strict preferences against the reward model that chose each round's
+    pool (rounds after round 0), docs/teams.md."""
+
+    share: float | None = Field(description="share the model orders alike; null: n = 0")
+    n: int
+
+
+class AnnotatorOut(_Out):
+    """Someone teaching the session: the owner (id "owner") or an annotator."""
+
+    id: str = Field(examples=["owner", "a-3f9c0b1d2e4a"])
+    name: str
+    comparisons: int = Field(description="their judgements, not undone, in all rounds")
+    pairs: int = Field(description="the preference pairs of those judgements")
+    shown_s: float = Field(
+        description="seconds from their first showing of each round to its close (or now)"
+    )
+    agreement: AgreementOut
+    model_agreement: ModelAgreementOut
+
+
+class MeOut(_Out):
+    """Who the request's token makes the caller in this session."""
+
+    id: str = Field(description='"owner" or the annotator\'s id')
+    name: str
+    owner: bool = Field(description="whether they may end rounds, change the session, share it")
+
+
+class AnnotatorIn(_In):
+    name: str = Field(max_length=1000, description="1…100 characters, no control characters")
+
+
+class AnnotatorCreated(_Out):
+    """A new annotator: their token is shown this once (the link carries it)."""
+
+    id: str
+    name: str
+    token: str
+    link: str = Field(description="the page for them: the app's URL ?session=…&token=…")
+
+
 class SessionState(_Out):
     """Everything a reloaded page needs but the tree."""
 
@@ -135,6 +190,10 @@ class SessionState(_Out):
     counts: Counts
     created_at: datetime
     origin: str | None = Field(default=None, description="the exported session an import came from")
+    me: MeOut = Field(description="who the caller is in this session")
+    annotators: list[AnnotatorOut] = Field(
+        description="the owner, then every annotator of the session (docs/teams.md)"
+    )
 
 
 # ------------------------------------------------------------------ rounds
@@ -198,6 +257,9 @@ class SuggestionRequest(_In):
 
 
 class Suggestion(_Out):
+    id: int = Field(
+        description="the suggestion's id; a judgement event naming it (suggestion_id) answered it"
+    )
     left: list[str]
     right: list[str]
     left_node: str
@@ -221,13 +283,25 @@ class JudgementIn(_In):
     source: Source
     seconds: float = Field(default=0.0, ge=0, le=86_400)
     edits: int = Field(default=0, ge=0, le=1_000_000)
-    annotator: str = Field(default="", max_length=200)
+    annotator: str = Field(
+        default="",
+        max_length=200,
+        description="the owner's free-text name for it; an annotator's judgement takes "
+        "their name (docs/teams.md)",
+    )
 
 
 class PairOut(_Out):
     a: str
     b: str
     label: float = Field(description="P(a preferred): 1, 0.5 or 0")
+
+
+class AnnotatorRef(_Out):
+    """Who made a judgement."""
+
+    id: str = Field(description='"owner" or the annotator\'s id')
+    name: str
 
 
 class JudgementOut(_Out):
@@ -240,7 +314,10 @@ class JudgementOut(_Out):
     source: str
     seconds: float
     edits: int
-    annotator: str
+    annotator: AnnotatorRef
+    suggestion_id: int | None = Field(
+        default=None, description="the group suggestion it answered (others drop it)"
+    )
     created_at: datetime
     undone: bool
     pairs: list[PairOut]

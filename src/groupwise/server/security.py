@@ -15,6 +15,13 @@ For every HTTP request, in this order:
 3. **Token** (`GuardMiddleware`): with a token, every ``/api`` and ``/clips`` request needs
    ``Authorization: Bearer <token>`` or ``?token=<token>`` (for ``<video src>``) → else 401.
    Compared in constant time. The built web UI's files stay public (they hold no data).
+   **Who** (docs/teams.md): the server's token, or no token on a server without one, is the
+   owner; an annotator's token (`identify`, looked up by its SHA-256) is that annotator,
+   whether or not the server has a token; any other token → 401 (a removed annotator's
+   too). An annotator reaches only their own session's routes (403 for another session's,
+   for creating or importing one); the caller is ``scope["state"]["caller"]``
+   (`storage.annotators.Caller`) for the routes, which refuse an annotator what only the
+   owner may do.
 4. **Body size** (`GuardMiddleware`): a body over `max_body_bytes` → 413, whether announced
    by Content-Length or streamed in chunks (counted as it arrives).
 5. **JSON only** (`GuardMiddleware`): a state change under ``/api`` with a body that is not
@@ -29,11 +36,15 @@ No CORS headers are ever added, so a foreign page cannot send ``application/json
 
 import json
 import secrets
+from collections.abc import Callable
 from urllib.parse import parse_qs
 
+import anyio
 from starlette.datastructures import Headers
 from starlette.exceptions import HTTPException
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
+
+from groupwise.storage.annotators import OWNER_CALLER, Caller
 
 PROTECTED_PREFIXES = ("/api", "/clips")
 STATE_CHANGING = frozenset({"POST", "PUT", "PATCH", "DELETE"})
@@ -41,6 +52,12 @@ SAME_ORIGIN_SITES = frozenset({"same-origin", "none"})
 """``Sec-Fetch-Site`` values of requests from the app's own page (``none``: the user's own
 navigation, e.g. a bookmark)."""
 JSON_TYPE = "application/json"
+SESSIONS = "/api/sessions"
+NO_TOKEN = "a token is required: send Authorization: Bearer <token> or ?token="
+BAD_TOKEN = (
+    "this token is not valid here: a mistyped token, or an annotator's removed from their "
+    "session; ask the session's owner for a new link"
+)
 
 
 class _Refused(HTTPException):
@@ -105,12 +122,49 @@ def not_json(headers: Headers) -> str | None:
     return None
 
 
+def presented_tokens(scope: Scope, headers: Headers) -> list[str]:
+    """The tokens a request carries: its Bearer header's, then its ``?token=`` values."""
+    found = []
+    header = headers.get("authorization", "")
+    if header[:7].lower() == "bearer ":
+        found.append(header[7:].strip())
+    query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
+    return found + [v for v in query.get("token", []) if v]
+
+
+def beyond_session(caller: Caller, method: str, path: str) -> str | None:
+    """Why an annotator may not send this request (it leaves their own session), or None.
+
+    Routes outside ``/api/sessions`` (envs, health, settings, clips) are everyone's; the
+    session list answers an annotator their own session only (the route filters it).
+    """
+    if not path.startswith(SESSIONS) or caller.is_owner:
+        return None
+    rest = path[len(SESSIONS) :]
+    if rest in ("", "/"):
+        if method == "GET":
+            return None
+        return f"{caller.name} is an annotator of one session; only the owner creates sessions"
+    if not rest.startswith("/"):
+        return None  # another route, e.g. /api/sessionsX: not found anyway
+    target = rest[1:].split("/", 1)[0]
+    if target == "import":
+        return f"{caller.name} is an annotator of one session; only the owner imports sessions"
+    if target != caller.session_id:
+        return (
+            f"{caller.name}'s token is for session {caller.session_id}; it does not reach "
+            f"session {target}"
+        )
+    return None
+
+
 class GuardMiddleware:
     """Same-origin check, token check, body limit and JSON-only bodies (module docstring);
     the Host check is Starlette's.
 
     `own_body_types`: paths of routes that take other bodies than JSON and check the type
-    themselves (the import).
+    themselves (the import). `identify`: the annotator whose token a string is, or None
+    (a blocking database read: it runs on a worker thread).
     """
 
     def __init__(
@@ -120,11 +174,13 @@ class GuardMiddleware:
         token: str | None,
         max_body_bytes: int,
         own_body_types: frozenset[str] = frozenset(),
+        identify: Callable[[str], Caller | None] | None = None,
     ) -> None:
         self.app = app
         self.token = token
         self.max_body_bytes = max_body_bytes
         self.own_body_types = own_body_types
+        self.identify = identify
 
     async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
         if scope["type"] != "http":
@@ -135,15 +191,15 @@ class GuardMiddleware:
         if changes and (reason := cross_site(scope, headers)) is not None:
             await _send_error(send, 403, reason, {})
             return
-        if self.token is not None and scope["path"].startswith(PROTECTED_PREFIXES):
-            if not self._authorised(scope, headers):
-                await _send_error(
-                    send,
-                    401,
-                    "a token is required: send Authorization: Bearer <token> or ?token=",
-                    {"www-authenticate": "Bearer"},
-                )
+        if scope["path"].startswith(PROTECTED_PREFIXES):
+            caller, refusal = await self._caller(scope, headers)
+            if caller is None:
+                await _send_error(send, 401, refusal, {"www-authenticate": "Bearer"})
                 return
+            if (reason := beyond_session(caller, scope["method"], scope["path"])) is not None:
+                await _send_error(send, 403, reason, {})
+                return
+            scope.setdefault("state", {})["caller"] = caller
         length = headers.get("content-length")
         if length is not None and (not length.isdigit() or int(length) > self.max_body_bytes):
             await _send_error(send, 413, self._too_large(), {})
@@ -159,16 +215,21 @@ class GuardMiddleware:
     def _too_large(self) -> str:
         return f"the request body is larger than {self.max_body_bytes // 1024} KiB"
 
-    def _authorised(self, scope: Scope, headers: Headers) -> bool:
-        assert self.token is not None
-        expected = self.token.encode()
-        header = headers.get("authorization", "")
-        if header[:7].lower() == "bearer " and secrets.compare_digest(
-            header[7:].strip().encode(), expected
-        ):
-            return True
-        query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
-        return any(secrets.compare_digest(v.encode(), expected) for v in query.get("token", []))
+    async def _caller(self, scope: Scope, headers: Headers) -> tuple[Caller | None, str]:
+        """Who sends the request (module docstring, step 3), or None and why not."""
+        tokens = presented_tokens(scope, headers)
+        if not tokens:
+            return (OWNER_CALLER, "") if self.token is None else (None, NO_TOKEN)
+        if self.token is not None:
+            expected = self.token.encode()
+            if any(secrets.compare_digest(t.encode(), expected) for t in tokens):
+                return OWNER_CALLER, ""
+        if self.identify is not None:
+            for token in tokens:
+                found = await anyio.to_thread.run_sync(self.identify, token)
+                if found is not None:
+                    return found, ""
+        return None, BAD_TOKEN
 
     async def _limited(self, scope: Scope, receive: Receive, send: Send, untyped: bool) -> None:
         """Run the app, counting the body as it arrives; `untyped`: a body → 415."""

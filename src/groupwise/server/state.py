@@ -3,8 +3,12 @@
 Every read checks the round timer lazily: a round whose time budget is used up is closed
 (phase ``training``) before its state is returned, so the page never sees an open round
 that should have ended (the supervisor also checks, for sessions nobody is looking at).
+
+A state is someone's (`Viewer`): its ``me`` is the caller, and its ``annotators`` the
+session's team with their counters and agreement (`storage.team`, docs/teams.md).
 """
 
+from collections.abc import Mapping, Sequence
 from datetime import datetime
 
 import numpy as np
@@ -13,18 +17,50 @@ from sqlalchemy.orm import Session as DbSession
 from groupwise.envs import horizon
 from groupwise.envs.episodes import check_episode_length
 from groupwise.server import schemas
-from groupwise.server.context import AppContext
+from groupwise.server.context import AppContext, Viewer
 from groupwise.storage import Database, InvalidError, lifecycle, sessions, timer
+from groupwise.storage.annotators import OWNER, Caller, owner_name, record_view
 from groupwise.storage.counts import Counts, counts
 from groupwise.storage.judgements import JudgementRecord
 from groupwise.storage.models import SessionRow, utcnow
 from groupwise.storage.settings import SessionSettings
+from groupwise.storage.team import AnnotatorStats, team_stats
+
+
+def annotator_out(stats: AnnotatorStats) -> schemas.AnnotatorOut:
+    """A team member's row as the page shows it."""
+    return schemas.AnnotatorOut(
+        id=stats.id,
+        name=stats.name,
+        comparisons=stats.comparisons,
+        pairs=stats.pairs,
+        shown_s=stats.shown_s,
+        agreement=schemas.AgreementOut(
+            kappa=stats.agreement.kappa, share=stats.agreement.share, n=stats.agreement.n
+        ),
+        model_agreement=schemas.ModelAgreementOut(
+            share=stats.model_agreement.share, n=stats.model_agreement.n
+        ),
+    )
+
+
+def me_of(session: SessionRow, caller: Caller) -> schemas.MeOut:
+    """Who `caller` is in `session`."""
+    name = owner_name(session) if caller.is_owner else caller.name
+    return schemas.MeOut(id=caller.id, name=name, owner=caller.is_owner)
 
 
 def state_of(
-    session: SessionRow, counted: Counts, now: datetime, shown_at: datetime | None = None
+    session: SessionRow,
+    counted: Counts,
+    now: datetime,
+    shown_at: datetime | None = None,
+    *,
+    me: schemas.MeOut | None = None,
+    team: Sequence[AnnotatorStats] = (),
 ) -> schemas.SessionState:
-    """The `SessionState` of a session row (`shown_at`: its current round's)."""
+    """The `SessionState` of a session row (`shown_at`: its current round's; `me`: the
+    caller, default the owner; `team`: `storage.team.team_stats`)."""
     settings = SessionSettings.model_validate(session.settings)
     return schemas.SessionState(
         id=session.id,
@@ -57,6 +93,8 @@ def state_of(
         ),
         created_at=session.created_at,
         origin=session.origin,
+        me=me or schemas.MeOut(id=OWNER, name=owner_name(session), owner=True),
+        annotators=[annotator_out(stats) for stats in team],
     )
 
 
@@ -74,22 +112,35 @@ def close_if_due(db: Database, session_id: str) -> int:
         return sessions.get_session(s, session_id).revision
 
 
-def _state(s: DbSession, session: SessionRow, now: datetime) -> schemas.SessionState:
-    return state_of(session, counts(s, session), now, timer.shown_at(s, session))
+def _state(
+    s: DbSession, session: SessionRow, now: datetime, viewer: Viewer
+) -> schemas.SessionState:
+    return state_of(
+        session,
+        counts(s, session),
+        now,
+        timer.shown_at(s, session),
+        me=me_of(session, viewer.caller),
+        team=team_stats(s, session, now, viewer.scores),
+    )
 
 
-def read_state(db: Database, session_id: str) -> schemas.SessionState:
-    """The session's current state. Raises NotFoundError."""
+def read_state(db: Database, session_id: str, viewer: Viewer | None = None) -> schemas.SessionState:
+    """The session's current state as `viewer` sees it (default: the owner, without the
+    model agreement). Raises NotFoundError."""
     close_if_due(db, session_id)
     with db.read() as s:
-        return _state(s, sessions.get_session(s, session_id), utcnow())
+        return _state(s, sessions.get_session(s, session_id), utcnow(), viewer or Viewer())
 
 
-def list_states(db: Database) -> list[schemas.SessionState]:
-    """Every session's state, newest first."""
+def list_states(db: Database, viewer: Viewer | None = None) -> list[schemas.SessionState]:
+    """Every session's state, newest first; an annotator's own session only."""
+    viewer = viewer or Viewer()
     now = utcnow()
+    mine = viewer.caller.session_id
     with db.read() as s:
-        return [_state(s, row, now) for row in sessions.list_sessions(s)]
+        rows = sessions.list_sessions(s)
+        return [_state(s, row, now, viewer) for row in rows if mine is None or row.id == mine]
 
 
 def check_env(env: str, settings: SessionSettings) -> SessionSettings:
@@ -128,34 +179,38 @@ def create_session(context: AppContext, request: schemas.SessionCreate) -> schem
         session = sessions.create_session(s, request.env, request.mode, settings, request.annotator)
         session_id = session.id
     context.supervisor.ensure_worker_soon()
-    return read_state(context.db, session_id)
+    return read_state(context.db, session_id, context.viewer())
 
 
-def pause(db: Database, session_id: str) -> schemas.SessionState:
-    with db.write() as s:
+def pause(context: AppContext, session_id: str) -> schemas.SessionState:
+    with context.db.write() as s:
         timer.pause(s, session_id)
-    return read_state(db, session_id)
+    return read_state(context.db, session_id, context.viewer())
 
 
-def show_round(db: Database, session_id: str, round_index: int) -> schemas.SessionState:
-    """A page shows the open round: its timer starts the first time. Raises NotFoundError,
-    ConflictError."""
-    with db.write() as s:
+def show_round(
+    context: AppContext, session_id: str, round_index: int, caller: Caller
+) -> schemas.SessionState:
+    """`caller`'s page shows the open round: the round's timer starts the first time
+    anyone shows it, and the caller's time shown the first time they do. Raises
+    NotFoundError, ConflictError."""
+    with context.db.write() as s:
         timer.show_round(s, session_id, round_index)
-    return read_state(db, session_id)
+        record_view(s, session_id, round_index, caller)
+    return read_state(context.db, session_id, context.viewer(caller))
 
 
-def resume(db: Database, session_id: str) -> schemas.SessionState:
-    with db.write() as s:
+def resume(context: AppContext, session_id: str) -> schemas.SessionState:
+    with context.db.write() as s:
         timer.resume(s, session_id)
-    return read_state(db, session_id)
+    return read_state(context.db, session_id, context.viewer())
 
 
 def end_round(context: AppContext, session_id: str) -> schemas.SessionState:
     with context.db.write() as s:
         lifecycle.end_round(s, session_id)
     context.supervisor.ensure_worker_soon()
-    return read_state(context.db, session_id)
+    return read_state(context.db, session_id, context.viewer())
 
 
 def retry(context: AppContext, session_id: str) -> schemas.SessionState:
@@ -163,11 +218,16 @@ def retry(context: AppContext, session_id: str) -> schemas.SessionState:
     with context.db.write() as s:
         lifecycle.retry(s, session_id)
     context.supervisor.ensure_worker_soon()
-    return read_state(context.db, session_id)
+    return read_state(context.db, session_id, context.viewer())
 
 
-def judgement_out(record: JudgementRecord) -> schemas.JudgementOut:
-    """The page's view of a stored judgement."""
+def judgement_out(record: JudgementRecord, names: Mapping[str, str]) -> schemas.JudgementOut:
+    """The page's view of a stored judgement; `names`: id → name of the session's people
+    (`storage.annotators.display_names`)."""
+    if record.annotator_id == OWNER:  # the owner's own name for it, if they gave one
+        name = record.annotator or names.get(OWNER, OWNER)
+    else:
+        name = names.get(record.annotator_id, record.annotator or record.annotator_id)
     return schemas.JudgementOut(
         id=record.id,
         client_id=record.client_id,
@@ -178,7 +238,8 @@ def judgement_out(record: JudgementRecord) -> schemas.JudgementOut:
         source=record.source,
         seconds=record.seconds,
         edits=record.edits,
-        annotator=record.annotator,
+        annotator=schemas.AnnotatorRef(id=record.annotator_id, name=name),
+        suggestion_id=record.suggestion_id,
         created_at=record.created_at,
         undone=record.undone,
         pairs=[schemas.PairOut(a=p.a, b=p.b, label=p.label) for p in record.pairs],

@@ -10,6 +10,7 @@ from groupwise.storage import export as repo
 from groupwise.storage.export_format import from_jsonl, from_parquet, to_jsonl, to_parquet
 from groupwise.storage.phases import FINISHED
 from groupwise.storage.sessions import get_session
+from groupwise.storage.team import ScoreSource
 
 FORMATS = {
     "jsonl": ("application/x-ndjson", to_jsonl),
@@ -35,18 +36,23 @@ class ExportFile:
 
 
 def export_file(
-    db: Database, session_id: str, fmt: str, states_from: Path | None = None
+    db: Database,
+    session_id: str,
+    fmt: str,
+    states_from: Path | None = None,
+    scores: ScoreSource | None = None,
 ) -> ExportFile:
     """The session's export in `fmt` ("jsonl" or "parquet"); with `states_from` (the data
     directory) the compared behaviours' arrays too, and their true rewards once the session
-    has finished (never while a person may still judge). Raises NotFoundError."""
+    has finished (never while a person may still judge); `scores`: the reward model's
+    predictions for the annotators' model agreement. Raises NotFoundError."""
     media_type, write = FORMATS[fmt]
     with db.read() as s:
         states = None
         if states_from is not None:
             finished = get_session(s, session_id).phase == FINISHED
             states = repo.StatesExport(states_from, true_rewards=finished)
-        export = repo.export_session(s, session_id, states)
+        export = repo.export_session(s, session_id, states, scores)
     return ExportFile(write(export), media_type, f"{session_id}.{fmt}")
 
 

@@ -16,18 +16,26 @@ Modules: `models` (tables), `database` (engines, pragmas), `settings` (session s
 timer: shown, pause, resume, due), `progress` (the worker's progress line), `counts`
 (comparisons and pairs), `ending` ("Finish now", "Continue training"),
 `rounds` (pools, suggestions, pairwise queue),
-`judgements` (store, retry, undo, list), `export` (a session to its export and back),
-`export_format` (the export as JSONL / Parquet).
+`judgements` (store, retry, undo, list), `annotators` (the people a session is shared
+with, their tokens and views), `team` (their counters and agreement), `export` (a session
+to its export and back), `export_format` (the export as JSONL / Parquet).
 """
 
 from groupwise.storage.database import DATABASE_FILE, Database, default_url, sqlite_url
-from groupwise.storage.errors import ConflictError, InvalidError, NotFoundError, StorageError
+from groupwise.storage.errors import (
+    ConflictError,
+    ForbiddenError,
+    InvalidError,
+    NotFoundError,
+    StorageError,
+)
 from groupwise.storage.settings import SessionSettings
 
 __all__ = [
     "DATABASE_FILE",
     "ConflictError",
     "Database",
+    "ForbiddenError",
     "InvalidError",
     "NotFoundError",
     "SessionSettings",

@@ -1,6 +1,6 @@
 """What the repositories raise for requests they refuse; each message is one clear sentence.
 
-The server maps them to HTTP statuses (404, 409, 422) with the message as ``detail``.
+The server maps them to HTTP statuses (403, 404, 409, 422) with the message as ``detail``.
 """
 
 
@@ -10,6 +10,11 @@ class StorageError(Exception):
 
 class NotFoundError(StorageError):
     """An unknown session, round, judgement or behaviour (HTTP 404)."""
+
+
+class ForbiddenError(StorageError):
+    """The caller may not do this: another annotator's judgement, or an owner's action
+    (HTTP 403)."""
 
 
 class ConflictError(StorageError):

@@ -5,6 +5,11 @@ Undone judgements are exported (flagged, without pairs): the export is the recor
 Importing creates a new, finished session holding the same judgements and pairs (pairs are
 copied, not derived again) with `origin` naming the exported session.
 
+Who made each judgement is exported by name (``annotator``) and id (``annotator_id``), and
+the team's counters and agreement as annotator lines (`storage.team`, docs/teams.md). An
+import keeps the attribution: each annotator of the export becomes a removed annotator of
+the new session (a new id, no token).
+
 With states (`export_session(..., states=StatesExport(data_dir))`), the export also carries
 the arrays of every behaviour a judgement compared, read from the round's pool
 (`groupwise.storage.states`), and, when `true_rewards` allows, their true rewards. Importing
@@ -22,16 +27,27 @@ from sqlalchemy.orm import Session as DbSession
 
 from groupwise.pool.ids import behaviour_index
 from groupwise.preferences.judgement import LABELS as PAIR_LABELS
+from groupwise.storage.annotators import OWNER, display_names
 from groupwise.storage.errors import InvalidError
 from groupwise.storage.export_format import (
+    AgreementLine,
+    AnnotatorLine,
     JudgementLine,
+    ModelAgreementLine,
     PairLine,
     RoundLine,
     SessionExport,
     SessionLine,
 )
 from groupwise.storage.judgements import LABELS, SOURCES, JudgementRecord, list_judgements
-from groupwise.storage.models import JudgementRow, PairRow, RoundRow, SessionRow, utcnow
+from groupwise.storage.models import (
+    AnnotatorRow,
+    JudgementRow,
+    PairRow,
+    RoundRow,
+    SessionRow,
+    utcnow,
+)
 from groupwise.storage.phases import FINISHED, ROUND_CLOSED
 from groupwise.storage.sessions import (
     MODES,
@@ -42,6 +58,7 @@ from groupwise.storage.sessions import (
 )
 from groupwise.storage.settings import SessionSettings
 from groupwise.storage.states import BehaviourStates, read_round_states, write_round_states
+from groupwise.storage.team import ScoreSource, team_stats
 
 
 @dataclass(frozen=True)
@@ -56,11 +73,17 @@ class StatesExport:
 
 
 def export_session(
-    s: DbSession, session_id: str, states: StatesExport | None = None
+    s: DbSession,
+    session_id: str,
+    states: StatesExport | None = None,
+    scores: ScoreSource | None = None,
 ) -> SessionExport:
     """Everything the export holds of a session; with `states`, the compared behaviours'
-    arrays too. Raises NotFoundError (also when a round's pool is gone)."""
+    arrays too; `scores`: the reward model's predictions for the annotators' model
+    agreement (None: not computed). Raises NotFoundError (also when a round's pool is
+    gone)."""
     session = get_session(s, session_id)
+    names = display_names(s, session)
     rounds = list(
         s.scalars(
             select(RoundRow).where(RoundRow.session_id == session_id).order_by(RoundRow.index)
@@ -104,7 +127,10 @@ def export_session(
                 source=j.source,  # type: ignore[arg-type]
                 seconds=j.seconds,
                 edits=j.edits,
-                annotator=j.annotator,
+                annotator=(j.annotator or names[OWNER])
+                if j.annotator_id == OWNER
+                else names.get(j.annotator_id, j.annotator),
+                annotator_id=j.annotator_id,
                 created_at=j.created_at,
                 undone=j.undone,
                 pairs=[PairLine(a=p.a, b=p.b, label=p.label) for p in j.pairs],
@@ -112,6 +138,23 @@ def export_session(
             for j in judgements
         ),
         behaviours=behaviours,
+        annotators=tuple(
+            AnnotatorLine(
+                id=a.id,
+                name=a.name,
+                comparisons=a.comparisons,
+                pairs=a.pairs,
+                shown_s=a.shown_s,
+                agreement=AgreementLine(
+                    kappa=a.agreement.kappa, share=a.agreement.share, n=a.agreement.n
+                ),
+                model_agreement=ModelAgreementLine(
+                    share=a.model_agreement.share, n=a.model_agreement.n
+                ),
+                removed=a.removed,
+            )
+            for a in team_stats(s, session, scores=scores, include_removed=True)
+        ),
     )
 
 
@@ -190,6 +233,8 @@ def import_session(
     )
     s.add(session)
     touch(session, now)
+    s.flush()
+    people = _import_annotators(s, session.id, export, now)
     round_ids: dict[int, int] = {}
     for index in indices:
         line = listed[index]
@@ -221,6 +266,7 @@ def import_session(
                 seconds=j.seconds,
                 edits=j.edits,
                 annotator=j.annotator,
+                annotator_id=people.get(j.annotator_id),
                 created_at=j.created_at,
                 undone=j.undone,
                 undone_at=now if j.undone else None,
@@ -236,6 +282,33 @@ def import_session(
         for states in export.behaviours:
             write_round_states(data_dir / round_directory(session.id, states.round), states)
     return session
+
+
+def _import_annotators(
+    s: DbSession, session_id: str, export: SessionExport, now: datetime
+) -> dict[str, str]:
+    """The export's annotators as removed annotators of the new session (no token): their
+    id in the export → their new id (the owner stays the owner)."""
+    named = {a.id: a.name for a in export.annotators}
+    for j in export.judgements:
+        named.setdefault(j.annotator_id, j.annotator or j.annotator_id)
+    ids: dict[str, str] = {}
+    for old, name in named.items():
+        if old == OWNER:
+            continue
+        ids[old] = f"a-{new_session_id()[2:]}"
+        s.add(
+            AnnotatorRow(
+                id=ids[old],
+                session_id=session_id,
+                name=name[:200],
+                token_sha256=None,
+                created_at=now,
+                removed_at=now,
+            )
+        )
+    s.flush()
+    return ids
 
 
 def _check_states(export: SessionExport) -> None:

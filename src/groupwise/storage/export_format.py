@@ -9,18 +9,23 @@ JSONL (``format: groupwise.session-export/1``), one JSON object a line:
      "phase", "round", "created_at"}
     {"type": "round", "round": r, "pool_dir", "opened_at", "shown_at", "closed_at",
      "close_reason"}  …
+    {"type": "annotator", "id": "owner" | "a-…", "name", "comparisons", "pairs", "shown_s",
+     "agreement": {"kappa", "share", "n"}, "model_agreement": {"share", "n"},
+     "removed"}  … the owner first (docs/teams.md)
     {"type": "behaviour", "round": r, "id": "b<i>", "obs": [[…] × L], "acts": [[…] × L],
      "true_rewards": [… L] or null}  … only in an export with states
     {"type": "judgement", "id", "seq", "client_id", "round", "left": [names],
-     "right": [names], "label", "source", "seconds", "edits", "annotator", "created_at",
-     "undone", "pairs": [{"a", "b", "label"}, …]}  … oldest first
+     "right": [names], "label", "source", "seconds", "edits", "annotator" (who made it,
+     by name), "annotator_id" ("owner" or theirs), "created_at", "undone",
+     "pairs": [{"a", "b", "label"}, …]}  … oldest first
 
 Parquet: one row per judgement with the judgement fields as columns (``pairs`` a list of
-structs); the session and round objects are in the schema metadata under
-``groupwise.session`` and ``groupwise.rounds`` (JSON). With states, each row also holds its
-groups' arrays, aligned with ``left`` / ``right``: ``left_obs`` / ``right_obs``
-(m, L, obs_dim) float32, ``left_acts`` / ``right_acts`` (m, L, act_dim) float32, and, when
-exported, ``left_true_rewards`` / ``right_true_rewards`` (m, L) float64.
+structs); the session, round and annotator objects are in the schema metadata under
+``groupwise.session``, ``groupwise.rounds`` and ``groupwise.annotators`` (JSON). With
+states, each row also holds its groups' arrays, aligned with ``left`` / ``right``:
+``left_obs`` / ``right_obs`` (m, L, obs_dim) float32, ``left_acts`` / ``right_acts``
+(m, L, act_dim) float32, and, when exported, ``left_true_rewards`` /
+``right_true_rewards`` (m, L) float64.
 
 Undone judgements are exported (flagged, without pairs): the export is the record of truth.
 True returns and rewards are exported only with states and only where the caller allows
@@ -46,6 +51,7 @@ from groupwise.storage.states import BehaviourStates
 FORMAT = "groupwise.session-export/1"
 _SESSION_KEY = b"groupwise.session"
 _ROUNDS_KEY = b"groupwise.rounds"
+_ANNOTATORS_KEY = b"groupwise.annotators"
 
 
 class _Strict(BaseModel):
@@ -103,9 +109,36 @@ class JudgementLine(_Strict):
     seconds: float = Field(default=0.0, ge=0)
     edits: int = Field(default=0, ge=0)
     annotator: str = Field(default="", max_length=200)
+    annotator_id: str = Field(default="owner", min_length=1, max_length=32)
     created_at: datetime
     undone: bool = False
     pairs: list[PairLine] = Field(default_factory=list, max_length=10_000)
+
+
+class AgreementLine(_Strict):
+    kappa: float | None = None
+    share: float | None = Field(default=None, ge=0, le=1)
+    n: int = Field(default=0, ge=0)
+
+
+class ModelAgreementLine(_Strict):
+    share: float | None = Field(default=None, ge=0, le=1)
+    n: int = Field(default=0, ge=0)
+
+
+class AnnotatorLine(_Strict):
+    """Someone who taught the session, with their counters and agreement when exported
+    (`storage.team`)."""
+
+    type: Literal["annotator"] = "annotator"
+    id: str = Field(min_length=1, max_length=32)
+    name: str = Field(max_length=200)
+    comparisons: int = Field(default=0, ge=0)
+    pairs: int = Field(default=0, ge=0)
+    shown_s: float = Field(default=0.0, ge=0)
+    agreement: AgreementLine = AgreementLine()
+    model_agreement: ModelAgreementLine = ModelAgreementLine()
+    removed: bool = False
 
 
 class BehaviourLine(_Strict):
@@ -126,6 +159,7 @@ class SessionExport:
     rounds: tuple[RoundLine, ...]
     judgements: tuple[JudgementLine, ...]
     behaviours: tuple[BehaviourStates, ...] = ()
+    annotators: tuple[AnnotatorLine, ...] = ()
 
 
 def _states_of(lines: list[BehaviourLine]) -> tuple[BehaviourStates, ...]:
@@ -151,7 +185,10 @@ def _states_of(lines: list[BehaviourLine]) -> tuple[BehaviourStates, ...]:
 
 def to_jsonl(export: SessionExport) -> bytes:
     """The JSONL bytes of an export (module docstring)."""
-    head = [line.model_dump_json().encode() for line in (export.session, *export.rounds)]
+    head = [
+        line.model_dump_json().encode()
+        for line in (export.session, *export.rounds, *export.annotators)
+    ]
     tail = [line.model_dump_json().encode() for line in export.judgements]
     states = [_behaviour_json(states, i) for states in export.behaviours for i in
               range(len(states.names))]  # fmt: skip
@@ -177,9 +214,11 @@ def from_jsonl(data: bytes) -> SessionExport:
     rounds: list[RoundLine] = []
     judgements: list[JudgementLine] = []
     behaviours: list[BehaviourLine] = []
+    annotators: list[AnnotatorLine] = []
     kinds: dict[str, type[_Strict]] = {
         "session": SessionLine,
         "round": RoundLine,
+        "annotator": AnnotatorLine,
         "behaviour": BehaviourLine,
         "judgement": JudgementLine,
     }
@@ -193,7 +232,7 @@ def from_jsonl(data: bytes) -> SessionExport:
         kind = kinds.get(str(obj.get("type"))) if isinstance(obj, dict) else None
         if kind is None:
             raise InvalidError(
-                f"line {number} has no known type (session, round, behaviour, judgement)"
+                f"line {number} has no known type (session, round, annotator, behaviour, judgement)"
             )
         parsed = _parse(kind, obj, f"line {number}")
         if isinstance(parsed, SessionLine):
@@ -206,9 +245,13 @@ def from_jsonl(data: bytes) -> SessionExport:
             judgements.append(parsed)
         elif isinstance(parsed, BehaviourLine):
             behaviours.append(parsed)
+        elif isinstance(parsed, AnnotatorLine):
+            annotators.append(parsed)
     if session is None:
         raise InvalidError("the export has no session line")
-    return SessionExport(session, tuple(rounds), tuple(judgements), _states_of(behaviours))
+    return SessionExport(
+        session, tuple(rounds), tuple(judgements), _states_of(behaviours), tuple(annotators)
+    )
 
 
 def _parse(kind: type[_Strict], obj: Any, where: str) -> _Strict:
@@ -234,6 +277,7 @@ _SCHEMA = pa.schema(
         ("seconds", pa.float64()),
         ("edits", pa.int64()),
         ("annotator", pa.string()),
+        ("annotator_id", pa.string()),
         ("created_at", pa.timestamp("us", tz="UTC")),
         ("undone", pa.bool_()),
         ("pairs", pa.list_(_PAIR)),
@@ -251,6 +295,9 @@ def to_parquet(export: SessionExport) -> bytes:
     metadata = {
         _SESSION_KEY: export.session.model_dump_json().encode(),
         _ROUNDS_KEY: json.dumps([r.model_dump(mode="json") for r in export.rounds]).encode(),
+        _ANNOTATORS_KEY: json.dumps(
+            [a.model_dump(mode="json") for a in export.annotators]
+        ).encode(),
     }
     table = pa.Table.from_pylist(rows, schema=_SCHEMA)
     if export.behaviours:
@@ -337,10 +384,18 @@ def from_parquet(data: bytes) -> SessionExport:
     try:
         session_obj = json.loads(metadata[_SESSION_KEY])
         rounds_obj = json.loads(metadata.get(_ROUNDS_KEY, b"[]"))
+        annotators_obj = json.loads(metadata.get(_ANNOTATORS_KEY, b"[]"))
     except (json.JSONDecodeError, UnicodeDecodeError):
         raise InvalidError("the Parquet file's session metadata is not JSON") from None
     if not isinstance(rounds_obj, list):
         raise InvalidError("the Parquet file's round metadata is not a list")
+    if not isinstance(annotators_obj, list):
+        raise InvalidError("the Parquet file's annotator metadata is not a list")
+    annotators = [
+        _parse(AnnotatorLine, {**a, "type": "annotator"} if isinstance(a, dict) else a,
+               f"annotator {i}")
+        for i, a in enumerate(annotators_obj)
+    ]  # fmt: skip
     session = _parse(SessionLine, session_obj, "session metadata")
     rounds = [_parse(RoundLine, r, f"round {i}") for i, r in enumerate(rounds_obj)]
     plain = table.select([name for name in _SCHEMA.names if name in table.column_names])
@@ -355,4 +410,5 @@ def from_parquet(data: bytes) -> SessionExport:
         tuple(r for r in rounds if isinstance(r, RoundLine)),
         tuple(judgements),
         _states_of(_states_from_table(table, judgements)),
+        tuple(a for a in annotators if isinstance(a, AnnotatorLine)),
     )

@@ -10,6 +10,10 @@ Pairs are the round's own: judgement number k of a round (0, 1, … in arrival o
 ones included) gets the pairs `groupwise.preferences.pairs.judgement_pairs` derives for key
 k, the one derivation that the round's end (`groupwise.run.round.end_round`, on
 `round_judgements`) calls again, so the pairs stored and shown are the pairs trained on.
+
+Every judgement is someone's (docs/teams.md): `JudgementInput.annotator_id` names the
+annotator who made it (`storage.annotators`; "owner" for the session's owner), and only
+they can undo it.
 """
 
 from collections.abc import Sequence
@@ -30,7 +34,14 @@ from groupwise.preferences.judgement import (
     Source,
 )
 from groupwise.preferences.pairs import judgement_pairs
-from groupwise.storage.errors import ConflictError, InvalidError, NotFoundError, check_text
+from groupwise.storage.annotators import OWNER, list_annotators, maker_name
+from groupwise.storage.errors import (
+    ConflictError,
+    ForbiddenError,
+    InvalidError,
+    NotFoundError,
+    check_text,
+)
 from groupwise.storage.lifecycle import close_round
 from groupwise.storage.models import (
     MAX_INTEGER,
@@ -41,7 +52,7 @@ from groupwise.storage.models import (
     utcnow,
 )
 from groupwise.storage.phases import READY
-from groupwise.storage.rounds import mark_suggestion_used
+from groupwise.storage.rounds import Overlap, mark_suggestion_used
 from groupwise.storage.sessions import get_round, get_session, settings_of, touch
 from groupwise.storage.timer import round_due
 
@@ -73,6 +84,9 @@ class JudgementInput:
     seconds: float = 0.0
     edits: int = 0
     annotator: str = ""
+    """The name it is stored under (the annotator's; the owner's free text)."""
+    annotator_id: str = OWNER
+    """Who makes it: "owner" or an annotator's id (`storage.annotators`)."""
 
 
 @dataclass(frozen=True)
@@ -95,6 +109,10 @@ class JudgementRecord:
     undone: bool
     revision: int
     pairs: tuple[PairRecord, ...]
+    annotator_id: str = OWNER
+    """Who made it: "owner" or an annotator's id."""
+    suggestion_id: int | None = None
+    """The group suggestion it answered, if any."""
 
 
 def record_of(row: JudgementRow) -> JudgementRecord:
@@ -116,6 +134,8 @@ def record_of(row: JudgementRow) -> JudgementRecord:
         undone=row.undone,
         revision=row.revision,
         pairs=tuple(PairRecord(p.a, p.b, p.label) for p in row.pairs),
+        annotator_id=row.annotator_id or OWNER,
+        suggestion_id=row.suggestion_id,
     )
 
 
@@ -131,7 +151,8 @@ def add_judgement(
     Raises:
         NotFoundError: unknown session.
         ConflictError: the session is not ready, the round is not the open one or its
-            time is up, or the `client_id` was used for a different comparison.
+            time is up, or the `client_id` was used for a different comparison (or by
+            someone else).
         InvalidError: a behaviour not in the round, in both groups or twice in one; an
             empty group or one too large for the mode; an unknown label or source; a NUL
             character in the client id or annotator (`check_text`).
@@ -142,11 +163,12 @@ def add_judgement(
     session = get_session(s, session_id, lock=True)
     stored = _by_client_id(s, session_id, judgement.client_id)
     if stored is not None:
-        if (stored.round, stored.left, stored.right, stored.label) != (
+        if (stored.round, stored.left, stored.right, stored.label, stored.annotator_id) != (
             judgement.round,
             tuple(judgement.left),
             tuple(judgement.right),
             judgement.label,
+            judgement.annotator_id,
         ):
             raise ConflictError(
                 f"client_id {judgement.client_id!r} was already used for another comparison"
@@ -180,6 +202,7 @@ def add_judgement(
         seconds=float(judgement.seconds),
         edits=int(judgement.edits),
         annotator=judgement.annotator,
+        annotator_id=None if judgement.annotator_id == OWNER else judgement.annotator_id,
         created_at=now,
         revision=session.revision,
         pairs=[
@@ -189,7 +212,16 @@ def add_judgement(
     )
     s.add(row)
     s.flush()
-    mark_suggestion_used(s, round_row.id, judgement.left, judgement.right, judgement.source)
+    shared = bool(list_annotators(s, session_id))  # someone else could answer it too
+    row.suggestion_id = mark_suggestion_used(
+        s,
+        round_row.id,
+        judgement.left,
+        judgement.right,
+        judgement.source,
+        holder=judgement.annotator_id,
+        overlap=Overlap(settings.overlap_share, settings.seed, judgement.round) if shared else None,
+    )
     limit = settings.comparisons_per_round
     if limit > 0 and _live_in_round(s, session_id, judgement.round) >= limit:
         close_round(s, session, "comparisons", now)
@@ -285,14 +317,21 @@ def _live_in_round(s: DbSession, session_id: str, round_index: int) -> int:
 
 
 def undo_judgement(
-    s: DbSession, session_id: str, judgement_id: int, now: datetime | None = None
+    s: DbSession,
+    session_id: str,
+    judgement_id: int,
+    now: datetime | None = None,
+    *,
+    annotator_id: str = OWNER,
 ) -> JudgementRecord:
     """Undo a judgement of the open round: its pairs are deleted, the row stays (undone).
 
-    Undoing an undone judgement returns it unchanged.
+    Only the annotator who made it (`annotator_id`: "owner" or an annotator's id) can
+    undo it. Undoing an undone judgement returns it unchanged.
 
     Raises:
         NotFoundError: unknown session, or no such judgement in it.
+        ForbiddenError: someone else made it.
         ConflictError: the judgement's round is closed.
     """
     now = now or utcnow()
@@ -306,6 +345,9 @@ def undo_judgement(
         ).one_or_none()
     if row is None:
         raise NotFoundError(f"session {session_id} has no judgement {judgement_id}")
+    if (row.annotator_id or OWNER) != annotator_id:
+        maker = maker_name(s, session, row.annotator_id, row.annotator)
+        raise ForbiddenError(f"judgement {judgement_id} was made by {maker}; only they can undo it")
     if row.undone:
         return record_of(row)
     if session.phase != READY or row.round_index != session.round:

@@ -17,6 +17,11 @@ Tables (one session owns everything below it; deleting a session cascades):
     suggestion_edges  the round's top-k pairwise suggestion edges for the view
     pairwise_queue    the round's pairs for the pairwise baseline, best first
     training_points   the agent's learning as it happens: PPO steps, true return, last refit
+    annotators        the people a session's owner shares it with: name, token hash
+    round_views       when each annotator first showed a round (their time shown)
+
+Who made a judgement is `judgements.annotator_id` (null: the session's owner, as every
+judgement stored before sessions could be shared); docs/teams.md.
 """
 
 from datetime import UTC, datetime
@@ -185,6 +190,12 @@ class JudgementRow(Base):
     seconds: Mapped[float] = mapped_column(Float, default=0.0)
     edits: Mapped[int] = mapped_column(Integer, default=0)
     annotator: Mapped[str] = mapped_column(String(200), default="")
+    """The name it was given under when stored (the owner's free text, or the annotator's
+    name)."""
+    annotator_id: Mapped[str | None] = mapped_column(String(32), default=None)
+    """The annotator who made it (`AnnotatorRow.id`); null: the session's owner."""
+    suggestion_id: Mapped[int | None] = mapped_column(Integer, default=None)
+    """The group suggestion it answered (`SuggestionRow.id`), if any."""
     created_at: Mapped[datetime] = mapped_column(default=utcnow)
     undone: Mapped[bool] = mapped_column(default=False)
     undone_at: Mapped[datetime | None] = mapped_column(default=None)
@@ -247,6 +258,12 @@ class SuggestionRow(Base):
     right_node: Mapped[str] = mapped_column(String(64))
     score: Mapped[float] = mapped_column(Float)
     used: Mapped[bool] = mapped_column(default=False)
+    leased_to: Mapped[str | None] = mapped_column(String(32), default=None)
+    """Who it is offered to now ("owner" or an annotator id) until `lease_until`."""
+    lease_until: Mapped[datetime | None] = mapped_column(default=None)
+    first_by: Mapped[str | None] = mapped_column(String(32), default=None)
+    """Set when its first answer chose it for a second annotator's (agreement): who gave
+    that first answer; it stays unused until someone else answers it."""
 
 
 class SuggestionEdgeRow(Base):
@@ -276,6 +293,9 @@ class PairQueueRow(Base):
     b: Mapped[str] = mapped_column(String(16))
     score: Mapped[float] = mapped_column(Float)
     skipped: Mapped[bool] = mapped_column(default=False)
+    leased_to: Mapped[str | None] = mapped_column(String(32), default=None)
+    """Who it is asked of now ("owner" or an annotator id) until `lease_until`."""
+    lease_until: Mapped[datetime | None] = mapped_column(default=None)
 
 
 class TrainingPointRow(Base):
@@ -302,3 +322,32 @@ class TrainingPointRow(Base):
     """PPO env steps of the policy that sampled round `round`'s pool."""
     revision: Mapped[int] = mapped_column(Integer, default=0)
     """The session revision the point was written at (the event stream's cursor)."""
+
+
+class AnnotatorRow(Base):
+    """A person the session's owner shares the session with (docs/teams.md). Only the
+    SHA-256 of their token is kept; a removed annotator keeps the row (their judgements
+    stay theirs) and loses the token."""
+
+    __tablename__ = "annotators"
+    __table_args__ = (Index("ix_annotators_session", "session_id"),)
+
+    id: Mapped[str] = mapped_column(String(32), primary_key=True)
+    session_id: Mapped[str] = mapped_column(ForeignKey("sessions.id", ondelete="CASCADE"))
+    name: Mapped[str] = mapped_column(String(200))
+    token_sha256: Mapped[str | None] = mapped_column(String(64), unique=True, default=None)
+    """Hex SHA-256 of the annotator's token; null once removed (or imported)."""
+    created_at: Mapped[datetime] = mapped_column(default=utcnow)
+    removed_at: Mapped[datetime | None] = mapped_column(default=None)
+
+
+class RoundViewRow(Base):
+    """When an annotator ("owner" or an annotator id) first showed a round in a page."""
+
+    __tablename__ = "round_views"
+    __table_args__ = (UniqueConstraint("round_id", "annotator"),)
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    round_id: Mapped[int] = mapped_column(ForeignKey("rounds.id", ondelete="CASCADE"))
+    annotator: Mapped[str] = mapped_column(String(32))
+    shown_at: Mapped[datetime] = mapped_column()

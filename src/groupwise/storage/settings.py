@@ -137,6 +137,21 @@ class SessionSettings(BaseModel):
         "sampled from the policy as it is then and prepared ahead, so End round opens it at "
         "once (later: a younger policy's behaviours; a round ended sooner waits for its pool)",
     )
+    lease_s: float = Field(
+        default=60,
+        ge=0,
+        le=3600,
+        description="a shared session (docs/teams.md): seconds a group suggestion or pair is "
+        "offered to one annotator alone, so two people do not answer the same one at once "
+        "(0: everyone gets the same)",
+    )
+    overlap_share: float = Field(
+        default=0.1,
+        ge=0,
+        le=1,
+        description="a shared session: share of answered suggestions offered once more, to "
+        "another annotator, to measure how well the annotators agree (0: none)",
+    )
     exploration_fraction: ExplorationFraction = 0.25
     eval_episodes: int = Field(
         default=5, ge=0, le=100, description="episodes measuring the true return after training"

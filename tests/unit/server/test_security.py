@@ -296,4 +296,5 @@ def test_the_schema_documents_the_guards_answers_on_state_changes(client):
     paths = client.get("/api/openapi.json").json()["paths"]
     judgements = paths["/api/sessions/{session_id}/judgements"]
     assert {"403", "415"} <= set(judgements["post"]["responses"])
-    assert not {"403", "415"} & set(judgements["get"]["responses"])
+    # a read takes any body type; its 403 is an annotator's token for another session
+    assert "415" not in judgements["get"]["responses"]

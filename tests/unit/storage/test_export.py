@@ -63,7 +63,7 @@ def test_jsonl_is_one_object_per_line(db, open_session):
     with db.read() as s:
         lines = to_jsonl(export_session(s, sid)).decode().splitlines()
     kinds = [json.loads(line)["type"] for line in lines]
-    assert kinds == ["session", "round", "judgement", "judgement", "judgement"]
+    assert kinds == ["session", "round", "annotator", "judgement", "judgement", "judgement"]
     assert "true_return" not in "".join(lines)  # never leaves the server
 
 

@@ -9,6 +9,7 @@ ERRORS: dict[int | str, dict[str, Any]] = {
     for code, text in (
         (400, "bad request"),
         (401, "missing or wrong token"),
+        (403, "not the caller's to do: another annotator's, or the owner's alone"),
         (404, "unknown session, round or judgement"),
         (409, "not possible in the session's current phase"),
         (413, "body too large"),

@@ -1,11 +1,11 @@
 """The end of a session: finish now, continue training, the final agent and its files."""
 
-from fastapi import APIRouter
+from fastapi import APIRouter, Depends
 from fastapi.responses import FileResponse
 
 from groupwise.run.agent_package import AGENT_VIDEO, AGENT_ZIP
 from groupwise.server import agent_views
-from groupwise.server.deps import Context, SessionId
+from groupwise.server.deps import Context, SessionId, owner_only
 from groupwise.server.routes import ERRORS
 from groupwise.server.schemas import AgentOut, AgentPickIn, ContinueIn, SessionState
 
@@ -15,14 +15,14 @@ NO_STORE = "no-cache"
 """The files change when training continues; the page asks with ?v=<round> anyway."""
 
 
-@router.post("/{session_id}/finish")
+@router.post("/{session_id}/finish", dependencies=[Depends(owner_only("finish the session"))])
 def finish(session_id: SessionId, context: Context) -> SessionState:
     """No more rounds after the current one: the open round ends now (a round being
     prepared is dropped), then the final phase (409 when finishing, finished or failed)."""
     return agent_views.finish_now(context, session_id)
 
 
-@router.post("/{session_id}/continue")
+@router.post("/{session_id}/continue", dependencies=[Depends(owner_only("continue the training"))])
 def continue_training(session_id: SessionId, request: ContinueIn, context: Context) -> SessionState:
     """Train a finished session again: `steps` more PPO steps on the frozen learned reward,
     or `rounds` more feedback rounds, then the final phase (409 unless finished)."""
@@ -36,7 +36,7 @@ def agent(session_id: SessionId, context: Context) -> AgentOut:
     return agent_views.agent(context, session_id)
 
 
-@router.put("/{session_id}/agent/round")
+@router.put("/{session_id}/agent/round", dependencies=[Depends(owner_only("choose the agent"))])
 def pick_agent(session_id: SessionId, request: AgentPickIn, context: Context) -> AgentOut:
     """Hand over another round's policy: agent.zip and the summary are repacked from that
     round's checkpoint (404 for no such round, 409 before the session is finished or when

@@ -1,14 +1,16 @@
-"""Judgements: submit (idempotent on client_id), list, undo."""
+"""Judgements: submit (idempotent on client_id), list, undo; each the caller's own."""
 
 from typing import Annotated
 
 from fastapi import APIRouter, Path, Query, Response, status
 
 from groupwise.server import state
-from groupwise.server.deps import Context, SessionId
+from groupwise.server.deps import Context, Me, SessionId
 from groupwise.server.routes import ERRORS
 from groupwise.server.schemas import JudgementIn, JudgementOut
 from groupwise.storage import judgements as repo
+from groupwise.storage.annotators import Caller, display_names
+from groupwise.storage.sessions import get_session
 
 router = APIRouter(
     prefix="/api/sessions/{session_id}/judgements", tags=["judgements"], responses=ERRORS
@@ -21,35 +23,33 @@ router = APIRouter(
     responses={200: {"model": JudgementOut, "description": "a retry: the stored judgement"}},
 )
 def submit(
-    session_id: SessionId, judgement: JudgementIn, context: Context, response: Response
+    session_id: SessionId, judgement: JudgementIn, context: Context, me: Me, response: Response
 ) -> JudgementOut:
-    """Store a judgement and its pairs (committed before this answer). A retry with the
-    same client_id answers 200 with the stored judgement."""
-    record, created = repo_add(context, session_id, judgement)
+    """Store the caller's judgement and its pairs (committed before this answer). A retry
+    with the same client_id answers 200 with the stored judgement."""
+    with context.db.write() as s:
+        record, created = repo.add_judgement(s, session_id, _input(judgement, me))
+        names = display_names(s, get_session(s, session_id))
     if not created:
         response.status_code = status.HTTP_200_OK
-    return state.judgement_out(record)
+    return state.judgement_out(record, names)
 
 
-def repo_add(
-    context: Context, session_id: str, judgement: JudgementIn
-) -> tuple[repo.JudgementRecord, bool]:
-    with context.db.write() as s:
-        return repo.add_judgement(
-            s,
-            session_id,
-            repo.JudgementInput(
-                client_id=judgement.client_id,
-                round=judgement.round,
-                left=tuple(judgement.left),
-                right=tuple(judgement.right),
-                label=judgement.label,
-                source=judgement.source,
-                seconds=judgement.seconds,
-                edits=judgement.edits,
-                annotator=judgement.annotator,
-            ),
-        )
+def _input(judgement: JudgementIn, caller: Caller) -> repo.JudgementInput:
+    return repo.JudgementInput(
+        client_id=judgement.client_id,
+        round=judgement.round,
+        left=tuple(judgement.left),
+        right=tuple(judgement.right),
+        label=judgement.label,
+        source=judgement.source,
+        seconds=judgement.seconds,
+        edits=judgement.edits,
+        # the owner may name their judgements (the page's ?annotator=); an annotator's
+        # carry their name, whatever the body says
+        annotator=judgement.annotator if caller.is_owner else caller.name,
+        annotator_id=caller.id,
+    )
 
 
 @router.get("")
@@ -62,7 +62,8 @@ def list_judgements(
     """The session's judgements (of one round with ?round=), oldest first."""
     with context.db.read() as s:
         records = repo.list_judgements(s, session_id, round, include_undone=include_undone)
-    return [state.judgement_out(r) for r in records]
+        names = display_names(s, get_session(s, session_id))
+    return [state.judgement_out(r, names) for r in records]
 
 
 @router.delete("/{judgement_id}")
@@ -70,8 +71,11 @@ def undo(
     session_id: SessionId,
     judgement_id: Annotated[int, Path(ge=0, le=2**62)],
     context: Context,
+    me: Me,
 ) -> JudgementOut:
-    """Undo a judgement of the open round (its pairs are removed)."""
+    """Undo the caller's judgement of the open round (its pairs are removed); 403 for
+    someone else's."""
     with context.db.write() as s:
-        record = repo.undo_judgement(s, session_id, judgement_id)
-    return state.judgement_out(record)
+        record = repo.undo_judgement(s, session_id, judgement_id, annotator_id=me.id)
+        names = display_names(s, get_session(s, session_id))
+    return state.judgement_out(record, names)

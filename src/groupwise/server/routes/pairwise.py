@@ -3,7 +3,7 @@
 from fastapi import APIRouter
 
 from groupwise.server import pool_views
-from groupwise.server.deps import Context, SessionId
+from groupwise.server.deps import Context, Me, SessionId
 from groupwise.server.routes import ERRORS
 from groupwise.server.schemas import PairSkip, PairwiseNext
 
@@ -13,12 +13,13 @@ router = APIRouter(
 
 
 @router.get("/next")
-def next_pair(session_id: SessionId, context: Context) -> PairwiseNext:
-    """The next unanswered pair of the open round's queue and the one after it."""
-    return pool_views.pairwise_next(context, session_id)
+def next_pair(session_id: SessionId, context: Context, me: Me) -> PairwiseNext:
+    """The next unanswered pair of the open round's queue and the one after it, neither
+    leased to another annotator; in a shared session the first is leased to the caller."""
+    return pool_views.pairwise_next(context, session_id, me)
 
 
 @router.post("/skip")
-def skip(session_id: SessionId, request: PairSkip, context: Context) -> PairwiseNext:
+def skip(session_id: SessionId, request: PairSkip, context: Context, me: Me) -> PairwiseNext:
     """Skip a pair of the queue (it is not asked again this round); the next pairs."""
-    return pool_views.skip_pair(context, session_id, request)
+    return pool_views.skip_pair(context, session_id, request, me)

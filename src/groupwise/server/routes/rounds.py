@@ -6,7 +6,7 @@ from typing import Annotated
 from fastapi import APIRouter, Query
 
 from groupwise.server import pool_views, state
-from groupwise.server.deps import Context, RoundIndex, SessionId
+from groupwise.server.deps import Context, Me, RoundIndex, SessionId
 from groupwise.server.routes import ERRORS
 from groupwise.server.schemas import (
     Edge,
@@ -41,15 +41,18 @@ def next_suggestion(
     session_id: SessionId,
     round_index: RoundIndex,
     context: Context,
+    me: Me,
     request: SuggestionRequest | None = None,
 ) -> SuggestionOut:
-    """The best group suggestion not answered yet and not excluded (null when none)."""
+    """The best group suggestion not answered yet, not excluded and not leased to another
+    annotator (null when none); in a shared session it is leased to the caller for the
+    session's `lease_s`."""
     exclude = request.exclude if request is not None else None
-    return pool_views.next_suggestion(context.db, session_id, round_index, exclude)
+    return pool_views.next_suggestion(context.db, session_id, round_index, exclude, me)
 
 
 @router.post("/{round_index}/shown")
-def shown(session_id: SessionId, round_index: RoundIndex, context: Context) -> SessionState:
-    """A page shows the open round: the first report starts its timer (409 for a round that
-    is not the open one)."""
-    return state.show_round(context.db, session_id, round_index)
+def shown(session_id: SessionId, round_index: RoundIndex, context: Context, me: Me) -> SessionState:
+    """The caller's page shows the open round: the first report starts its timer, the
+    caller's first their time shown (409 for a round that is not the open one)."""
+    return state.show_round(context, session_id, round_index, me)

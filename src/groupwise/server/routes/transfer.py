@@ -37,7 +37,11 @@ def export(
 ) -> Response:
     """The session's judgements and pairs as a file download."""
     file = transfer.export_file(
-        context.db, session_id, format, context.data_dir if states else None
+        context.db,
+        session_id,
+        format,
+        context.data_dir if states else None,
+        context.round_scores,
     )
     return Response(
         file.body,
