@@ -17,7 +17,13 @@ from sqlalchemy.orm import Session as DbSession
 
 from groupwise.storage.errors import NotFoundError, check_text
 from groupwise.storage.models import RoundRow, SessionRow, utcnow
-from groupwise.storage.phases import FINISHED, PREPARING, ROUND_PREPARING, WORK_PHASES
+from groupwise.storage.phases import (
+    FINISHED,
+    PREPARING,
+    READY,
+    ROUND_PREPARING,
+    WORK_PHASES,
+)
 from groupwise.storage.settings import LIBRARY, SessionSettings
 
 MODES = ("groupwise", "pairwise")
@@ -144,6 +150,16 @@ def worker_sessions(s: DbSession) -> list[SessionRow]:
     """Sessions that wait for the app's training worker, the longest-waiting first (a
     session driven by a user's program through `WebTeacher` never does)."""
     return [row for row in sessions_in(s, WORK_PHASES) if row.settings.get("driver") != LIBRARY]
+
+
+def training_open_rounds(s: DbSession) -> list[SessionRow]:
+    """Open rounds the app's worker trains while the person compares (``training:
+    "continuous"``), the longest-waiting first."""
+    return [
+        row
+        for row in sessions_in(s, (READY,))
+        if row.settings.get("driver") != LIBRARY and settings_of(row).training == "continuous"
+    ]
 
 
 def touch(session: SessionRow, now: datetime | None = None) -> None:

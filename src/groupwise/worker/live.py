@@ -111,40 +111,45 @@ class LiveSessions:
         round ends (its training job then tries once more and fails visibly if it must)."""
 
     def step(self) -> bool:
-        """One slice of the open continuous session whose turn it is; False when none is
-        open (the worker then sleeps)."""
+        """One slice of training for the open continuous session whose turn it is (a session
+        with nothing to learn from yet passes its turn on); False when none trained (the
+        worker then sleeps)."""
         open_jobs, ending = self._continuous_sessions()
         jobs = [job for job in open_jobs if self._broken.get(job.session_id) != job.round]
         # a round just ended keeps its run for the training job
         for stale in set(self._live) - {job.session_id for job in jobs} - ending:
             self._live.pop(stale).run.close()
-        if not jobs:
-            return False
-        job = min(jobs, key=lambda j: self._turns.get(j.session_id, -1))
-        self._turn += 1
-        self._turns[job.session_id] = self._turn
-        tick = time.perf_counter()
-        try:
-            self._slice(job)
-        except Exception:
-            log.exception(
-                "session %s: continuous training of round %d failed", job.session_id, job.round
-            )
-            self._broken[job.session_id] = job.round
-            if (training := self._live.pop(job.session_id, None)) is not None:
-                training.run.close()
-        if (took := time.perf_counter() - tick) > SLOW_SLICE_S:
-            log.info("session %s: a slice took %.1f s", job.session_id, took)
-        return True
+        for job in sorted(jobs, key=lambda j: self._turns.get(j.session_id, -1)):
+            self._turn += 1
+            self._turns[job.session_id] = self._turn
+            tick = time.perf_counter()
+            try:
+                trained = self._slice(job)
+            except Exception:
+                log.exception(
+                    "session %s: continuous training of round %d failed",
+                    job.session_id,
+                    job.round,
+                )
+                self._broken[job.session_id] = job.round
+                if (training := self._live.pop(job.session_id, None)) is not None:
+                    training.run.close()
+                return True
+            if (took := time.perf_counter() - tick) > SLOW_SLICE_S:
+                log.info("session %s: a slice took %.1f s", job.session_id, took)
+            if trained:
+                return True
+        return False
 
-    def _slice(self, job: Job) -> None:
+    def _slice(self, job: Job) -> bool:
+        """Refit when due and train one rollout; False when the round has no pairs yet."""
         training = self._training(job)
         with self.db.read() as s:
             keyed = round_judgements(s, job.session_id, job.round)
         refitted = training.live.update(keyed, time.monotonic())
         run = training.run
         if not len(run.dataset):  # PPO starts with the round's first pairs
-            return
+            return False
         if refitted or training.evaluated_s is None:
             self._point(training, evaluate=training.evaluated_s is None)
         tick = time.perf_counter()
@@ -157,6 +162,7 @@ class LiveSessions:
             run.save_live(job.round)
             training.checkpointed = time.monotonic()
         self._stage(job, training)
+        return True
 
     def _stage(self, job: Job, training: LiveTraining) -> None:
         """Prepare the next round ahead once the round trained `stage_after_s`: from a

@@ -8,7 +8,9 @@ a thread, so it never blocks the event loop). Each check:
    queued behind them stay queued;
 2. closes rounds whose time budget is used up (the timer is also checked on every read);
 3. starts a worker when there is work and none is running, e.g. after `POST /retry`
-   re-queued a failed step, or at startup for sessions a previous server left mid-step.
+   re-queued a failed step, at startup for sessions a previous server left mid-step, or
+   for an open round that trains continuously (a killed worker's training resumes from
+   its live checkpoint at once, not when the round ends).
 """
 
 import asyncio
@@ -24,7 +26,7 @@ from pathlib import Path
 from groupwise.storage import Database
 from groupwise.storage.lifecycle import close_if_due, mark_failed
 from groupwise.storage.phases import READY
-from groupwise.storage.sessions import sessions_in, worker_sessions
+from groupwise.storage.sessions import sessions_in, training_open_rounds, worker_sessions
 from groupwise.storage.timer import round_due
 from groupwise.worker.process import THREAD_ENV, kill_group, worker_main
 
@@ -156,5 +158,7 @@ class Supervisor:
                 close_if_due(s, session_id)
 
     def _has_work(self) -> bool:
+        """A session waits for a job, or an open round trains continuously (after a killed
+        worker, its training resumes without waiting for the round's end)."""
         with self.db.read() as s:
-            return bool(worker_sessions(s))
+            return bool(worker_sessions(s)) or bool(training_open_rounds(s))

@@ -119,3 +119,39 @@ def test_a_killed_worker_fails_the_session_and_retry_recovers(serve):
     server.wait_for("ready", 0)
     new_pid = httpx.get(f"{server.url}/api/health").json()["worker_pid"]
     assert new_pid is not None and new_pid != pid
+
+
+def test_a_worker_killed_mid_training_resumes_while_the_round_is_open(serve):
+    """A continuous session's worker killed while the person compares: the supervisor starts
+    another at once (the open round is work), which trains on from the checkpoint; the
+    session never fails and the round stays open."""
+    server = serve("--env", "GridWorld", *TINY_FLAGS, settings={**TINY_SETTINGS})
+    server.wait_for("ready", 0)
+    with server.client() as http:
+        answer = http.post(
+            f"/api/sessions/{server.session}/judgements",
+            json=judgement(0, ["b0", "b1"], ["b2"]),
+        )
+        assert answer.status_code == 201, answer.text
+
+        def steps() -> int:
+            points = http.get(f"/api/sessions/{server.session}/training").json()["points"]
+            return max((p["ppo_steps"] for p in points), default=0)
+
+        wait_until(lambda: steps() > 0, timeout=120)  # PPO trains while the round is open
+        pid = http.get("/api/health").json()["worker_pid"]
+        os.kill(pid, signal.SIGKILL)
+        restarted = wait_until(
+            lambda: (p := http.get("/api/health").json()["worker_pid"]) not in (None, pid) and p,
+            timeout=60,
+        )
+        assert restarted != pid
+        before = len(http.get(f"/api/sessions/{server.session}/training").json()["points"])
+        wait_until(  # the new worker refits and evaluates: new points of the curve
+            lambda: (
+                len(http.get(f"/api/sessions/{server.session}/training").json()["points"]) > before
+            ),
+            timeout=120,
+        )
+        state = server.state()
+        assert (state["phase"], state["round"], state["error"]) == ("ready", 0, None)

@@ -22,9 +22,11 @@ def test_the_worker_trains_while_the_round_is_open_and_ends_it_on_that_run(clien
     sid = new_session(client, training="continuous")["id"]
     run_worker_once(client)  # round 0 ready
     worker = _worker(client)
-    assert worker.train_live()  # an open continuous round: a slice, but no pairs yet …
+    # an open continuous round with no pairs yet: no PPO, and the worker may sleep (it
+    # used to report work done and poll the database in a tight loop)
+    assert not worker.train_live()
     training = worker.live._live[sid]
-    assert training.run.agent.num_timesteps == 0  # … so no PPO
+    assert training.run.agent.num_timesteps == 0
     post_judgement(client, sid, ["b0", "b1"], ["b2"])
     for _ in range(3):
         assert worker.train_live()
@@ -87,3 +89,16 @@ def test_sessions_take_turns_and_a_job_goes_first(client):
         assert worker.work_once()
     steps = {sid: worker.live._live[sid].run.agent.num_timesteps for sid in (first, second)}
     assert steps == {first: 3 * ROLLOUT, second: 2 * ROLLOUT}  # turn by turn
+
+
+def test_a_session_with_nothing_to_learn_from_passes_its_turn(client):
+    idle = new_session(client, training="continuous")["id"]
+    run_worker_once(client)
+    busy = new_session(client, training="continuous")["id"]
+    run_worker_once(client)
+    post_judgement(client, busy, ["b0", "b1"], ["b2"])
+    worker = _worker(client)
+    for _ in range(2):
+        assert worker.train_live()  # both slices go to the session with pairs
+    assert worker.live._live[busy].run.agent.num_timesteps == 2 * ROLLOUT
+    assert worker.live._live[idle].run.agent.num_timesteps == 0
