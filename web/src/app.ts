@@ -183,10 +183,14 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
             videoUrl: api.agentVideoUrl(s.id, agent.round),
             downloadUrl: api.agentZipUrl(s.id, agent.round),
             exportUrl: progress.exportUrl,
+            roundVideoUrl: (round) => api.agentRoundVideoUrl(s.id, round),
             busy: st.busy,
             training: st.training?.sid === s.id ? st.training.points : [],
           },
-          { continueTraining: (body) => void controller.continueTraining(body) },
+          {
+            continueTraining: (body) => void controller.continueTraining(body),
+            pickAgent: (round) => controller.pickAgent(round),
+          },
         );
       }
       const retry = { retry: () => void controller.control("retry") };

@@ -14,6 +14,7 @@ import { createPageSettings } from "./effects/page-settings";
 import { createPairwiseFlow } from "./effects/pairwise-flow";
 import { createRoundSync } from "./effects/round";
 import { createSessions } from "./effects/sessions";
+import { createTakeaway } from "./effects/takeaway";
 
 export interface ControllerOptions {
   annotator?: string;
@@ -41,6 +42,7 @@ export function createController(store: Store, api: Api, options: ControllerOpti
   const sessions = createSessions(ctx, events, round, setUrl, pageSettings);
   const answers = createAnswers(ctx, annotator, groups, pairwise);
   const controls = createControls(ctx, round);
+  const takeaway = createTakeaway(ctx);
 
   return {
     boot: sessions.boot,
@@ -57,6 +59,7 @@ export function createController(store: Store, api: Api, options: ControllerOpti
     control: controls.control,
     finish: controls.finish,
     continueTraining: controls.continueTraining,
+    pickAgent: takeaway.pick,
     lastJudgement: answers.lastJudgement,
   };
 }

@@ -2,8 +2,9 @@
  * The finished session: the final agent's video, its evaluation (a target env's episode
  * score in the target's unit, with its threshold, and the per-step sum beside it; else the
  * true return) and that score per round as a small chart, the downloads (the agent as one
- * zip, the judgements), and "Continue training" (more PPO steps on the frozen reward model,
- * or more rounds).
+ * zip, the judgements), the choice of the agent to take away among the rounds' agents
+ * (`views/takeaway.ts`), and "Continue training" (more PPO steps on the frozen reward
+ * model, or more rounds).
  */
 import type { AgentOut, ContinueIn, SessionState, TrainingPoint } from "../api";
 import { plural } from "../lib/format";
@@ -16,7 +17,9 @@ import {
   scoreLines,
   scoreText,
 } from "../lib/results";
+import { choiceText } from "../lib/takeaway";
 import { h, memo, s, text } from "./dom";
+import { renderTakeaway } from "./takeaway";
 import { drawCurve } from "./training";
 
 export interface ResultsData {
@@ -25,6 +28,8 @@ export interface ResultsData {
   videoUrl: string;
   downloadUrl: string;
   exportUrl: string;
+  /** Round `round`'s clip (`GET …/agent/rounds/{round}.mp4`). */
+  roundVideoUrl(round: number): string;
   busy: boolean;
   /** The session's learning curve (`lib/training.ts`), drawn under the rounds' chart. */
   training: readonly TrainingPoint[];
@@ -32,9 +37,13 @@ export interface ResultsData {
 
 export interface ResultsHandlers {
   continueTraining(body: ContinueIn): void;
+  /** Round `round`'s agent becomes the download: resolves to the new agent, or rejects with
+   * an error whose message says why not. */
+  pickAgent(round: number): Promise<AgentOut>;
 }
 
 interface View {
+  panelSub: HTMLElement;
   title: HTMLElement;
   summary: HTMLElement;
   score: HTMLElement;
@@ -51,12 +60,19 @@ interface View {
   learningChart: SVGSVGElement;
   /** The points the learning chart shows (redrawn when they change). */
   learned: readonly TrainingPoint[] | null;
+  takeaway: HTMLElement;
+  /** A pick on its way to the server, or why the last one failed. */
+  pick: { pending: number | null; error: string | null };
+  /** What the choice was last drawn from (redrawn when a pick settles). */
+  last: ResultsData | null;
   download: HTMLAnchorElement;
+  hint: HTMLElement;
   exportLink: HTMLAnchorElement;
   kind: HTMLSelectElement;
   amount: HTMLInputElement;
   submit: HTMLButtonElement;
-  /** The agent the view shows ("sid:round"); a new one resets the form and the video. */
+  /** The agent the view shows ("sid:session round:agent round"): another one resets the
+   * video and the chart; another session round (it trained again) resets the forms too. */
   shown: string;
   handlers: ResultsHandlers | null;
 }
@@ -69,16 +85,24 @@ export function renderResults(element: HTMLElement, data: ResultsData, handlers:
   const view = memo(views, element, () => build(element));
   view.handlers = handlers;
   const { session: st, agent } = data;
-  const key = `${st.id}:${agent.round}`;
+  const key = `${st.id}:${st.round}:${agent.round}`;
   if (view.shown !== key) {
+    const sameSession = view.shown.startsWith(`${st.id}:${st.round}:`);
     view.shown = key;
     view.video.src = data.videoUrl;
     view.download.href = data.downloadUrl;
-    view.kind.value = "steps";
-    view.amount.value = String(defaultSteps(st));
-    view.amount.dataset.steps = view.amount.value;
+    view.download.setAttribute("download", `groupwise-agent-${st.id}-round-${agent.round}.zip`);
+    if (!sameSession) {
+      // a new agent, not another round's of the same session: the forms start over
+      view.kind.value = "steps";
+      view.amount.value = String(defaultSteps(st));
+      view.amount.dataset.steps = view.amount.value;
+      view.pick = { pending: null, error: null };
+    }
     drawChart(view.chart, agent);
   }
+  view.last = data;
+  drawTakeaway(view, agent);
   view.exportLink.href = data.exportUrl;
   view.learning.hidden = !data.training.some((p) => p.true_return !== null);
   // a target env's return is the sum of its per-step scores (agent.measure says so)
@@ -90,13 +114,14 @@ export function renderResults(element: HTMLElement, data: ResultsData, handlers:
   const c = st.counts;
   const frozen = agent.rounds.filter((r) => !r.feedback);
   const feedback = agent.rounds.filter((r) => r.feedback);
+  text(view.panelSub, choiceText(agent).replace("Chosen: r", "R"));
   text(view.title, "Session finished: your agent");
   text(
     view.summary,
     `${plural(c.comparisons_total, "comparison")} and ${plural(c.pairs_total, "preference pair")} ` +
       `over ${plural(feedback.length, "round")} of feedback, then ` +
       `${frozen.length ? plural(frozen.length, "round") : "no round"} of PPO on the frozen reward model: ` +
-      `${agent.env_steps.toLocaleString("en")} PPO steps in all.`,
+      `${(agent.rounds.at(-1)?.env_steps ?? agent.env_steps).toLocaleString("en")} PPO steps in all.`,
   );
   const v = agent.video;
   const t = agent.target;
@@ -134,10 +159,51 @@ export function renderResults(element: HTMLElement, data: ResultsData, handlers:
     view.chartNote,
     series.rounds.some((r) => r.value === null)
       ? "Rounds without a point were not evaluated (eval_episodes = 0)."
-      : "Filled: after a round of feedback; hollow: PPO on the frozen reward model only." +
+      : "Filled: after a round of feedback; hollow: PPO on the frozen reward model only; " +
+          "ringed: the agent you take." +
           (series.reference === null ? "" : " Dashed: the threshold of success."),
   );
   view.submit.disabled = data.busy;
+  view.hint.replaceChildren(
+    `The download is round ${agent.round}'s agent. Load it in Python with `,
+    h("code", {}, "groupwise.load_agent(path)"),
+    "; its README says how.",
+  );
+}
+
+function drawTakeaway(view: View, agent: AgentOut): void {
+  const data = view.last;
+  if (!data) return;
+  renderTakeaway(
+    view.takeaway,
+    {
+      agent,
+      clipUrl: data.roundVideoUrl,
+      pending: view.pick.pending,
+      busy: data.busy,
+      error: view.pick.error,
+    },
+    { pick: (round) => pick(view, agent, round) },
+  );
+}
+
+/** Sends a pick (one at a time); draws the choice when it settles, or the reason it failed. */
+function pick(view: View, agent: AgentOut, round: number): void {
+  const handlers = view.handlers;
+  if (!handlers || view.pick.pending !== null) return;
+  view.pick = { pending: round, error: null };
+  drawTakeaway(view, agent);
+  handlers.pickAgent(round).then(
+    (picked) => {
+      view.pick = { pending: null, error: null };
+      drawTakeaway(view, picked);
+    },
+    (err: unknown) => {
+      const why = err instanceof Error ? err.message : String(err);
+      view.pick = { pending: null, error: `Round ${round}'s agent was not taken: ${why}` };
+      drawTakeaway(view, view.last?.agent ?? agent);
+    },
+  );
 }
 
 /** The steps "Continue training" offers first: as many as the session's final phase. */
@@ -169,6 +235,9 @@ function drawChart(svg: SVGSVGElement, agent: AgentOut): void {
   if (g.path) children.push(s("path", { class: "line", d: g.path }));
   for (const p of g.points) {
     if (p.y === null) continue;
+    if (p.round === agent.round) {
+      children.push(s("circle", { class: "chosen-ring", cx: p.x, cy: p.y, r: 8.5, "aria-hidden": "true" }));
+    }
     const label =
       `round ${p.round}${p.feedback ? "" : " (PPO only)"}: ${series.name} ` + `${formatValue(p.value ?? 0)}`;
     children.push(
@@ -212,7 +281,7 @@ function build(element: HTMLElement): View {
     loop: true,
     playsinline: true,
     preload: "auto",
-    "aria-label": "The final agent: one greedy episode",
+    "aria-label": "The agent you take: one greedy episode",
   });
   video.muted = true; // the attribute alone does not allow autoplay everywhere
   const caption = h("figcaption", { class: "agent-caption num" });
@@ -231,7 +300,11 @@ function build(element: HTMLElement): View {
     learningChart,
     h("p", { class: "chart-note muted" }, "The greedy policy, measured while it trained (minutes:seconds since the first point)."),
   );
-  const download = h("a", { class: "button primary", download: "" }, "Download agent (.zip)");
+  const download = h(
+    "a",
+    { class: "button primary", download: "", "aria-describedby": "results-hint" },
+    "Download agent (.zip)",
+  );
   const exportLink = h("a", { class: "button", download: "" }, "Download judgements (JSONL)");
   const kind = h(
     "select",
@@ -259,12 +332,15 @@ function build(element: HTMLElement): View {
     ),
     h("div", { class: "continue-row" }, amount, kind, submit),
   );
+  const panelSub = h("span", { class: "panel-sub" });
+  const takeaway = h("section", { class: "results-takeaway" });
+  const hint = h("p", { class: "results-hint muted", id: "results-hint" });
   element.classList.add("results");
   element.replaceChildren(
     h(
       "div",
       { class: "panel results-video" },
-      h("div", { class: "panel-head" }, h("h2", { class: "panel-title" }, "Final agent")),
+      h("div", { class: "panel-head" }, h("h2", { class: "panel-title" }, "Your agent"), panelSub),
       h("figure", { class: "agent-figure" }, video, caption),
     ),
     h(
@@ -278,19 +354,15 @@ function build(element: HTMLElement): View {
         score,
         h("section", { class: "results-chart" }, chartTitle, chart, chartNote),
         learning,
+        takeaway,
         h("div", { class: "results-actions" }, download, exportLink),
-        h(
-          "p",
-          { class: "results-hint muted" },
-          "Load the download in Python with ",
-          h("code", {}, "groupwise.load_agent(path)"),
-          "; its README says how.",
-        ),
+        hint,
         form,
       ),
     ),
   );
   const view: View = {
+    panelSub,
     title,
     summary,
     score,
@@ -306,7 +378,11 @@ function build(element: HTMLElement): View {
     learning,
     learningChart,
     learned: null,
+    takeaway,
+    pick: { pending: null, error: null },
+    last: null,
     download,
+    hint,
     exportLink,
     kind,
     amount,
