@@ -71,6 +71,13 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
     serve.add_argument("--token", help="access token (generated for a non-loopback host)")
     serve.add_argument("--session", help="serve this session instead of the newest unfinished")
     serve.add_argument("--new", action="store_true", help="always start a new session")
+    serve.add_argument(
+        "--ray",
+        metavar="ADDRESS",
+        help="render clips on demand as tasks on this Ray cluster ('auto', 'ray://HOST:10001', "
+        "'local': a Ray of this machine) instead of processes of the server; every node needs "
+        "groupwise installed",
+    )
     for name, kind in SETTING_FLAGS.items():
         serve.add_argument(
             f"--{name.replace('_', '-')}",
@@ -201,6 +208,33 @@ def _check_same_settings(
         )
 
 
+RAY_CONNECT_S = 5.0
+"""Seconds `--ray HOST:PORT` waits for the Ray head to accept a connection."""
+
+
+def _join_ray(address: str) -> None:
+    """Connect to the Ray cluster that renders clips now, so a wrong address is a usage
+    error before the server starts (`clips.on_demand.RayBackend` then uses the connection)."""
+    import logging
+
+    try:
+        import ray
+    except ImportError:
+        raise UsageError("--ray: Ray is not installed (pip install groupwise[ray])") from None
+    host, _, port = address.rpartition(":")
+    if host and port.isdigit() and "://" not in address:
+        # Ray retries an unreachable head for minutes before it gives up
+        try:
+            socket.create_connection((host, int(port)), timeout=RAY_CONNECT_S).close()
+        except OSError as error:
+            reason = error.strerror or error
+            raise UsageError(f"--ray {address}: no Ray head answers there ({reason})") from None
+    try:
+        ray.init(address=address, logging_level=logging.WARNING, log_to_driver=False)
+    except Exception as error:  # ConnectionError, ValueError, RuntimeError: Ray says which
+        raise UsageError(f"--ray {address}: cannot join the Ray cluster: {error}") from None
+
+
 def run(args: argparse.Namespace) -> int:
     import uvicorn
     from pydantic import ValidationError
@@ -221,6 +255,7 @@ def run(args: argparse.Namespace) -> int:
         database_url=args.db,
         token=token,
         allowed_hosts=LOOPBACK_HOSTS if loopback else None,
+        ray_address=args.ray,
     )
     try:
         chosen = choose_session(
@@ -238,6 +273,8 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"{flag}: {first['msg']}") from None
     except StorageError as error:  # unknown env or session
         raise UsageError(str(error)) from None
+    if args.ray is not None:
+        _join_ray(args.ray)
     sock = _bind(args.host, args.port)
     port = sock.getsockname()[1]
     shown = f"[{args.host}]" if ":" in args.host else args.host
