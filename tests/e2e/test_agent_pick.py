@@ -3,7 +3,7 @@ answered and finished, the results page lists each round's agent with its clip (
 pointed at) and its true return; a refused pick shows the server's reason; "Take this agent"
 on round 0 (from the keyboard) makes round 0 the download: `GET …/agent`, the page's choice,
 video and caption, and the zip's name and contents say round 0.
-Screenshot: agent-pick.png (1366 × 768)."""
+Screenshots: agent-pick-choices.png, agent-pick.png (1366 × 768)."""
 
 import re
 import time
@@ -91,6 +91,7 @@ def test_the_person_takes_round_0s_agent(
     expect(card0).to_contain_text(re.compile(r"True return -?[\d.]+"))
     expect(picker.locator('li[data-round="2"]')).to_contain_text("✓ Chosen")
     expect(picker.get_by_role("button", name="Take this agent")).to_have_count(2)
+    shot(page, "agent-pick-choices")
 
     # the clips are still until pointed at, and then only that one plays
     clips = picker.locator("video.takeaway-video")
