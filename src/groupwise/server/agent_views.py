@@ -3,6 +3,7 @@ final agent (its summary, video and download; `groupwise.run.final` writes them)
 
 from dataclasses import asdict
 from pathlib import Path
+from typing import cast
 
 from groupwise.run.agent_package import (
     AGENT_VIDEO,
@@ -109,7 +110,7 @@ def _agent_out(summary: AgentSummary, directory: Path) -> schemas.AgentOut:
             )
             for r in data["rounds"]
         ],
-        chosen_by=summary.chosen_by,
+        chosen_by=cast(schemas.ChosenBy, summary.chosen_by),
     )
 
 

@@ -45,6 +45,10 @@ class AppConfig:
     """How often the supervisor checks the worker and the round timers."""
     worker_poll_s: float = 0.25
     """How often an idle worker polls the database for work."""
+    training_workers: int = 1
+    """Training worker processes (``serve --training-workers``); each serves a share of the
+    sessions (`worker.process.shard_of`), so on a lab server several sessions train on
+    different cores. One on a 2-core machine: PPO has one core, the server the other."""
     clip_workers: int = 2
     """Processes of the server that render clips on demand (`clips.on_demand`)."""
     ray_address: str | None = None

@@ -87,6 +87,7 @@ class AppContext:
                     config.data_dir,
                     worker_poll_s=config.worker_poll_s,
                     supervisor_poll_s=config.supervisor_poll_s,
+                    processes=config.training_workers,
                 ),
             ),
         )

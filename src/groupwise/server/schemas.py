@@ -389,7 +389,7 @@ class AgentRound(_Out):
     )
     checkpoint: bool = Field(
         default=False,
-        description="the round's checkpoint is there: the person may pick it as the take-away agent",
+        description="the round's checkpoint is there: the person may pick it as take-away agent",
     )
 
 
@@ -423,6 +423,10 @@ class AgentTarget(_Out):
     stretch: float = Field(description="the more ambitious level")
 
 
+ChosenBy = Literal["last", "teacher", "person"]
+"""Who chose the take-away agent's round (`AgentOut.chosen_by`)."""
+
+
 class AgentOut(_Out):
     """The finished session's agent: what the download holds and how it came about."""
 
@@ -443,7 +447,7 @@ class AgentOut(_Out):
     target_score_std: float | None
     video: AgentVideo | None
     rounds: list[AgentRound]
-    chosen_by: Literal["last", "teacher", "person"] = Field(
+    chosen_by: ChosenBy = Field(
         default="last",
         description='who chose `round`: "last" (nobody: the last round, the default), "teacher" '
         '(a simulated teacher, headless) or "person" (PUT …/agent/round)',
@@ -504,3 +508,7 @@ class RoundEvent(_Out):
 class Health(_Out):
     status: Literal["ok"] = "ok"
     worker_pid: int | None = Field(description="the training worker's process id, if running")
+    worker_pids: list[int] = Field(
+        default_factory=list,
+        description="every running training worker's process id (`serve --training-workers`)",
+    )

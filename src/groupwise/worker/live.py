@@ -33,6 +33,7 @@ import logging
 import math
 import shutil
 import time
+from collections.abc import Callable
 from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
@@ -97,9 +98,13 @@ class LiveSessions:
     """The worker's continuous rounds, one `LiveTraining` per open session (module
     docstring)."""
 
-    def __init__(self, db: Database, data_dir: Path) -> None:
+    def __init__(
+        self, db: Database, data_dir: Path, serves: Callable[[str], bool] = lambda _: True
+    ) -> None:
         self.db = db
         self.data_dir = data_dir
+        self.serves = serves
+        """Whether this worker serves a session (`process.Worker.serves`)."""
         self._live: dict[str, LiveTraining] = {}
         self._turns: dict[str, int] = {}
         self._turn = 0
@@ -329,7 +334,9 @@ class LiveSessions:
             continuous = [
                 row
                 for row in rows
-                if settings[row.id].training == CONTINUOUS and settings[row.id].driver == "app"
+                if settings[row.id].training == CONTINUOUS
+                and settings[row.id].driver == "app"
+                and self.serves(row.id)
             ]
             jobs = [
                 Job(

@@ -23,6 +23,7 @@ import multiprocessing
 import os
 import signal
 import time
+import zlib
 from pathlib import Path
 from typing import TYPE_CHECKING
 
@@ -42,8 +43,21 @@ THREAD_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS
 """Set in the environment the worker is spawned with (see the module docstring)."""
 
 
-def worker_main(database_url: str, data_dir: str, poll_s: float, log_level: int) -> None:
-    """The worker process's entry point: poll for jobs until the parent process is gone."""
+def shard_of(session_id: str, count: int) -> int:
+    """Which of `count` worker processes serves a session: a stable hash of its id, the
+    same in every process and after a restart."""
+    return zlib.crc32(session_id.encode()) % count
+
+
+def worker_main(
+    database_url: str,
+    data_dir: str,
+    poll_s: float,
+    log_level: int,
+    shard: tuple[int, int] = (0, 1),
+) -> None:
+    """The worker process's entry point: poll for jobs until the parent process is gone.
+    `shard` (index, count): this worker serves the sessions `shard_of` gives its index."""
     os.setpgrp()  # see the module docstring
     # SIGTERM (the supervisor stopping it) unwinds the job, so the render pool shuts down
     # cleanly; the step re-runs when a server starts again.
@@ -56,7 +70,7 @@ def worker_main(database_url: str, data_dir: str, poll_s: float, log_level: int)
     )
     logging.getLogger("groupwise").setLevel(log_level)
     db = Database(database_url, pool_size=2)
-    Worker(db, Path(data_dir), poll_s).run()
+    Worker(db, Path(data_dir), poll_s, shard).run()
 
 
 def _stop(signum: int, frame: object) -> None:
@@ -85,10 +99,13 @@ def kill_group(pid: int) -> None:
 class Worker:
     """Runs jobs one at a time; the render pool is kept across rounds."""
 
-    def __init__(self, db: Database, data_dir: Path, poll_s: float) -> None:
+    def __init__(
+        self, db: Database, data_dir: Path, poll_s: float, shard: tuple[int, int] = (0, 1)
+    ) -> None:
         self.db = db
         self.data_dir = data_dir
         self.poll_s = poll_s
+        self.shard = shard
         self._render: dict[int, RenderPool] = {}
         self._live: LiveSessions | None = None
 
@@ -99,11 +116,21 @@ class Worker:
         if self._live is None:
             from groupwise.worker.live import LiveSessions
 
-            self._live = LiveSessions(self.db, self.data_dir)
+            self._live = LiveSessions(self.db, self.data_dir, self.serves)
         return self._live
 
+    def serves(self, session_id: str) -> bool:
+        """Whether this worker serves the session (its `shard`)."""
+        index, count = self.shard
+        return count == 1 or shard_of(session_id, count) == index
+
     def run(self) -> None:
-        log.info("training worker %d started", os.getpid())
+        index, count = self.shard
+        log.info(
+            "training worker %d started%s",
+            os.getpid(),
+            f" (shard {index} of {count})" if count > 1 else "",
+        )
         try:
             while _parent_alive():
                 if not self.work_once():
@@ -124,7 +151,7 @@ class Worker:
         from groupwise.worker import jobs
 
         with self.db.read() as s:
-            waiting = [row.id for row in worker_sessions(s)]
+            waiting = [row.id for row in worker_sessions(s) if self.serves(row.id)]
         for session_id in waiting:
             job = jobs.job_of(self.db, session_id)
             if job is not None:

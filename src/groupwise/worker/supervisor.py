@@ -1,4 +1,8 @@
-"""The server's side of the training worker: start it, watch it, report its death.
+"""The server's side of the training workers: start them, watch them, report a death.
+
+One worker process by default; with `WorkerConfig.processes` N, worker k serves the
+sessions whose id `process.shard_of` maps to k (a stable hash), and each check below runs
+for every shard.
 
 `Supervisor.check()` runs every `WorkerConfig.supervisor_poll_s` in the app's lifespan task (on
 a thread, so it never blocks the event loop). Each check:
@@ -28,7 +32,7 @@ from groupwise.storage.lifecycle import close_if_due, mark_failed
 from groupwise.storage.phases import READY
 from groupwise.storage.sessions import sessions_in, training_open_rounds, worker_sessions
 from groupwise.storage.timer import round_due
-from groupwise.worker.process import THREAD_ENV, kill_group, worker_main
+from groupwise.worker.process import THREAD_ENV, kill_group, shard_of, worker_main
 
 log = logging.getLogger(__name__)
 
@@ -48,40 +52,53 @@ class WorkerConfig:
     """How often an idle worker reads the database for work."""
     supervisor_poll_s: float = 0.25
     """How often the server checks that its worker lives (and starts one when work waits)."""
+    processes: int = 1
+    """Training worker processes (``serve --training-workers``): each serves the sessions
+    `process.shard_of` gives it, so sessions on different workers train on different
+    cores; the sessions of one worker take turns."""
 
 
 class Supervisor:
-    """Owns the worker process. Thread-safe: checks run on worker threads of the app."""
+    """Owns the worker processes (`WorkerConfig.processes`, each serving a shard of the
+    sessions). Thread-safe: checks run on worker threads of the app."""
 
     def __init__(self, db: Database, config: WorkerConfig) -> None:
+        if config.processes < 1:
+            raise ValueError(f"processes must be >= 1, got {config.processes}")
         self.db = db
         self.config = config
         self._lock = threading.Lock()
-        self._process: BaseProcess | None = None
+        self._processes: dict[int, BaseProcess] = {}
         self._stopping = False
         self._loop: asyncio.AbstractEventLoop | None = None
         self._wake: asyncio.Event | None = None
 
     @property
+    def worker_pids(self) -> list[int]:
+        """The running workers' process ids, by shard."""
+        running = sorted(self._processes.items())
+        return [p.pid for _, p in running if p.pid is not None and p.is_alive()]
+
+    @property
     def worker_pid(self) -> int | None:
-        """The running worker's process id (None when none runs)."""
-        process = self._process
-        return process.pid if process is not None and process.is_alive() else None
+        """A running worker's process id (the first shard's; None when none runs)."""
+        return next(iter(self.worker_pids), None)
 
     def check(self) -> None:
-        """One round of supervision (module docstring)."""
+        """One round of supervision (module docstring), for every shard."""
         with self._lock:
             if self._stopping:
                 return
-            process = self._process
-            if process is not None and not process.is_alive():
-                self._process = None
-                if process.pid is not None:
-                    kill_group(process.pid)  # render processes it may have left
-                self._report_death(process.exitcode)
+            for shard, process in list(self._processes.items()):
+                if not process.is_alive():
+                    del self._processes[shard]
+                    if process.pid is not None:
+                        kill_group(process.pid)  # render processes it may have left
+                    self._report_death(shard, process.exitcode)
             self._close_due_rounds()
-            if self._process is None and self._has_work():
-                self._start()
+            for shard in self._waiting_shards():
+                if shard not in self._processes:
+                    self._start(shard)
 
     async def run(self) -> None:
         """Check every `supervisor_poll_s` (or at once when woken) until cancelled."""
@@ -104,19 +121,19 @@ class Supervisor:
             loop.call_soon_threadsafe(wake.set)
 
     def stop(self, timeout_s: float = 5.0) -> None:
-        """Stop the worker (on server shutdown); its step re-runs on the next start."""
+        """Stop the workers (on server shutdown); their steps re-run on the next start."""
         with self._lock:
             self._stopping = True
-            process, self._process = self._process, None
-        if process is None:
-            return
-        process.terminate()
-        process.join(timeout_s)
-        if process.pid is not None:
-            kill_group(process.pid)  # the worker if it is still alive, and its render processes
-        process.join(timeout_s)
+            processes, self._processes = list(self._processes.values()), {}
+        for process in processes:
+            process.terminate()
+        for process in processes:
+            process.join(timeout_s)
+            if process.pid is not None:
+                kill_group(process.pid)  # the worker if still alive, and its render processes
+            process.join(timeout_s)
 
-    def _start(self) -> None:
+    def _start(self, shard: int) -> None:
         context = multiprocessing.get_context("spawn")
         process = context.Process(
             target=worker_main,
@@ -125,8 +142,9 @@ class Supervisor:
                 str(self.config.data_dir),
                 self.config.worker_poll_s,
                 logging.getLogger("groupwise").getEffectiveLevel(),
+                (shard, self.config.processes),
             ),
-            name="groupwise-worker",
+            name=f"groupwise-worker-{shard}",
             daemon=False,  # it starts render processes of its own
         )
         saved = {key: os.environ.get(key) for key in THREAD_ENV}
@@ -139,15 +157,15 @@ class Supervisor:
                     os.environ.pop(key, None)
                 else:
                     os.environ[key] = value
-        self._process = process
-        log.info("training worker started (pid %s)", process.pid)
+        self._processes[shard] = process
+        log.info("training worker %d started (pid %s)", shard, process.pid)
 
-    def _report_death(self, exit_code: int | None) -> None:
+    def _report_death(self, shard: int, exit_code: int | None) -> None:
         message = f"the training worker stopped (exit code {exit_code})"
-        log.error(message)
+        log.error("%s (shard %d)", message, shard)
         with self.db.write() as s:
             for session in worker_sessions(s):
-                if session.progress_phase != QUEUED:
+                if session.progress_phase != QUEUED and self._shard(session.id) == shard:
                     mark_failed(s, session.id, session.phase, message)
 
     def _close_due_rounds(self) -> None:
@@ -157,8 +175,13 @@ class Supervisor:
             with self.db.write() as s:
                 close_if_due(s, session_id)
 
-    def _has_work(self) -> bool:
-        """A session waits for a job, or an open round trains continuously (after a killed
-        worker, its training resumes without waiting for the round's end)."""
+    def _waiting_shards(self) -> set[int]:
+        """The shards with work: a session waits for a job, or an open round trains
+        continuously (after a killed worker, its training resumes without waiting for the
+        round's end)."""
         with self.db.read() as s:
-            return bool(worker_sessions(s)) or bool(training_open_rounds(s))
+            rows = worker_sessions(s) + training_open_rounds(s)
+            return {self._shard(row.id) for row in rows}
+
+    def _shard(self, session_id: str) -> int:
+        return shard_of(session_id, self.config.processes)

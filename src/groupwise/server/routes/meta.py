@@ -24,8 +24,9 @@ def list_envs() -> list[EnvOut]:
 
 @router.get("/health")
 def health(context: Context) -> Health:
-    """The server is up; the training worker's pid while it runs (None otherwise)."""
-    return Health(worker_pid=context.supervisor.worker_pid)
+    """The server is up; the training workers' pids while they run."""
+    supervisor = context.supervisor
+    return Health(worker_pid=supervisor.worker_pid, worker_pids=supervisor.worker_pids)
 
 
 _TARGETS_BY_ENV = {target.env: target for target in TARGETS.values()}
