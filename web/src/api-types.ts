@@ -54,7 +54,7 @@ export interface paths {
         };
         /**
          * List Sessions
-         * @description Every session, newest first.
+         * @description Every session, newest first (an annotator's: their own session).
          */
         get: operations["list_sessions_api_sessions_get"];
         put?: never;
@@ -214,6 +214,52 @@ export interface paths {
         patch?: never;
         trace?: never;
     };
+    "/api/sessions/{session_id}/annotators": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        /**
+         * Team
+         * @description The owner (id "owner") and every annotator: comparisons, pairs, time shown, and
+         *     their agreement with the others and with the reward model.
+         */
+        get: operations["team_api_sessions__session_id__annotators_get"];
+        put?: never;
+        /**
+         * Add
+         * @description Add an annotator: their token and their link, shown this once (409 for a name the
+         *     session has; the owner's).
+         */
+        post: operations["add_api_sessions__session_id__annotators_post"];
+        delete?: never;
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
+    "/api/sessions/{session_id}/annotators/{annotator_id}": {
+        parameters: {
+            query?: never;
+            header?: never;
+            path?: never;
+            cookie?: never;
+        };
+        get?: never;
+        put?: never;
+        post?: never;
+        /**
+         * Remove
+         * @description Remove an annotator: their token stops working (401), their judgements stay.
+         */
+        delete: operations["remove_api_sessions__session_id__annotators__annotator_id__delete"];
+        options?: never;
+        head?: never;
+        patch?: never;
+        trace?: never;
+    };
     "/api/sessions/{session_id}/continue": {
         parameters: {
             query?: never;
@@ -246,7 +292,7 @@ export interface paths {
         put?: never;
         /**
          * End Round
-         * @description End the open round now; training starts (409 unless a round is open).
+         * @description End the open round now; training starts (409 unless a round is open; the owner's).
          */
         post: operations["end_round_api_sessions__session_id__end_round_post"];
         delete?: never;
@@ -264,8 +310,8 @@ export interface paths {
         };
         /**
          * Events
-         * @description Server-sent events: `state`, `judgement`, `round`, `training`, and keep-alive
-         *     comments.
+         * @description Server-sent events: `state` (as the caller sees it), `judgement` (everyone's),
+         *     `round`, `training`, and keep-alive comments.
          */
         get: operations["events_api_sessions__session_id__events_get"];
         put?: never;
@@ -332,8 +378,8 @@ export interface paths {
         put?: never;
         /**
          * Submit
-         * @description Store a judgement and its pairs (committed before this answer). A retry with the
-         *     same client_id answers 200 with the stored judgement.
+         * @description Store the caller's judgement and its pairs (committed before this answer). A retry
+         *     with the same client_id answers 200 with the stored judgement.
          */
         post: operations["submit_api_sessions__session_id__judgements_post"];
         delete?: never;
@@ -354,7 +400,8 @@ export interface paths {
         post?: never;
         /**
          * Undo
-         * @description Undo a judgement of the open round (its pairs are removed).
+         * @description Undo the caller's judgement of the open round (its pairs are removed); 403 for
+         *     someone else's.
          */
         delete: operations["undo_api_sessions__session_id__judgements__judgement_id__delete"];
         options?: never;
@@ -371,7 +418,8 @@ export interface paths {
         };
         /**
          * Next Pair
-         * @description The next unanswered pair of the open round's queue and the one after it.
+         * @description The next unanswered pair of the open round's queue and the one after it, neither
+         *     leased to another annotator; in a shared session the first is leased to the caller.
          */
         get: operations["next_pair_api_sessions__session_id__pairwise_next_get"];
         put?: never;
@@ -413,7 +461,7 @@ export interface paths {
         put?: never;
         /**
          * Pause
-         * @description Pause the open round's timer (409 unless a round is open).
+         * @description Pause the open round's timer (409 unless a round is open; the owner's).
          */
         post: operations["pause_api_sessions__session_id__pause_post"];
         delete?: never;
@@ -433,7 +481,7 @@ export interface paths {
         put?: never;
         /**
          * Resume
-         * @description Restart the paused timer (409 unless a round is open).
+         * @description Restart the paused timer (409 unless a round is open; the owner's).
          */
         post: operations["resume_api_sessions__session_id__resume_post"];
         delete?: never;
@@ -453,7 +501,8 @@ export interface paths {
         put?: never;
         /**
          * Retry
-         * @description Re-queue the step that failed and restart the worker if needed (409 unless failed).
+         * @description Re-queue the step that failed and restart the worker if needed (409 unless failed;
+         *     the owner's).
          */
         post: operations["retry_api_sessions__session_id__retry_post"];
         delete?: never;
@@ -493,7 +542,9 @@ export interface paths {
         put?: never;
         /**
          * Next Suggestion
-         * @description The best group suggestion not answered yet and not excluded (null when none).
+         * @description The best group suggestion not answered yet, not excluded and not leased to another
+         *     annotator (null when none); in a shared session it is leased to the caller for the
+         *     session's `lease_s`.
          */
         post: operations["next_suggestion_api_sessions__session_id__rounds__round_index__next_suggestion_post"];
         delete?: never;
@@ -513,8 +564,8 @@ export interface paths {
         put?: never;
         /**
          * Shown
-         * @description A page shows the open round: the first report starts its timer (409 for a round that
-         *     is not the open one).
+         * @description The caller's page shows the open round: the first report starts its timer, the
+         *     caller's first their time shown (409 for a round that is not the open one).
          */
         post: operations["shown_api_sessions__session_id__rounds__round_index__shown_post"];
         delete?: never;
@@ -774,6 +825,97 @@ export interface components {
             width: number;
         };
         /**
+         * AgreementOut
+         * @description An annotator's agreement with the others on the preference pairs they share (the
+         *     same unordered pair of a round's behaviours), docs/teams.md.
+         */
+        AgreementOut: {
+            /**
+             * Kappa
+             * @description Cohen's κ over the shared pairs; null when n = 0 (or when chance agreement is certain: both used one label throughout)
+             */
+            kappa: number | null;
+            /**
+             * N
+             * @description the shared pairs the numbers rest on
+             */
+            n: number;
+            /**
+             * Share
+             * @description share of the n pairs labelled alike; null: n = 0
+             */
+            share: number | null;
+        };
+        /**
+         * AnnotatorCreated
+         * @description A new annotator: their token is shown this once (the link carries it).
+         */
+        AnnotatorCreated: {
+            /** Id */
+            id: string;
+            /**
+             * Link
+             * @description the page for them: the app's URL ?session=…&token=…
+             */
+            link: string;
+            /** Name */
+            name: string;
+            /** Token */
+            token: string;
+        };
+        /** AnnotatorIn */
+        AnnotatorIn: {
+            /**
+             * Name
+             * @description 1…100 characters, no control characters
+             */
+            name: string;
+        };
+        /**
+         * AnnotatorOut
+         * @description Someone teaching the session: the owner (id "owner") or an annotator.
+         */
+        AnnotatorOut: {
+            agreement: components["schemas"]["AgreementOut"];
+            /**
+             * Comparisons
+             * @description their judgements, not undone, in all rounds
+             */
+            comparisons: number;
+            /**
+             * Id
+             * @example owner
+             * @example a-3f9c0b1d2e4a
+             */
+            id: string;
+            model_agreement: components["schemas"]["ModelAgreementOut"];
+            /** Name */
+            name: string;
+            /**
+             * Pairs
+             * @description the preference pairs of those judgements
+             */
+            pairs: number;
+            /**
+             * Shown S
+             * @description seconds from their first showing of each round to its close (or now)
+             */
+            shown_s: number;
+        };
+        /**
+         * AnnotatorRef
+         * @description Who made a judgement.
+         */
+        AnnotatorRef: {
+            /**
+             * Id
+             * @description "owner" or the annotator's id
+             */
+            id: string;
+            /** Name */
+            name: string;
+        };
+        /**
          * ClipTiming
          * @description How a pool's clips show its behaviours (docs/app.md, "Clips"; `clips.timing`).
          */
@@ -915,6 +1057,7 @@ export interface components {
         JudgementIn: {
             /**
              * Annotator
+             * @description the owner's free-text name for it; an annotator's judgement takes their name (docs/teams.md)
              * @default
              */
             annotator: string;
@@ -952,8 +1095,7 @@ export interface components {
         };
         /** JudgementOut */
         JudgementOut: {
-            /** Annotator */
-            annotator: string;
+            annotator: components["schemas"]["AnnotatorRef"];
             /** Client Id */
             client_id: string;
             /**
@@ -982,8 +1124,45 @@ export interface components {
             seconds: number;
             /** Source */
             source: string;
+            /**
+             * Suggestion Id
+             * @description the group suggestion it answered (others drop it)
+             */
+            suggestion_id?: number | null;
             /** Undone */
             undone: boolean;
+        };
+        /**
+         * MeOut
+         * @description Who the request's token makes the caller in this session.
+         */
+        MeOut: {
+            /**
+             * Id
+             * @description "owner" or the annotator's id
+             */
+            id: string;
+            /** Name */
+            name: string;
+            /**
+             * Owner
+             * @description whether they may end rounds, change the session, share it
+             */
+            owner: boolean;
+        };
+        /**
+         * ModelAgreementOut
+         * @description An annotator's strict preferences against the reward model that chose each round's
+         *     pool (rounds after round 0), docs/teams.md.
+         */
+        ModelAgreementOut: {
+            /** N */
+            n: number;
+            /**
+             * Share
+             * @description share the model orders alike; null: n = 0
+             */
+            share: number | null;
         };
         /**
          * PPOConfig
@@ -1342,6 +1521,8 @@ export interface components {
              *       "eval_episodes": 5,
              *       "exploration_fraction": 0.25,
              *       "frame_size": 240,
+             *       "lease_s": 60,
+             *       "overlap_share": 0.1,
              *       "pair_derivation": "cover",
              *       "pair_oversample": 1,
              *       "pool_size": 100,
@@ -1458,6 +1639,18 @@ export interface components {
              */
             frame_size: number;
             /**
+             * Lease S
+             * @description a shared session (docs/teams.md): seconds a group suggestion or pair is offered to one annotator alone, so two people do not answer the same one at once (0: everyone gets the same)
+             * @default 60
+             */
+            lease_s: number;
+            /**
+             * Overlap Share
+             * @description a shared session: share of answered suggestions offered once more, to another annotator, to measure how well the annotators agree (0: none)
+             * @default 0.1
+             */
+            overlap_share: number;
+            /**
              * Pair Cap
              * @description keep at most pair_cap × comparisons pairs a round
              */
@@ -1542,6 +1735,11 @@ export interface components {
         SessionState: {
             /** Annotator */
             annotator: string;
+            /**
+             * Annotators
+             * @description the owner, then every annotator of the session (docs/teams.md)
+             */
+            annotators: components["schemas"]["AnnotatorOut"][];
             counts: components["schemas"]["Counts"];
             /**
              * Created At
@@ -1559,6 +1757,8 @@ export interface components {
             failed_phase?: ("preparing" | "ready" | "training" | "finishing" | "finished" | "failed") | null;
             /** Id */
             id: string;
+            /** @description who the caller is in this session */
+            me: components["schemas"]["MeOut"];
             /**
              * Mode
              * @enum {string}
@@ -1584,6 +1784,11 @@ export interface components {
         };
         /** Suggestion */
         Suggestion: {
+            /**
+             * Id
+             * @description the suggestion's id; a judgement event naming it (suggestion_id) answered it
+             */
+            id: number;
             /** Left */
             left: string[];
             /** Left Node */
@@ -1832,6 +2037,15 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
             /** @description unknown session, round or judgement */
             404: {
                 headers: {
@@ -1906,6 +2120,15 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
             /** @description unknown session, round or judgement */
             404: {
                 headers: {
@@ -1973,6 +2196,15 @@ export interface operations {
             };
             /** @description missing or wrong token */
             401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
+            403: {
                 headers: {
                     [name: string]: unknown;
                 };
@@ -2058,7 +2290,7 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
-            /** @description a state change from another site (Sec-Fetch-Site or Origin) */
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
             403: {
                 headers: {
                     [name: string]: unknown;
@@ -2155,7 +2387,7 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
-            /** @description a state change from another site (Sec-Fetch-Site or Origin) */
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
             403: {
                 headers: {
                     [name: string]: unknown;
@@ -2248,6 +2480,15 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
             /** @description unknown session, round or judgement */
             404: {
                 headers: {
@@ -2318,6 +2559,15 @@ export interface operations {
             };
             /** @description missing or wrong token */
             401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
+            403: {
                 headers: {
                     [name: string]: unknown;
                 };
@@ -2409,6 +2659,15 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
             /** @description unknown session, round or judgement */
             404: {
                 headers: {
@@ -2479,6 +2738,15 @@ export interface operations {
             };
             /** @description missing or wrong token */
             401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
+            403: {
                 headers: {
                     [name: string]: unknown;
                 };
@@ -2567,7 +2835,7 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
-            /** @description a state change from another site (Sec-Fetch-Site or Origin) */
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
             403: {
                 headers: {
                     [name: string]: unknown;
@@ -2670,6 +2938,15 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
             /** @description unknown session, round or judgement */
             404: {
                 headers: {
@@ -2690,6 +2967,285 @@ export interface operations {
             };
             /** @description body too large */
             413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description invalid input */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+        };
+    };
+    team_api_sessions__session_id__annotators_get: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description a session id */
+                session_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            200: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["AnnotatorOut"][];
+                };
+            };
+            /** @description bad request */
+            400: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description missing or wrong token */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description unknown session, round or judgement */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not possible in the session's current phase */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description body too large */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description invalid input */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+        };
+    };
+    add_api_sessions__session_id__annotators_post: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description a session id */
+                session_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody: {
+            content: {
+                "application/json": components["schemas"]["AnnotatorIn"];
+            };
+        };
+        responses: {
+            /** @description Successful Response */
+            201: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["AnnotatorCreated"];
+                };
+            };
+            /** @description bad request */
+            400: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description missing or wrong token */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description unknown session, round or judgement */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not possible in the session's current phase */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description body too large */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description a body that is not application/json */
+            415: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description invalid input */
+            422: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+        };
+    };
+    remove_api_sessions__session_id__annotators__annotator_id__delete: {
+        parameters: {
+            query?: never;
+            header?: never;
+            path: {
+                /** @description a session id */
+                session_id: string;
+                annotator_id: string;
+            };
+            cookie?: never;
+        };
+        requestBody?: never;
+        responses: {
+            /** @description Successful Response */
+            204: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content?: never;
+            };
+            /** @description bad request */
+            400: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description missing or wrong token */
+            401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description unknown session, round or judgement */
+            404: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not possible in the session's current phase */
+            409: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description body too large */
+            413: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description a body that is not application/json */
+            415: {
                 headers: {
                     [name: string]: unknown;
                 };
@@ -2751,7 +3307,7 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
-            /** @description a state change from another site (Sec-Fetch-Site or Origin) */
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
             403: {
                 headers: {
                     [name: string]: unknown;
@@ -2846,7 +3402,7 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
-            /** @description a state change from another site (Sec-Fetch-Site or Origin) */
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
             403: {
                 headers: {
                     [name: string]: unknown;
@@ -2943,6 +3499,15 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
             /** @description unknown session, round or judgement */
             404: {
                 headers: {
@@ -3018,6 +3583,15 @@ export interface operations {
             };
             /** @description missing or wrong token */
             401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
+            403: {
                 headers: {
                     [name: string]: unknown;
                 };
@@ -3102,7 +3676,7 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
-            /** @description a state change from another site (Sec-Fetch-Site or Origin) */
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
             403: {
                 headers: {
                     [name: string]: unknown;
@@ -3200,6 +3774,15 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
             /** @description unknown session, round or judgement */
             404: {
                 headers: {
@@ -3290,7 +3873,7 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
-            /** @description a state change from another site (Sec-Fetch-Site or Origin) */
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
             403: {
                 headers: {
                     [name: string]: unknown;
@@ -3386,7 +3969,7 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
-            /** @description a state change from another site (Sec-Fetch-Site or Origin) */
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
             403: {
                 headers: {
                     [name: string]: unknown;
@@ -3481,6 +4064,15 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
             /** @description unknown session, round or judgement */
             404: {
                 headers: {
@@ -3562,7 +4154,7 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
-            /** @description a state change from another site (Sec-Fetch-Site or Origin) */
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
             403: {
                 headers: {
                     [name: string]: unknown;
@@ -3657,7 +4249,7 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
-            /** @description a state change from another site (Sec-Fetch-Site or Origin) */
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
             403: {
                 headers: {
                     [name: string]: unknown;
@@ -3752,7 +4344,7 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
-            /** @description a state change from another site (Sec-Fetch-Site or Origin) */
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
             403: {
                 headers: {
                     [name: string]: unknown;
@@ -3847,7 +4439,7 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
-            /** @description a state change from another site (Sec-Fetch-Site or Origin) */
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
             403: {
                 headers: {
                     [name: string]: unknown;
@@ -3946,6 +4538,15 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
             /** @description unknown session, round or judgement */
             404: {
                 headers: {
@@ -4029,7 +4630,7 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
-            /** @description a state change from another site (Sec-Fetch-Site or Origin) */
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
             403: {
                 headers: {
                     [name: string]: unknown;
@@ -4126,7 +4727,7 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
-            /** @description a state change from another site (Sec-Fetch-Site or Origin) */
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
             403: {
                 headers: {
                     [name: string]: unknown;
@@ -4223,6 +4824,15 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
+            403: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
             /** @description unknown session, round or judgement */
             404: {
                 headers: {
@@ -4293,6 +4903,15 @@ export interface operations {
             };
             /** @description missing or wrong token */
             401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
+            403: {
                 headers: {
                     [name: string]: unknown;
                 };
@@ -4378,7 +4997,7 @@ export interface operations {
                     "application/json": components["schemas"]["ErrorOut"];
                 };
             };
-            /** @description a state change from another site (Sec-Fetch-Site or Origin) */
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
             403: {
                 headers: {
                     [name: string]: unknown;
@@ -4474,6 +5093,15 @@ export interface operations {
             };
             /** @description missing or wrong token */
             401: {
+                headers: {
+                    [name: string]: unknown;
+                };
+                content: {
+                    "application/json": components["schemas"]["ErrorOut"];
+                };
+            };
+            /** @description not the caller's to do: another annotator's, or the owner's alone */
+            403: {
                 headers: {
                     [name: string]: unknown;
                 };

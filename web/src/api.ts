@@ -17,6 +17,14 @@ import { Latest } from "./lib/latest";
 import type { JsonSchema } from "./lib/settings-form";
 
 type Schemas = components["schemas"];
+/** Who made a judgement (shared sessions, docs/teams.md): "owner" or an annotator's id. */
+export type AnnotatorRef = Schemas["AnnotatorRef"];
+/** A person of the session with their counters and agreement (`GET …/annotators`). */
+export type Annotator = Schemas["AnnotatorOut"];
+/** The annotator added: `link` opens the session with their own `token` (shown once). */
+export type AnnotatorCreated = Schemas["AnnotatorCreated"];
+/** Who this page is in the session. */
+export type Me = Schemas["MeOut"];
 export type SessionState = Schemas["SessionState"];
 export type Settings = Schemas["SessionSettings"];
 /** Settings left out take the server's defaults. */
@@ -67,6 +75,7 @@ const NETWORK_MESSAGE =
   "Cannot reach the groupwise server; check that `groupwise serve` is still running.";
 
 const STATUS_MESSAGES: Record<number, string> = {
+  403: "Only the session's owner can do this.",
   401: "Access denied: open the page with the ?token= that `groupwise serve` printed.",
   404: "Not found on the server.",
   409: "The session is not in a state that allows this right now.",
@@ -114,9 +123,12 @@ export interface ApiOptions {
   sleep?: (ms: number) => Promise<void>;
 }
 
+/** The session's revision an event was sent at (its SSE `id:`), null when it had none. */
+export type Revision = number | null;
+
 export interface EventHandlers {
-  state?(state: SessionState): void;
-  judgement?(judgement: JudgementOut): void;
+  state?(state: SessionState, rev: Revision): void;
+  judgement?(judgement: JudgementOut, rev: Revision): void;
   round?(event: { round: number }): void;
   /** A point of the agent's learning curve the worker wrote. */
   training?(point: TrainingPoint): void;
@@ -244,6 +256,15 @@ export function createApi(options: ApiOptions = {}) {
     undoJudgement: (sid: string, id: number) =>
       request<JudgementOut>("DELETE", `${s(sid)}/judgements/${id}`),
 
+    /** The session's people with their counters and agreement (the owner first). */
+    annotators: (sid: string) => read<Annotator[]>("annotators", "GET", `${s(sid)}/annotators`),
+    /** The owner adds a person by name: their link (with their token) is in the answer only. */
+    addAnnotator: (sid: string, name: string) =>
+      request<AnnotatorCreated>("POST", `${s(sid)}/annotators`, { body: { name } }),
+    /** The owner removes a person: their link stops working; their judgements stay. */
+    removeAnnotator: (sid: string, aid: string) =>
+      request<null>("DELETE", `${s(sid)}/annotators/${encodeURIComponent(aid)}`),
+
     /** pause, resume, end-round, retry: the reply is newer than any session read in flight. */
     async control(sid: string, action: "pause" | "resume" | "end-round" | "retry") {
       const state = await request<SessionState>("POST", `${s(sid)}/${action}`);
@@ -301,22 +322,29 @@ export function createApi(options: ApiOptions = {}) {
     events(sid: string, handlers: EventHandlers): () => void {
       const ES = options.EventSource ?? globalThis.EventSource;
       const source = new ES(url(`${s(sid)}/events`, {}, true));
-      const on = <T>(name: string, fn: ((data: T) => void) | undefined) => {
+      const on = <T>(name: string, fn: ((data: T, rev: Revision) => void) | undefined) => {
         source.addEventListener(name, (event) => {
+          const message = event as MessageEvent<string>;
           let data: T;
           try {
-            data = JSON.parse((event as MessageEvent<string>).data) as T;
+            data = JSON.parse(message.data) as T;
           } catch {
             return; // a malformed event is not worth breaking the page for
           }
-          fn?.(data);
+          const rev = Number.parseInt(message.lastEventId ?? "", 10);
+          fn?.(data, Number.isFinite(rev) ? rev : null);
         });
       };
-      on<SessionState>("state", (state) => {
+      on<SessionState>("state", (state, rev) => {
         latest.invalidate("session");
-        handlers.state?.(state);
+        latest.invalidate("annotators");
+        handlers.state?.(state, rev);
       });
-      on("judgement", handlers.judgement);
+      on<JudgementOut>("judgement", (judgement, rev) => {
+        // A read of the people sent before this judgement misses it.
+        latest.invalidate("annotators");
+        handlers.judgement?.(judgement, rev);
+      });
       on("round", handlers.round);
       on("training", handlers.training);
       source.onopen = () => handlers.open?.();

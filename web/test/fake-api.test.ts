@@ -41,9 +41,10 @@ function operation(route: string): Operation | undefined {
   return doc.paths[path]?.[method];
 }
 
-/** The JSON schema of the route's 200 (else 201) response. */
+/** The JSON schema of the route's 200 (else 201) response; a 204's body is nothing (null). */
 function replySchema(route: string): Schema | undefined {
   const responses = operation(route)?.responses ?? {};
+  if (responses["204"] && !responses["200"] && !responses["201"]) return { type: "null" };
   return (responses["200"] ?? responses["201"])?.content?.["application/json"]?.schema;
 }
 
@@ -155,6 +156,9 @@ async function exercise(mode: "groupwise" | "pairwise") {
     annotator: "",
   });
   await call("undoJudgement", sid, j.id);
+  await call("annotators", sid);
+  const added = await call("addAnnotator", sid, "Ann");
+  await call("removeAnnotator", sid, added.id);
   await call("shown", sid, 1);
   for (const action of ["pause", "resume", "end-round", "retry"] as const) await call("control", sid, action);
   await call("finish", sid);

@@ -4,7 +4,7 @@ import { FRESH_ORIGIN, type Origin, arcChange, originAfter, suggestedOrigin } fr
 import { type Groups, clickArc, moveLeaf, removeLeaf } from "../src/lib/selection";
 import { initialState, reduce } from "../src/state";
 
-const suggestion: Suggestion = { left: ["b1", "b2"], right: ["b3"], left_node: "m1", right_node: "b3", score: 0.5 };
+const suggestion: Suggestion = { id: 1, left: ["b1", "b2"], right: ["b3"], left_node: "m1", right_node: "b3", score: 0.5 };
 const loaded: Groups = { A: ["b1", "b2"], B: ["b3"] };
 const cluster = (leaves: string[], target: "A" | "B", add = false) =>
   ({ leaves, isLeaf: false, target, add }) as const;

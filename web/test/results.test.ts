@@ -59,7 +59,7 @@ describe("the finished page's chart", () => {
 // issue 23: a Hopper-backflip agent's episode score was 0.23 turns, its per-step sum 184
 function row(round: number, feedback: boolean, perStepSum: number, score: number) {
   return { round, feedback, judgements: 0, pairs_total: 9, env_steps: 64 * (round + 1),
-    true_return_mean: perStepSum, target_score_mean: score };
+    true_return_mean: perStepSum, target_score_mean: score, checkpoint: true, video: false };
 }
 const backflip = {
   measure: "per-step score sum (rad/s)",

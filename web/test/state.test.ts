@@ -17,7 +17,7 @@ function judgement(id: number, left: string[], right: string[]): JudgementOut {
     source: "explored",
     seconds: 3,
     edits: 1,
-    annotator: "",
+    annotator: { id: "owner", name: "owner" },
     created_at: "",
     undone: false,
     pairs: left.map((a, i) => ({ a, b: right[i % right.length]!, label: 1 })),

@@ -9,7 +9,7 @@
  * `FAKE_ROUTES` against `openapi.json` itself, replies included.
  */
 import openapiDocument from "../../openapi.json";
-import type { Api, EnvInfo, JudgementOut, OpenApiDocument, PairQuery, SessionState } from "../api";
+import type { Annotator, Api, EnvInfo, JudgementOut, OpenApiDocument, PairQuery, SessionState } from "../api";
 import type { paths } from "../api-types";
 import type { SyntheticRound } from "./synthetic";
 
@@ -27,14 +27,17 @@ type Operation<R extends Route> = R extends `${infer M extends Method} ${infer P
   : never;
 type JsonBody<T> = T extends { content: { "application/json": infer B } } ? B : never;
 
-/** The JSON body the server answers `route` with (its 200, else its 201 response). */
+/** The JSON body the server answers `route` with (its 200, else its 201 response; null
+ * for a 204). */
 export type Reply<R extends Route> =
   Operation<R> extends { responses: infer S }
     ? S extends { 200: infer Ok }
       ? JsonBody<Ok>
       : S extends { 201: infer Created }
         ? JsonBody<Created>
-        : never
+        : S extends { 204: unknown }
+          ? null
+          : never
     : never;
 
 /** The JSON routes the fake answers; `answer` takes no other. */
@@ -62,6 +65,9 @@ export const FAKE_ROUTES = [
   "get /api/sessions/{session_id}/agent",
   "put /api/sessions/{session_id}/agent/round",
   "get /api/sessions/{session_id}/training",
+  "get /api/sessions/{session_id}/annotators",
+  "post /api/sessions/{session_id}/annotators",
+  "delete /api/sessions/{session_id}/annotators/{annotator_id}",
 ] as const satisfies readonly Route[];
 export type FakeRoute = (typeof FAKE_ROUTES)[number];
 
@@ -127,6 +133,17 @@ export function fakeApi(
   let judgements = round.judgements.slice();
   let nextId = Math.max(0, ...judgements.map((j) => j.id)) + 1;
   let used = 0;
+  const person = (id: string, name: string, comparisons: number): Annotator => ({
+    id,
+    name,
+    comparisons,
+    pairs: 4 * comparisons,
+    shown_s: 11 * comparisons,
+    agreement: { kappa: comparisons ? 0.41 : null, share: comparisons ? 0.72 : null, n: 3 * comparisons },
+    model_agreement: { share: comparisons ? 0.8 : null, n: 4 * comparisons },
+  });
+  let people: Annotator[] = [person("owner", "owner", 14)];
+  let nextPerson = 1;
   const session: SessionState = {
     id: "s-demo",
     env: "GridWorld",
@@ -150,6 +167,8 @@ export function fakeApi(
       pair_oversample: 1,
       training: "rounds",
       stage_after_s: 60,
+      lease_s: 60,
+      overlap_share: 0.1,
     },
     round: 1,
     rounds: 5,
@@ -159,8 +178,12 @@ export function fakeApi(
     timer: { elapsed_s: 95, budget_s: 600, paused: false, running: true, shown_at: null },
     counts: { comparisons_round: judgements.length, pairs_round: 0, comparisons_total: 24, pairs_total: 103 },
     created_at: new Date().toISOString(),
+    me: { id: "owner", name: "owner", owner: true },
+    annotators: people,
     ...state,
   };
+  /** Who answers on this fake page. */
+  const me = () => ({ id: session.me.id, name: session.me.name });
 
   function answer<R extends FakeRoute>(route: R, reply: Reply<R>): Reply<R> {
     onServe?.({ route, reply });
@@ -231,7 +254,7 @@ export function fakeApi(
       const b = round.candidates[(used * 2 + 1) % round.candidates.length]!;
       used++;
       return answer("post /api/sessions/{session_id}/rounds/{round_index}/next-suggestion", {
-        suggestion: { left: a.leaves, right: b.leaves, left_node: a.id, right_node: b.id, score: 0.8 },
+        suggestion: { id: used, left: a.leaves, right: b.leaves, left_node: a.id, right_node: b.id, score: 0.8 },
       });
     },
     pairwiseNext: async () =>
@@ -243,6 +266,8 @@ export function fakeApi(
       const value = body.label === "left" ? 1 : body.label === "right" ? 0 : 0.5;
       const j: JudgementOut = {
         ...body,
+        annotator: me(),
+        suggestion_id: null,
         id: nextId++,
         created_at: new Date().toISOString(),
         undone: false,
@@ -289,6 +314,25 @@ export function fakeApi(
     pickAgent: async (_sid, r) => {
       picked = r;
       return answer("put /api/sessions/{session_id}/agent/round", agentOut());
+    },
+    annotators: async () =>
+      answer("get /api/sessions/{session_id}/annotators", people.map((p) => ({ ...p }))),
+    addAnnotator: async (_sid, name) => {
+      const id = `a-${nextPerson++}`;
+      people = [...people, person(id, name.trim(), 0)];
+      session.annotators = people;
+      const token = `token-${id}`;
+      return answer("post /api/sessions/{session_id}/annotators", {
+        id,
+        name: name.trim(),
+        token,
+        link: `?session=${session.id}&token=${token}`,
+      });
+    },
+    removeAnnotator: async (_sid, aid) => {
+      people = people.filter((p) => p.id !== aid);
+      session.annotators = people;
+      return answer("delete /api/sessions/{session_id}/annotators/{annotator_id}", null);
     },
     clipUrl: (clip) => (clip.endsWith(".jpg") || clip.endsWith(".mp4") ? poster(clip) : clip),
     exportUrl: () => "#",

@@ -105,7 +105,8 @@ export function syntheticRound(
       source: "explored",
       seconds: 5,
       edits: 0,
-      annotator: "",
+      annotator: { id: "owner", name: "owner" },
+      suggestion_id: null,
       created_at: "",
       undone: false,
       pairs: Array.from({ length: count }, (_, i) => ({
