@@ -2,8 +2,9 @@
  * The page: mounts the views, derives each view's data from the one store (once per frame),
  * and maps keys and handlers to store actions and controller effects.
  */
-import { type Api, type Edge, type JudgementOut, createApi } from "./api";
+import { type Annotator, type Api, type Edge, type JudgementOut, createApi } from "./api";
 import { type Controller, createController } from "./controller";
+import { OWNER_COLOUR, OWNER_ID, annotatorColours, isShared, judgementAnnotator, meOf } from "./lib/annotators";
 import { clipCaption } from "./lib/clip-timing";
 import { guideSeen, rememberGuideSeen } from "./lib/guide";
 import { type KeyInput, keyCommand } from "./lib/keys";
@@ -13,7 +14,9 @@ import { startTogether } from "./views/clips";
 import { type ClipRef, renderComparison } from "./views/comparison";
 import { h } from "./views/dom";
 import { type HistoryEdge, renderExploration } from "./views/exploration";
+import { renderAnnotatorsDialog } from "./views/annotators-dialog";
 import { renderGuide } from "./views/guide";
+import { renderPeople } from "./views/people";
 import { renderPairwise } from "./views/pairwise";
 import { renderProgress } from "./views/progress";
 import { renderResults } from "./views/results";
@@ -43,6 +46,10 @@ const historyEdges = memo1((judgements: readonly JudgementOut[]): HistoryEdge[] 
   judgements.flatMap((j) => j.pairs.map((p) => ({ a: p.a, b: p.b, label: p.label }))),
 );
 const compared = memo1(comparedLeaves);
+/** A colour per person: the session's list in its order, then anyone only judgements name. */
+const colours = memo2((people: readonly Annotator[], judgements: readonly JudgementOut[]) =>
+  annotatorColours([...people.map((p) => p.id), ...judgements.map((j) => judgementAnnotator(j).id)]),
+);
 const topK = memo2((edges: readonly Edge[], k: number) => edges.slice(0, Math.max(0, k)));
 const highlighted = memo2((hover: State["hover"], tree: Tree | undefined): ReadonlySet<string> => {
   const node = hover.id ? tree?.nodes.get(hover.id) : undefined;
@@ -99,10 +106,13 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
   // The agent learning (a continuous session): under the behaviours, or under the pair.
   const trainingA = h("section", { hidden: true });
   const trainingB = h("section", { hidden: true });
+  // The people of a shared session: likewise under the behaviours, or under the pair.
+  const peopleA = h("section", { hidden: true });
+  const peopleB = h("section", { hidden: true });
   const groupWorkspace = h(
     "div",
     { class: "workspace groupwise", hidden: true },
-    h("div", { class: "left" }, exploration, trainingA),
+    h("div", { class: "left" }, exploration, trainingA, peopleA),
     h("div", { class: "right" }, comparison, progressA),
   );
   const pairWorkspace = h(
@@ -110,6 +120,7 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
     { class: "workspace pairwise-mode", hidden: true },
     h("div", { class: "right" }, pairwise, progressB),
     trainingB,
+    peopleB,
   );
   // The finished session's agent: its video, chart, downloads (in place of the workspace).
   const results = h("section", { hidden: true, "aria-label": "Session results" });
@@ -119,8 +130,9 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
   const keysHint = h("p", { class: "keys-hint", "aria-hidden": "true" });
   const messageBar = h("footer", { class: "messagebar" }, keysHint, toast);
   const guide = h("div", {});
+  const peopleDialog = h("div", { hidden: true });
   const main = h("main", { class: "main" }, message, start, groupWorkspace, pairWorkspace, results);
-  root.replaceChildren(status, main, messageBar, guide);
+  root.replaceChildren(status, main, messageBar, guide, peopleDialog);
   const guideStorage = localStore();
   /** Modes whose guide this page already offered (it opens by itself once per mode). */
   const offered = new Set<string>();
@@ -164,16 +176,34 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
         create: (body) => void controller.create(body),
       });
     }
+    const me = meOf(s);
+    const shared = isShared(s);
+    const people = st.annotators.list;
+    const colourOf = colours(people, st.judgements);
     if (s && st.boot === "ready") {
-      renderStatus(status, { session: s, sessionAt: st.sessionAt, connection: st.connection, busy: st.busy }, {
+      const statusData = {
+        session: s,
+        sessionAt: st.sessionAt,
+        connection: st.connection,
+        busy: st.busy,
+        me,
+        shared,
+        annotators: people.filter((p) => p.id !== OWNER_ID).length,
+        colour: colourOf.get(me.id) ?? OWNER_COLOUR,
+      };
+      renderStatus(status, statusData, {
         pause: () => void controller.control("pause"),
         resume: () => void controller.control("resume"),
         endRound: () => void controller.control("end-round"),
         finish: () => void controller.finish(),
         sessions: () => void controller.showStart(),
         guide: () => dispatch({ type: "guide", open: true }),
+        people: () => {
+          dispatch({ type: "people", patch: { open: !st.people.open, error: null } });
+          if (!st.people.open) void controller.refreshAnnotators();
+        },
       });
-      const progress = { session: s, exportUrl: api.exportUrl(s.id), busy: st.busy };
+      const progress = { session: s, exportUrl: api.exportUrl(s.id), busy: st.busy, owner: me.owner };
       if (agent && mode) {
         renderResults(
           results,
@@ -185,6 +215,7 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
             exportUrl: progress.exportUrl,
             roundVideoUrl: (round) => api.agentRoundVideoUrl(s.id, round),
             busy: st.busy,
+            owner: me.owner,
             training: st.training?.sid === s.id ? st.training.points : [],
           },
           {
@@ -196,6 +227,17 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
       const retry = { retry: () => void controller.control("retry") };
       const points = st.training?.sid === s.id ? st.training.points : [];
       renderTraining(mode === "groupwise" ? trainingA : trainingB, { session: s, points });
+      if (mode) {
+        renderPeople(mode === "groupwise" ? peopleA : peopleB, {
+          shared: shared && results.hidden,
+          people,
+          meId: me.id,
+          colours: colourOf,
+          judgements: st.judgements,
+          mode,
+          round: s.round,
+        });
+      }
       if (mode === "groupwise") {
         renderGroupwise(st);
         renderProgress(progressA, progress, retry);
@@ -215,6 +257,20 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
       keysHint.title = hint;
     }
     renderGuide(guide, mode, st.guide && mode !== null, { close: closeGuide });
+    renderAnnotatorsDialog(
+      peopleDialog,
+      { open: st.people.open && me.owner && !!s, people, colours: colourOf, state: st.people, base: document.baseURI },
+      {
+        add: (name) => controller.addAnnotator(name),
+        remove: (id) => void controller.removeAnnotator(id),
+        close: closePeople,
+      },
+    );
+  }
+
+  function closePeople(): void {
+    dispatch({ type: "people", patch: { open: false, created: null, error: null } });
+    status.querySelector<HTMLElement>(".people-button")?.focus();
   }
 
   function renderGroupwise(st: State): void {
@@ -343,6 +399,14 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
     const st = store.getState();
     const s = st.session;
     if (st.boot !== "ready" || !s) return;
+    if (st.people.open) {
+      // The owner's dialog: the answer keys rest while it is open.
+      if (e.key === "Escape") {
+        e.preventDefault();
+        closePeople();
+      }
+      return;
+    }
     if (st.guide) {
       // A dialog: the answer keys rest until it is closed.
       if (e.key === "Escape") {

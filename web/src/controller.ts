@@ -12,6 +12,7 @@ import { createEventStream } from "./effects/events";
 import { createGroups } from "./effects/groups";
 import { createPageSettings } from "./effects/page-settings";
 import { createPairwiseFlow } from "./effects/pairwise-flow";
+import { createPeople } from "./effects/people";
 import { createRoundSync } from "./effects/round";
 import { createSessions } from "./effects/sessions";
 import { createTakeaway } from "./effects/takeaway";
@@ -37,7 +38,8 @@ export function createController(store: Store, api: Api, options: ControllerOpti
   const pairwise = createPairwiseFlow(ctx, annotator);
   const groups = createGroups(ctx, storage);
   const round = createRoundSync(ctx, groups, pairwise, visible);
-  const events = createEventStream(ctx, round);
+  const people = createPeople(ctx, groups, pairwise);
+  const events = createEventStream(ctx, round, people);
   const pageSettings = createPageSettings(ctx, storage);
   const sessions = createSessions(ctx, events, round, setUrl, pageSettings);
   const answers = createAnswers(ctx, annotator, groups, pairwise);
@@ -61,6 +63,9 @@ export function createController(store: Store, api: Api, options: ControllerOpti
     continueTraining: controls.continueTraining,
     pickAgent: takeaway.pick,
     lastJudgement: answers.lastJudgement,
+    addAnnotator: people.add,
+    removeAnnotator: people.remove,
+    refreshAnnotators: people.refresh,
   };
 }
 

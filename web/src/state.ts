@@ -4,15 +4,19 @@
  */
 import type {
   AgentOut,
+  Annotator,
+  AnnotatorCreated,
   ClipTiming,
   Edge,
   EnvInfo,
   JudgementOut,
   PairQuery,
+  Revision,
   SessionState,
   Settings,
   TrainingPoint,
 } from "./api";
+import { type AnnotatorBoard, EMPTY_BOARD, withJudgementEvent, withSessionState } from "./lib/annotators";
 import {
   type ArcClick,
   EMPTY_GROUPS,
@@ -74,6 +78,15 @@ export interface PairwiseState {
   clip?: ClipTiming | null;
 }
 
+/** The owner's "Annotators" dialog: open or not, the person just added (their link is shown
+ * once), a request in flight, and why the last one was refused. */
+export interface PeopleState {
+  open: boolean;
+  created: AnnotatorCreated | null;
+  busy: boolean;
+  error: string | null;
+}
+
 /** The New-session form's answers from the server (the inputs themselves live in the DOM). */
 export interface NewSessionState {
   /** The settings a session of the chosen env and settings would store. */
@@ -122,6 +135,11 @@ export interface State {
   agent: { key: string; data: AgentOut | null } | null;
   /** The session `sid`'s learning curve so far, in time order (`lib/training.ts`). */
   training: { sid: string; points: TrainingPoint[] } | null;
+  /** Each person's counters and agreement, kept live between states (`lib/annotators.ts`). */
+  annotators: AnnotatorBoard;
+  /** Judgements this page just undid: an undone event finds their pairs here. */
+  undone: JudgementOut[];
+  people: PeopleState;
 }
 
 export const initialState: State = {
@@ -158,6 +176,9 @@ export const initialState: State = {
   guide: false,
   agent: null,
   training: null,
+  annotators: EMPTY_BOARD,
+  undone: [],
+  people: { open: false, created: null, busy: false, error: null },
 };
 
 export type Action =
@@ -166,12 +187,18 @@ export type Action =
   | { type: "schemas"; schemas: Schemas }
   | { type: "new-session"; patch: Partial<NewSessionState> }
   | { type: "sessions"; sessions: SessionState[] }
-  | { type: "session"; session: SessionState; at: number }
+  /** `rev`: the revision of a state event (null for a state read or a control's reply). */
+  | { type: "session"; session: SessionState; at: number; rev?: Revision }
   | { type: "round-data"; round: RoundData }
   | { type: "suggestions"; edges: Edge[] }
   | { type: "judgements"; judgements: JudgementOut[] }
   | { type: "judgement-stored"; judgement: JudgementOut }
   | { type: "judgement-undone"; id: number }
+  /** A judgement event of the stream (anyone's), at revision `rev`. */
+  | { type: "judgement-event"; judgement: JudgementOut; rev: Revision }
+  | { type: "people"; patch: Partial<PeopleState> }
+  /** The session's people as `GET …/annotators` answered (after the events seen so far). */
+  | { type: "annotators"; sid: string; list: Annotator[] }
   | { type: "select"; click: Omit<ArcClick, "target">; other: boolean; at: number }
   | { type: "remove"; id: string; at: number }
   | { type: "move"; id: string; at: number }
@@ -221,8 +248,11 @@ export function reduce(state: State, action: Action): State {
       return { ...state, newSession: { ...state.newSession, ...action.patch } };
     case "sessions":
       return { ...state, sessions: action.sessions };
-    case "session":
-      return { ...state, session: action.session, sessionAt: action.at };
+    case "session": {
+      const other = state.session?.id !== action.session.id;
+      const board = withSessionState(other ? EMPTY_BOARD : state.annotators, action.session.annotators, action.rev ?? null);
+      return { ...state, session: action.session, sessionAt: action.at, annotators: board };
+    }
     case "round-data": {
       const sameRound =
         state.round?.sid === action.round.sid && state.round?.round === action.round.round;
@@ -246,8 +276,28 @@ export function reduce(state: State, action: Action): State {
     case "judgement-stored":
       if (state.round && action.judgement.round !== state.round.round) return state;
       return { ...state, judgements: upsert(state.judgements, action.judgement) };
-    case "judgement-undone":
-      return { ...state, judgements: state.judgements.filter((j) => j.id !== action.id) };
+    case "judgement-undone": {
+      const gone = state.judgements.find((j) => j.id === action.id);
+      return {
+        ...state,
+        judgements: state.judgements.filter((j) => j.id !== action.id),
+        undone: gone ? [...state.undone, gone].slice(-20) : state.undone,
+      };
+    }
+    case "judgement-event": {
+      const j = action.judgement;
+      const known = j.undone
+        ? (state.judgements.find((x) => x.id === j.id) ?? state.undone.find((x) => x.id === j.id))
+        : undefined;
+      const annotators = withJudgementEvent(state.annotators, j, action.rev, known);
+      const next = reduce({ ...state, annotators }, j.undone ? { type: "judgement-undone", id: j.id } : { type: "judgement-stored", judgement: j });
+      return next;
+    }
+    case "annotators":
+      if (state.session?.id !== action.sid) return state;
+      return { ...state, annotators: withSessionState(state.annotators, action.list, null) };
+    case "people":
+      return { ...state, people: { ...state.people, ...action.patch } };
     case "select": {
       const click = { ...action.click, target: action.other ? otherGroup(state.target) : state.target };
       const r = clickArc(state.groups, click);

@@ -3,7 +3,9 @@
  * - default: `window.bench.run(n)` times the exploration view on a synthetic round
  *   (benchmarks/web_render.py drives it in Chromium);
  * - `?demo=groupwise` / `?demo=pairwise`: the whole app on an in-memory fake server
- *   (`&n=1000` behaviours; `&clips=served`: clips and posters as files under clips/).
+ *   (`&n=1000` behaviours; `&clips=served`: clips and posters as files under clips/;
+ *   `&shared=owner` / `&shared=annotator`: a session shared by three people, seen by its
+ *   owner or by one of them; `&owner=NAME` names the owner).
  */
 import "../styles.css";
 import type { SessionState } from "../api";
@@ -264,6 +266,25 @@ if (demo === "groupwise" || demo === "pairwise") {
   const state: Partial<SessionState> = phase ? { phase } : {};
   if (phase === "failed") state.error = "training round 1 failed: CUDA out of memory (see the server log)";
   if (phase === "training") state.progress = { phase: "reward", fraction: 0.35, message: "reward model epoch 7 / 20" };
+  const shared = params.get("shared");
+  if (shared === "owner" || shared === "annotator") {
+    const people = [
+      { id: "owner", name: params.get("owner") ?? "Maria Garcia" },
+      { id: "a-1", name: "Ann Lee" },
+      { id: "a-2", name: "bob" },
+    ];
+    const me = shared === "owner" ? people[0]! : people[1]!;
+    state.me = { ...me, owner: shared === "owner" };
+    state.annotators = people.map((p, i) => ({
+      ...p,
+      comparisons: [14, 9, 3][i]!,
+      pairs: [52, 31, 8][i]!,
+      shown_s: [412, 388, 95][i]!,
+      agreement: i === 2 ? { kappa: null, share: null, n: 0 } : { kappa: [0.62, 0.48][i]!, share: [0.8, 0.74][i]!, n: [10, 12][i]! },
+      model_agreement: { share: [0.71, 0.66, 0.5][i]!, n: [40, 25, 8][i]! },
+    }));
+    synth.judgements.forEach((j, i) => (j.annotator = people[i % people.length]!));
+  }
   const api = fakeApi(synth, demo, state);
   // ?clips=served: clips and posters as files under clips/ (a test serves them and counts
   // the requests), instead of inline SVG posters.

@@ -3,7 +3,8 @@
  * and time) and undo of the last judgement, which puts its groups, or in pairwise mode its
  * pair, back on screen. (Pairwise answers go through `pairwise-flow.ts`.)
  */
-import type { JudgementOut, Label } from "../api";
+import { ApiError, type JudgementOut, type Label } from "../api";
+import { meOf, undoTarget } from "../lib/annotators";
 import { fromSuggestion } from "../lib/selection";
 import { uuid } from "../lib/uuid";
 import { FRESH_ORIGIN } from "../state";
@@ -59,9 +60,10 @@ export function createAnswers(
     }
   }
 
+  /** The judgement undo takes back: this person's last of the round (`undoTarget`). */
   function lastJudgement(): JudgementOut | null {
-    const list = get().judgements;
-    return list.length ? list[list.length - 1]! : null;
+    const st = get();
+    return undoTarget(st.judgements, meOf(st.session).id);
   }
 
   async function undo(): Promise<void> {
@@ -88,7 +90,10 @@ export function createAnswers(
       }
       dispatch({ type: "toast", kind: "info", text: "Last answer undone." });
     } catch (err) {
-      fail(err);
+      // Another person's judgement (shared sessions): the server says whose, and it stays.
+      if (err instanceof ApiError && err.status === 403) {
+        dispatch({ type: "toast", kind: "error", text: `Not undone: ${err.message}` });
+      } else fail(err);
     } finally {
       dispatch({ type: "undoing", value: false });
     }

@@ -5,9 +5,10 @@
  */
 import { STALE } from "../api";
 import type { EffectContext } from "./context";
+import type { PeopleEffects } from "./people";
 import type { RoundSync } from "./round";
 
-export function createEventStream({ store, api, fail }: EffectContext, round: RoundSync) {
+export function createEventStream({ store, api, fail }: EffectContext, round: RoundSync, people: PeopleEffects) {
   const dispatch = store.dispatch;
   const get = store.getState;
   let closeEvents: (() => void) | null = null;
@@ -27,16 +28,17 @@ export function createEventStream({ store, api, fail }: EffectContext, round: Ro
         dropped = true;
         dispatch({ type: "connection", value: "lost" });
       },
-      state(session) {
+      state(session, rev) {
         if (session.id !== get().session?.id) return;
-        dispatch({ type: "session", session, at: Date.now() });
+        dispatch({ type: "session", session, at: Date.now(), rev });
         void round.sync();
         void round.syncAgent();
         void round.reportShown();
       },
-      judgement(j) {
-        if (j.undone) dispatch({ type: "judgement-undone", id: j.id });
-        else dispatch({ type: "judgement-stored", judgement: j });
+      judgement(j, rev) {
+        if (get().session?.id !== sid) return;
+        dispatch({ type: "judgement-event", judgement: j, rev });
+        void people.answeredElsewhere(j);
       },
       round() {
         void resync(sid);

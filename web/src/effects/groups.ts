@@ -97,9 +97,36 @@ export function createGroups({ store, api, fail }: EffectContext, storage: Stora
     }
   }
 
+  /**
+   * The session became shared (docs/teams.md): the suggestion on screen was offered before
+   * there was anyone to keep it from, so it is asked for again, which leases it to this
+   * person; when someone else holds it by now, the next one takes its place (groups the
+   * person already changed stay).
+   */
+  async function reclaim(): Promise<void> {
+    const st = get();
+    const s = st.session;
+    const round = st.round;
+    const shown = st.origin.suggestion;
+    if (!s || !round || s.phase !== "ready" || s.mode !== "groupwise" || !shown) return;
+    const untouched = () => {
+      const o = get().origin;
+      return o.suggestion === shown && o.source === "suggested" && o.edits === 0;
+    };
+    if (!untouched()) return;
+    try {
+      const reply = await api.nextSuggestion(s.id, round.round, passed);
+      if (reply === STALE || !reply.suggestion || reply.suggestion.id === shown.id || !untouched()) return;
+      const sug = reply.suggestion;
+      dispatch({ type: "set-groups", groups: fromSuggestion(sug.left, sug.right), origin: suggestedOrigin(sug, Date.now()) });
+    } catch (err) {
+      fail(err);
+    }
+  }
+
   store.subscribe(save);
 
-  return { startRound, suggest };
+  return { startRound, suggest, reclaim };
 }
 
 export type GroupEffects = ReturnType<typeof createGroups>;

@@ -5,7 +5,8 @@
  * queue knows what was answered). Pairs answered or skipped on this page are never shown
  * again, even when a reply races with them.
  */
-import { type Label, type PairQuery, STALE } from "../api";
+import { type JudgementOut, type Label, type PairQuery, STALE } from "../api";
+import { answersPair } from "../lib/annotators";
 import { uuid } from "../lib/uuid";
 import type { EffectContext } from "./context";
 
@@ -132,7 +133,29 @@ export function createPairwiseFlow({ store, api, fail }: EffectContext, annotato
     });
   }
 
-  return { start, answer: answerPair, skip: skipPair, restore };
+  /**
+   * Someone else answered judgement `j`: the pair on screen, or the one after it, goes when
+   * it is that pair (the server no longer offers it), and the next pairs are fetched.
+   * True when the pair on screen went.
+   */
+  function dropAnswered(j: JudgementOut): boolean {
+    const pw = get().pairwise;
+    const current = pw.current && answersPair(j, pw.current);
+    const following = pw.following && answersPair(j, pw.following);
+    if (!current && !following) return false;
+    if (current) advancePair();
+    else dispatch({ type: "pairwise", patch: { following: null, done: [...pw.done, pairKey(pw.following!)] } });
+    queue = queue.then(() => nextPair());
+    return !!current;
+  }
+
+  /** The session became shared: ask for the pairs again, which leases the first to this
+   * person (the pair on screen stays). */
+  function reclaim(): void {
+    queue = queue.then(() => nextPair());
+  }
+
+  return { start, answer: answerPair, skip: skipPair, restore, dropAnswered, reclaim };
 }
 
 export type PairwiseFlow = ReturnType<typeof createPairwiseFlow>;

@@ -5,6 +5,7 @@
  * Rounds are named "sid:round"; a load for a round the session moved past is dropped.
  */
 import { ApiError, type SessionState, STALE } from "../api";
+import { isShared } from "../lib/annotators";
 import { buildTree } from "../lib/tree";
 import type { EffectContext } from "./context";
 import type { GroupEffects } from "./groups";
@@ -105,13 +106,15 @@ export function createRoundSync(
   /**
    * Tells the server the open round is on screen, once per round: its timer starts then, so
    * a round that waited for the person uses none of its time (docs/app.md, "The round
-   * timer"). On screen means its data arrived, the page is not hidden and the guide does not
+   * timer"); in a shared session each page reports, for its person's time shown. On screen
+   * means its data arrived, the page is not hidden and the guide does not
    * cover it; the page calls this again when any of these changes.
    */
   async function reportShown(): Promise<void> {
     const st = get();
     const s = st.session;
-    if (!s || st.boot !== "ready" || s.phase !== "ready" || s.timer.shown_at) return;
+    // In a shared session every page reports too: each person's time shown starts then.
+    if (!s || st.boot !== "ready" || s.phase !== "ready" || (s.timer.shown_at && !isShared(s))) return;
     const key = `${s.id}:${s.round}`;
     if (loadedKey !== key || shownKey === key || st.guide || !visible()) return;
     shownKey = key;

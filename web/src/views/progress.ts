@@ -11,6 +11,8 @@ export interface ProgressData {
   session: SessionState | null;
   exportUrl: string | null;
   busy: boolean;
+  /** Whether this page is the session's owner: only they retry a failed step (issue 21). */
+  owner?: boolean;
 }
 
 export interface ProgressHandlers {
@@ -47,7 +49,7 @@ export function renderProgress(element: HTMLElement, data: ProgressData, handler
   view.bar.hidden = !showBar;
   view.step.parentElement!.hidden = !showBar;
   view.message.hidden = !showBar;
-  view.retry.hidden = phase !== "failed";
+  view.retry.hidden = phase !== "failed" || data.owner === false;
   view.retry.disabled = data.busy;
   view.exportLink.hidden = phase !== "finished" || !data.exportUrl;
   if (data.exportUrl) view.exportLink.href = data.exportUrl;

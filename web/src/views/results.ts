@@ -31,6 +31,8 @@ export interface ResultsData {
   /** Round `round`'s clip (`GET …/agent/rounds/{round}.mp4`). */
   roundVideoUrl(round: number): string;
   busy: boolean;
+  /** Whether this page is the session's owner: only they continue training (issue 21). */
+  owner?: boolean;
   /** The session's learning curve (`lib/training.ts`), drawn under the rounds' chart. */
   training: readonly TrainingPoint[];
 }
@@ -169,6 +171,8 @@ export function renderResults(element: HTMLElement, data: ResultsData, handlers:
     h("code", {}, "groupwise.load_agent(path)"),
     "; its README says how.",
   );
+  const form = view.submit.closest("form");
+  if (form) form.hidden = data.owner === false;
 }
 
 function drawTakeaway(view: View, agent: AgentOut): void {

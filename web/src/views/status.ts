@@ -7,11 +7,17 @@
  * way, cut with an ellipsis (the full name in its title), and a two-click button is as wide
  * in both its texts. Once the session is finishing or finished, the round's timer, counters
  * and "End round" are gone.
+ *
+ * A shared session (issue 21): who this page is (a badge and the name); for the owner the
+ * name is on "Annotators" (add a person, copy their link, remove one), which reads so until
+ * the session is shared; an annotator's page has no Pause, End round, Finish now or sessions
+ * list, which are the owner's.
  */
-import type { SessionState } from "../api";
+import type { Me, SessionState } from "../api";
+import { initials } from "../lib/annotators";
 import { clock, elapsedNow, roundOf } from "../lib/format";
 import type { State } from "../state";
-import { attr, h, memo, text } from "./dom";
+import { attr, h, memo, s, text } from "./dom";
 
 export interface StatusData {
   session: SessionState | null;
@@ -19,6 +25,12 @@ export interface StatusData {
   connection: State["connection"];
   /** A control request (pause, end round…) is in flight. */
   busy: boolean;
+  /** Who this page is, and whether the session has other people. */
+  me: Me;
+  shared: boolean;
+  /** The people besides the owner; the colour of this page's badge. */
+  annotators: number;
+  colour: string;
 }
 
 export interface StatusHandlers {
@@ -29,6 +41,8 @@ export interface StatusHandlers {
   finish(): void;
   sessions(): void;
   guide(): void;
+  /** The owner's "Annotators" dialog. */
+  people(): void;
 }
 
 interface View {
@@ -45,6 +59,14 @@ interface View {
   finish: HTMLButtonElement;
   conn: HTMLElement;
   help: HTMLButtonElement;
+  brand: HTMLButtonElement;
+  who: HTMLElement;
+  badge: HTMLElement;
+  whoName: HTMLElement;
+  people: HTMLButtonElement;
+  peopleIcon: SVGSVGElement;
+  peopleBadge: HTMLElement;
+  peopleLabel: HTMLElement;
   data: StatusData | null;
   handlers: StatusHandlers | null;
   confirmUntil: number;
@@ -106,18 +128,44 @@ export function renderStatus(element: HTMLElement, data: StatusData, handlers: S
     view.pairs.nextElementSibling!.textContent = `${c.pairs_total} total`;
   }
   const over = !!s && roundsOver(s);
+  const owner = data.me.owner;
   view.timerWrap.hidden = over;
   view.counts.hidden = over;
-  view.end.hidden = over;
+  view.end.hidden = over || !owner;
+  // Who this page is: an annotator's name beside the counters; the owner's on their
+  // "Annotators" button (one control, so the bar keeps one line at 1366 px).
+  view.who.hidden = !data.shared || owner;
+  for (const b of [view.badge, view.peopleBadge]) {
+    text(b, initials(data.me.name));
+    b.style.background = data.colour;
+  }
+  text(view.whoName, data.me.name);
+  view.who.title = `You are ${data.me.name}, an annotator of this shared session`;
+  // An icon until the session is shared (the bar has no room for a word in its widest
+  // states), then this person's initials and name.
+  view.people.hidden = !owner || !s;
+  view.peopleBadge.hidden = !data.shared;
+  view.peopleLabel.hidden = !data.shared;
+  attr(view.peopleIcon, "display", data.shared ? "none" : null);
+  view.people.classList.toggle("shared", data.shared);
+  text(view.peopleLabel, data.me.name);
+  attr(view.people, "aria-label", data.shared ? `Annotators · you are ${data.me.name}, the owner` : "Annotators");
+  view.people.title = data.shared
+    ? `You are ${data.me.name}, the session's owner. Annotators (${data.annotators} besides you): add a person, copy their link, remove one`
+    : "Annotators: share this session with other people, each with a link of their own";
+  fitPeople(view, element);
+  view.brand.disabled = !owner;
+  view.brand.title = owner ? "Sessions" : "Sessions: the owner's";
   const ready = s?.phase === "ready";
   view.pause.disabled = !ready || data.busy;
+  view.pause.hidden = !owner; // the owner's (403 for an annotator)
   const paused = s?.timer.paused ?? false;
   text(view.pause, paused ? "Resume" : "Pause");
   attr(view.pause, "aria-label", paused ? "Resume the round timer" : "Pause the round timer");
   view.end.disabled = !ready || data.busy;
   if (!ready) resetConfirm(view);
   const finishable = !!s && canFinish(s);
-  view.finish.hidden = !s || s.phase === "finishing" || s.phase === "finished";
+  view.finish.hidden = !s || s.phase === "finishing" || s.phase === "finished" || !owner;
   view.finish.disabled = !finishable || data.busy;
   if (!finishable) resetFinishConfirm(view);
   text(view.conn, CONNECTION[data.connection]);
@@ -158,6 +206,22 @@ function resetFinishConfirm(view: View): void {
   setConfirm(view.finish, FINISH, false);
 }
 
+/**
+ * The owner's name on "Annotators" gives way only after the env name (`.meta`) is as short as
+ * it goes: the button keeps its width unless the bar, laid out so, still overflows; then it
+ * may shrink (the name cut with an ellipsis, whole in the title). Flex shrink factors alone
+ * would take a sliver off both, which cuts a name that fits.
+ */
+function fitPeople(view: View, bar: HTMLElement): void {
+  const button = view.people;
+  if (!button.classList.contains("shared") || button.hidden) {
+    button.classList.remove("squeeze");
+    return;
+  }
+  button.classList.remove("squeeze");
+  if (bar.scrollWidth > bar.clientWidth) button.classList.add("squeeze");
+}
+
 function tick(view: View): void {
   const s = view.data?.session;
   if (!s) {
@@ -172,6 +236,7 @@ function tick(view: View): void {
   view.timer.classList.toggle("late", budget > 0 && budget - elapsed < 30 && s.phase === "ready");
   if (view.confirmUntil && Date.now() > view.confirmUntil) resetConfirm(view);
   if (view.finishConfirmUntil && Date.now() > view.finishConfirmUntil) resetFinishConfirm(view);
+  if (view.people.classList.contains("shared")) fitPeople(view, view.people.parentElement!);
 }
 
 function build(element: HTMLElement): View {
@@ -201,6 +266,26 @@ function build(element: HTMLElement): View {
   round.title = ROUND_TITLE;
   const sessions = h("button", { type: "button", class: "brand", title: "Sessions" }, "groupwise");
   const timerWrap = h("span", { class: "timer-wrap" }, timer, pause);
+  const badge = h("span", { class: "person-badge", "aria-hidden": "true" });
+  const whoName = h("span", { class: "who-name" });
+  const who = h("span", { class: "who", hidden: true }, badge, h("span", { class: "sr-only" }, "You are "), whoName);
+  const peopleBadge = h("span", { class: "person-badge", "aria-hidden": "true", hidden: true });
+  const peopleLabel = h("span", { class: "people-label", "aria-hidden": "true", hidden: true });
+  // Two people: share the session.
+  const peopleIcon = s(
+    "svg",
+    { class: "people-icon", viewBox: "0 0 24 24", width: 18, height: 18, "aria-hidden": "true" },
+    s("circle", { cx: 9, cy: 8, r: 3.2 }),
+    s("path", { d: "M2.5 19c.6-3.6 3.2-5.5 6.5-5.5s5.9 1.9 6.5 5.5" }),
+    s("path", { d: "M15.5 5.2a3 3 0 0 1 0 5.6M17.5 13.8c1.6.6 2.8 2 3.2 3.9" }),
+  );
+  const people = h(
+    "button",
+    { type: "button", class: "ghost small people-button", "aria-haspopup": "dialog", "aria-label": "Annotators" },
+    peopleIcon,
+    peopleBadge,
+    peopleLabel,
+  );
   const counts = h(
     "dl",
     { class: "counts" },
@@ -216,6 +301,8 @@ function build(element: HTMLElement): View {
     phase,
     timerWrap,
     counts,
+    who,
+    people,
     conn,
     end,
     finish,
@@ -235,6 +322,14 @@ function build(element: HTMLElement): View {
     finish,
     conn,
     help,
+    brand: sessions,
+    who,
+    badge,
+    whoName,
+    people,
+    peopleIcon,
+    peopleBadge,
+    peopleLabel,
     data: null,
     handlers: null,
     confirmUntil: 0,
@@ -264,6 +359,7 @@ function build(element: HTMLElement): View {
   });
   sessions.addEventListener("click", () => view.handlers?.sessions());
   help.addEventListener("click", () => view.handlers?.guide());
+  people.addEventListener("click", () => view.handlers?.people());
   window.setInterval(() => tick(view), 500);
   return view;
 }
