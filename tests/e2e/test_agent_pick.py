@@ -108,6 +108,18 @@ def test_the_person_takes_round_0s_agent(
     assert page.eval_on_selector_all(
         ".results-takeaway li:not([data-round='0']) video", "vs => vs.every((v) => v.paused)"
     )
+    # from the keyboard: round 1's play button plays its clip until pressed again
+    page.mouse.move(5, 5)
+    play1 = picker.get_by_role("button", name="Play round 1's clip")
+    play1.focus()
+    page.keyboard.press("Space")
+    expect(play1).to_have_attribute("aria-pressed", "true")
+    page.wait_for_function(
+        "() => !document.querySelector('li[data-round=\"1\"] video').paused", timeout=15_000
+    )
+    assert page.eval_on_selector("li[data-round='0'] video", "v => v.paused")
+    page.keyboard.press("Space")
+    expect(play1).to_have_attribute("aria-pressed", "false")
 
     # a refused pick says why, and changes nothing
     reason = "round 0's checkpoint has no policy.zip: its policy cannot be packaged"

@@ -175,11 +175,10 @@ function stop(card: Card): void {
   setPlaying(card, false);
 }
 
+/** A toggle button keeps its name ("Play round 3's clip"); aria-pressed says it plays. */
 function setPlaying(card: Card, playing: boolean): void {
   if (!card.play) return;
-  const round = card.item.dataset.round;
   attr(card.play, "aria-pressed", String(playing));
-  attr(card.play, "aria-label", `${playing ? "Pause" : "Play"} round ${round}'s clip`);
   card.item.classList.toggle("playing", playing);
 }
 
