@@ -1,145 +1,310 @@
-"""Benchmark: preparing a behaviour pool (SPEC §3.1-3.2, §4, §9): time per phase.
+"""Benchmark: a round on screen (issue 22): preparing a pool as the app's worker does, phase by
+phase, and how long a clip rendered on demand takes to reach the page.
 
-Prepares a pool of 200 Hopper behaviours (the env's clip duration, 1.5 s = 188 steps shown
-as 47 frames at real speed; `--length 30` for the study's L; random policy, 240×240 clips, 2
-render workers) into a temporary directory with `groupwise.pool.publish.prepare_pool` and prints a
-Markdown table. Render and encode run inside the workers, overlapping each other (a job's
-ffmpeg encodes while its worker renders the next window) and the parent's features, DTW and
-tree: their rows give worker-seconds (ffmpeg: CPU seconds) and the clip phase's wall time split
-in proportion to them. The CPU time of all processes is printed too: unlike wall time, it
-hardly changes when other processes compete for the cores.
-Target: total ≤ 20 s on a 2-core machine.
+For each window length (30 steps, the study's L, and the env's default clip, 1.5 s = 188
+Hopper steps) and each pool size, the app's round 0 (`SessionSettings` defaults, random
+policy, a fresh reward ensemble): `sample_pool` (2× windows, the ensemble's most uncertain
+kept), DTW in the tree config's band, the tree, the Groupwise-DM's suggestions
+(`worker.jobs.session_strategy`, 2× the comparison budget), then `publish_pool` — with clips
+on demand (the app's default) a poster per behaviour and each clip's recipe; with
+``--clips eager`` every clip as before — and the round's rows (`worker.offers`). The
+render workers are started and warm before the clock starts, as in the long-lived worker.
 
-    python benchmarks/pool_prep.py [--env Hopper] [--n 200] [--length L | --seconds S]
-                                   [--oversample 1] [--repeats 1] [--workers 2]
+Per phase: wall s, CPU s of every process (this one with its threads, the render workers),
+the CPU floor on this machine (CPU s / cores: the wall time if the phase's work were spread
+over every core) and wall / floor (2 on 2 cores: one core busy). "on screen" is their sum:
+from sampling to the round's rows, when the page can show posters, tree and suggestions.
+
+Then the first-frame budget of clips on demand: a real server (`create_app`, no worker) on
+the pool's store; request → first byte of a clip not rendered yet, one at a time (p50 / p95
+after the render processes are warm, and the very first with their start), and a group of 8
+asked at once (the comparison view), the last first byte.
+
+    python -m benchmarks.pool_prep [--env Hopper] [--n 200 [1000]] [--lengths 30 default]
+                                   [--clips on_demand|eager] [--workers 2] [--clip-requests 20]
 """
 
 import argparse
+import contextlib
 import os
 import resource
+import socket
 import statistics
 import sys
 import tempfile
-from collections.abc import Sequence
+import threading
+import time
+from collections.abc import Iterator, Sequence
+from dataclasses import dataclass, field, replace
 from pathlib import Path
+from typing import Any, Literal
 
 import numpy as np
 
-from groupwise.clips.timing import env_clip_timing
+from groupwise.clips.render import RenderPool
+from groupwise.clips.replay import FrameSettings
+from groupwise.clips.store import ClipStore
+from groupwise.envs import make_env
 from groupwise.envs.rendering import ensure_gl_backend
-from groupwise.pool.publish import PoolTimings, PublishConfig, prepare_pool
+from groupwise.pool.publish import PreparedPool, publish_pool
+from groupwise.pool.sampling import sample_pool
+from groupwise.reward import RewardEnsemble
 from groupwise.rl.policy_files import load_policy
+from groupwise.storage import SessionSettings
+from groupwise.worker.jobs import offered_queries, publish_config, session_strategy
+from groupwise.worker.offers import prepared_round
+
+GOALS = {200: 8.0, 1000: 30.0}
+"""Wall seconds to a round on screen on 2 cores, by pool size (issue 22)."""
 
 
-def _cpu_seconds() -> float:
-    """CPU time of this process and of its finished children (workers, with their ffmpeg)."""
+def _clock_ticks() -> int:
+    return os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
+
+
+def cpu_seconds() -> float:
+    """CPU time of this process (all threads), of its finished children, and of its live
+    descendants (the render workers; read from /proc where there is one)."""
     own = resource.getrusage(resource.RUSAGE_SELF)
-    children = resource.getrusage(resource.RUSAGE_CHILDREN)
-    return own.ru_utime + own.ru_stime + children.ru_utime + children.ru_stime
+    done = resource.getrusage(resource.RUSAGE_CHILDREN)
+    total = own.ru_utime + own.ru_stime + done.ru_utime + done.ru_stime
+    return total + sum(_proc_cpu(pid) for pid in _descendants(os.getpid()))
 
 
-def run_once(
-    cfg: PublishConfig, size: int, length: int, oversample: float, seed: int
-) -> tuple[PoolTimings, float]:
-    """Prepare one pool of `size` behaviours of `length` steps (from `oversample` × `size`
-    windows) in a fresh temporary directory; its timings and the CPU seconds of every
-    process involved (the pool's workers have exited when it returns)."""
-    with tempfile.TemporaryDirectory() as out:
-        before = _cpu_seconds()
-        pool = prepare_pool(
-            cfg,
-            load_policy("random", cfg.env),
-            np.random.default_rng(seed),
-            Path(out),
-            size=size,
-            length=length,
-            oversample=oversample,
+def _descendants(root: int) -> list[int]:
+    parents: dict[int, int] = {}
+    for entry in Path("/proc").glob("[0-9]*/stat"):
+        with contextlib.suppress(OSError, ValueError, IndexError):
+            fields = entry.read_text().rsplit(")", 1)[1].split()
+            parents[int(entry.parent.name)] = int(fields[1])
+    found, frontier = [], [root]
+    while frontier:
+        parent = frontier.pop()
+        children = [pid for pid, ppid in parents.items() if ppid == parent]
+        found += children
+        frontier += children
+    return found
+
+
+def _proc_cpu(pid: int) -> float:
+    """utime + stime + cutime + cstime of a live process, in seconds (0 when gone)."""
+    try:
+        fields = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except (OSError, IndexError):
+        return 0.0
+    return sum(int(f) for f in fields[11:15]) / _clock_ticks()
+
+
+@dataclass
+class Phase:
+    name: str
+    wall_s: float
+    cpu_s: float
+    load: float
+
+
+@dataclass
+class Run:
+    """One pool prepared: its phases, and the on-demand first-frame times."""
+
+    n: int
+    steps: int
+    frames: int
+    phases: list[Phase] = field(default_factory=list)
+    first_clip_s: float = float("nan")  # the first clip asked for, render processes cold
+    ttfb_s: list[float] = field(default_factory=list)  # cold clips one at a time, warm workers
+    group_s: float = float("nan")  # 8 clips asked at once: the last first byte
+
+    @contextlib.contextmanager
+    def phase(self, name: str) -> Iterator[None]:
+        wall, cpu = time.perf_counter(), cpu_seconds()
+        yield
+        wall_s, cpu_s = time.perf_counter() - wall, cpu_seconds() - cpu
+        self.phases.append(Phase(name, wall_s, cpu_s, os.getloadavg()[0]))
+
+
+def prepare(
+    env: str,
+    n: int,
+    settings: SessionSettings,
+    mode: Literal["on_demand", "eager"],
+    render: RenderPool,
+    out: Path,
+    seed: int,
+) -> tuple[Run, PreparedPool]:
+    """Round 0 of a session with `settings`, as the worker prepares it (module docstring)."""
+    cfg = settings.run_config(env)
+    loop = cfg.loop
+    rng = np.random.default_rng(seed)
+    ensemble = RewardEnsemble.for_env(lambda: make_env(env), cfg.reward, rng)
+    policy = load_policy("random", env)
+    timing = settings.clip_timing(env)
+    run = Run(n, timing.steps, timing.frames)
+    with run.phase("sample"):
+        pool = sample_pool(
+            lambda: make_env(env), policy, n, loop.fragment_length, rng,
+            exploration_fraction=loop.exploration_fraction, oversample=loop.pool_oversample,
+            ensemble=ensemble, select=loop.pool_selection,
+        )  # fmt: skip
+    with run.phase("DTW"):
+        pool.measure_distances(cfg=cfg.tree)
+    with run.phase("tree"):
+        pool.tree(cfg.tree)
+    with run.phase("suggestions"):
+        queries = session_strategy(cfg, "groupwise").propose(pool, offered_queries(settings), rng)
+    publish = replace(publish_config(cfg, settings.frame_size, render.workers), clips=mode)
+    with run.phase("posters" if mode == "on_demand" else "clips"):
+        published = publish_pool(
+            publish, pool, out, store=ClipStore(out / "clips"), render_pool=render,
             show_progress=False,
-        )
-        cpu = _cpu_seconds() - before
-    return pool.timings, cpu
+        )  # fmt: skip
+    with run.phase("rows"):
+        prepared_round(pool, published, queries, settings.suggestions)
+    return run, published
 
 
-def table(t: PoolTimings) -> str:
-    """The Markdown table of one run."""
-    render_cpu = t.render_s + t.replay_s
-    encode_cpu = t.ffmpeg_cpu_s
-    total_cpu = render_cpu + encode_cpu
-    render_wall = t.clips_s * render_cpu / total_cpu if total_cpu > 0 else 0.0
-    rows = [
-        ("sample", f"{t.sample_s:.2f}", "", "episodes from the policy, cut into windows"),
-        (
-            "render",
-            f"{render_wall:.2f}",
-            f"{t.render_s:.1f} + {t.replay_s:.1f}",
-            f"env.render() + replay steps, summed over workers (wall, so it grows when "
-            f"other processes compete); {t.frames / t.render_s:.0f} frames per worker-second",
-        ),
-        (
-            "encode",
-            f"{t.clips_s - render_wall:.2f}",
-            f"{t.ffmpeg_cpu_s:.1f}",
-            f"CPU s of ffmpeg, which runs beside the workers (they spent {t.encode_s:.1f} s "
-            "feeding it, on posters and the store)",
-        ),
-        ("features", f"{t.features_s:.3f}", "", "parent, while workers render"),
-        ("DTW", f"{t.dtw_s:.3f}", "", "parent, while workers render (incl. numba cache load)"),
-        ("tree", f"{t.tree_s:.3f}", "", "tree, candidates, medoids; parent, while workers render"),
-        ("write", f"{t.write_s:.3f}", "", "arrays, JSON"),
-        ("**total**", f"**{t.total_s:.2f}**", "", "wall time of prepare_pool"),
-    ]
+@contextlib.contextmanager
+def clip_server(data_dir: Path) -> Iterator[str]:
+    """A real app (no worker) on `data_dir`'s clip store, on a free port; its base URL."""
+    import uvicorn
+
+    from groupwise.server import AppConfig, create_app
+
+    app = create_app(AppConfig(data_dir=data_dir, start_worker=False))
+    sock = socket.socket(socket.AF_INET, socket.SOCK_STREAM, socket.IPPROTO_TCP)
+    sock.bind(("127.0.0.1", 0))
+    server = uvicorn.Server(uvicorn.Config(app, log_level="warning", access_log=False))
+    thread = threading.Thread(target=server.run, kwargs={"sockets": [sock]}, daemon=True)
+    thread.start()
+    while not server.started:
+        time.sleep(0.01)
+    try:
+        yield f"http://127.0.0.1:{sock.getsockname()[1]}"
+    finally:
+        server.should_exit = True
+        thread.join(10)
+
+
+def first_byte_s(client: Any, url: str) -> float:
+    """Seconds from sending a GET to its first body byte (the clip's status checked)."""
+    start = time.perf_counter()
+    with client.stream("GET", url) as response:
+        if response.status_code != 200:
+            raise RuntimeError(f"GET {url}: {response.status_code} {response.read()[:200]!r}")
+        for _ in response.iter_raw(1):
+            break
+        return time.perf_counter() - start
+
+
+def measure_on_demand(run: Run, published: PreparedPool, data_dir: Path, requests: int) -> None:
+    """First-frame budget of `published`'s clips through a real server (module docstring)."""
+    import httpx
+
+    clips = list(published.clips)
+    with clip_server(data_dir) as base, httpx.Client(base_url=base, timeout=120) as client:
+        run.first_clip_s = first_byte_s(client, f"/clips/{clips[0]}")
+        first_byte_s(client, f"/clips/{published.posters[1]}")  # a poster: warms the workers
+        time.sleep(2.0)
+        for clip in clips[1 : 1 + requests]:
+            run.ttfb_s.append(first_byte_s(client, f"/clips/{clip}"))
+        group = clips[1 + requests : 9 + requests]
+        times: list[float] = []
+        threads = [
+            threading.Thread(target=lambda c=c: times.append(first_byte_s(client, f"/clips/{c}")))
+            for c in group
+        ]
+        for thread in threads:
+            thread.start()
+        for thread in threads:
+            thread.join()
+        run.group_s = max(times) if times else float("nan")
+
+
+def report(runs: Sequence[Run], env: str, mode: str, workers: int) -> str:
+    cores = os.cpu_count() or 1
     lines = [
-        "| phase | wall s | worker s | note |",
-        "|---|---:|---:|---|",
-        *(f"| {a} | {b} | {c} | {d} |" for a, b, c, d in rows),
+        f"Pool preparation, {env}, random policy, a fresh ensemble (round 0), app settings "
+        f"(2× windows sampled, 240×240, {workers} render workers), clips {mode}; {cores} "
+        f"CPUs, MUJOCO_GL={os.environ.get('MUJOCO_GL', '')}. floor = CPU s / {cores} cores; "
+        "ratio = wall / floor. load: 1-min load average after the phase.",
         "",
-        f"Render and encode overlap (clip phase {t.clips_s:.2f} s wall, split in proportion "
-        "to their seconds); features, DTW and tree overlap them too.",
+        "| N | L (frames) | phase | wall s | CPU s | floor s | ratio | load |",
+        "|---:|---|---|---:|---:|---:|---:|---:|",
     ]
+    for run in runs:
+        label = f"{run.steps} ({run.frames})"
+        for p in run.phases:
+            floor = p.cpu_s / cores
+            ratio = p.wall_s / floor if floor > 0 else float("nan")
+            lines.append(
+                f"| {run.n} | {label} | {p.name} | {p.wall_s:.2f} | {p.cpu_s:.2f} | "
+                f"{floor:.2f} | {ratio:.2f} | {p.load:.1f} |"
+            )
+        wall = sum(p.wall_s for p in run.phases)
+        cpu = sum(p.cpu_s for p in run.phases)
+        goal = GOALS.get(run.n)
+        target = f" (goal ≤ {goal:g} s)" if goal and run.steps > 30 else ""
+        load = max(p.load for p in run.phases)
+        lines.append(
+            f"| {run.n} | {label} | **on screen**{target} | **{wall:.2f}** | {cpu:.2f} | "
+            f"{cpu / cores:.2f} | {wall / (cpu / cores):.2f} | {load:.1f} |"
+        )
+    if any(run.ttfb_s for run in runs):
+        lines += [
+            "",
+            "Clips on demand through a real server, request → first byte of a clip not "
+            "rendered yet (render processes of the server, warm unless said):",
+            "",
+            "| N | L (frames) | first clip, processes cold | p50 | p95 | clips "
+            "| 8 at once, last | load |",
+            "|---:|---|---:|---:|---:|---:|---:|---:|",
+        ]
+        for run in runs:
+            if not run.ttfb_s:
+                continue
+            ms = sorted(t * 1e3 for t in run.ttfb_s)
+            p95 = ms[min(len(ms) - 1, round(0.95 * (len(ms) - 1)))]
+            lines.append(
+                f"| {run.n} | {run.steps} ({run.frames}) | {run.first_clip_s * 1e3:.0f} ms | "
+                f"{statistics.median(ms):.0f} ms | {p95:.0f} ms | {len(ms)} | "
+                f"{run.group_s * 1e3:.0f} ms | {os.getloadavg()[0]:.1f} |"
+            )
     return "\n".join(lines)
 
 
 def main(argv: Sequence[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
     parser.add_argument("--env", default="Hopper")
-    parser.add_argument("--n", type=int, default=200, help="behaviours in the pool")
-    parser.add_argument("--length", type=int, help="steps per behaviour (default: --seconds)")
-    parser.add_argument("--seconds", type=float, help="simulated seconds (default: the env's)")
+    parser.add_argument("--n", type=int, nargs="+", default=[200], help="pool sizes")
     parser.add_argument(
-        "--oversample", type=float, default=1.0, help="windows sampled per kept one (app: 2)"
+        "--lengths",
+        nargs="+",
+        default=["30", "default"],
+        help="steps per behaviour, or 'default' (the env's clip seconds: Hopper 1.5 s)",
     )
-    parser.add_argument("--workers", type=int, default=2)
-    parser.add_argument("--repeats", type=int, default=1, help="runs; the median is shown")
+    parser.add_argument("--clips", choices=["on_demand", "eager"], default="on_demand")
+    parser.add_argument("--workers", type=int, default=2, help="render workers")
+    parser.add_argument("--clip-requests", type=int, default=20, help="cold clips asked for")
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args([] if argv is None else list(argv))
-    backend = ensure_gl_backend()
-    clip = env_clip_timing(args.env, args.seconds, steps=args.length)
-    cfg = PublishConfig(env=args.env, workers=args.workers)
-    load_before = os.getloadavg()[0]
-    runs = [
-        run_once(cfg, args.n, clip.steps, args.oversample, args.seed + k)
-        for k in range(args.repeats)
-    ]
-    load_after = os.getloadavg()[0]
-    median = statistics.median(t.total_s for t, _ in runs)
-    shown, cpu = min(runs, key=lambda run: abs(run[0].total_s - median))
-    print(
-        f"Pool preparation: {args.n} {args.env} behaviours × {clip.steps} steps "
-        f"({clip.seconds:.2f} s; clips of {clip.frames} frames, every {clip.stride}. step, "
-        f"{clip.fps:.4g} fps), {args.oversample:g}× windows sampled, random "
-        f"policy, {cfg.width}×{cfg.height}, x264 {cfg.video.preset}, {cfg.workers} workers, "
-        f"{os.cpu_count()} CPUs, MUJOCO_GL={backend}; load average {load_before:.1f} before, "
-        f"{load_after:.1f} after.\n"
-    )
-    print(table(shown))
-    cores = os.cpu_count() or 1
-    print(
-        f"\nCPU time of all processes (parent, workers, ffmpeg): {cpu:.1f} s, i.e. at least "
-        f"{cpu / cores:.1f} s of wall time on {cores} otherwise idle cores."
-    )
-    if len(runs) > 1:
-        totals = ", ".join(f"{t.total_s:.1f} (CPU {c:.1f})" for t, c in runs)
-        print(f"Totals of {len(runs)} runs, wall (CPU) s: {totals}; the median run is shown.")
+    ensure_gl_backend()
+    runs = []
+    with RenderPool(args.workers) as render:
+        render.warm_up(FrameSettings(args.env))  # the worker's pool is long-lived and warm
+        render.start([], ClipStore(tempfile.mkdtemp())).wait(show_progress=False)
+        for length in args.lengths:
+            for n in args.n:
+                steps = None if length == "default" else int(length)
+                settings = SessionSettings(pool_size=n, fragment_length=steps).for_env(args.env)
+                with tempfile.TemporaryDirectory() as tmp:
+                    run, published = prepare(
+                        args.env, n, settings, args.clips, render, Path(tmp), args.seed
+                    )
+                    if args.clips == "on_demand" and args.clip_requests > 0:
+                        measure_on_demand(run, published, Path(tmp), args.clip_requests)
+                runs.append(run)
+                print(f"[{n} × {run.steps} steps done]", file=sys.stderr, flush=True)
+    print(report(runs, args.env, args.clips, args.workers))
 
 
 if __name__ == "__main__":
