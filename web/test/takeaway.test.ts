@@ -1,5 +1,5 @@
 import { describe, expect, it } from "vitest";
-import { ApiError, type AgentOut, type Api } from "../src/api";
+import { ApiError, type AgentOut, type Api, STALE, createApi } from "../src/api";
 import { fakeApi } from "../src/bench/fake-api";
 import { syntheticRound } from "../src/bench/synthetic";
 import { createController } from "../src/controller";
@@ -125,5 +125,46 @@ describe("taking a round's agent", () => {
     const before = store.getState().agent;
     await expect(controller.pickAgent(0)).rejects.toThrow(reason);
     expect(store.getState().agent).toBe(before);
+  });
+});
+
+describe("the pick on the wire", () => {
+  function fetchOnce(status: number, body: unknown) {
+    const calls: Array<{ url: string; init: RequestInit }> = [];
+    const pending: Array<() => void> = [];
+    const fetch = ((url: string, init: RequestInit) => {
+      calls.push({ url, init });
+      const answer = calls.length === 1 && init.method === "GET" ? { round: 2 } : body;
+      const code = calls.length === 1 && init.method === "GET" ? 200 : status;
+      return new Promise<Response>((resolve) =>
+        pending.push(() => resolve(new Response(JSON.stringify(answer), { status: code }))),
+      );
+    }) as unknown as typeof globalThis.fetch;
+    /** Answers the requests, the last sent first. */
+    const release = () => pending.splice(0).reverse().forEach((go) => go());
+    return { fetch, calls, release };
+  }
+
+  it("PUTs the round, and an agent read it overtook is dropped", async () => {
+    const { fetch, calls, release } = fetchOnce(200, { round: 0, chosen_by: "person" });
+    const api = createApi({ fetch, base: "http://x/" });
+    const read = api.agent("s-1");
+    const picked = api.pickAgent("s-1", 0);
+    release();
+    expect(await picked).toEqual({ round: 0, chosen_by: "person" });
+    expect(await read).toBe(STALE);
+    expect(calls[1]!.url).toBe("http://x/api/sessions/s-1/agent/round");
+    expect(calls[1]!.init.method).toBe("PUT");
+    expect(JSON.parse(String(calls[1]!.init.body))).toEqual({ round: 0 });
+    expect(api.agentRoundVideoUrl("s-1", 3)).toBe("http://x/api/sessions/s-1/agent/rounds/3.mp4");
+  });
+
+  it("rejects with the server's reason", async () => {
+    const reason = "round 0's checkpoint has no policy.zip: its policy cannot be packaged";
+    const { fetch, release } = fetchOnce(409, { detail: reason });
+    const api = createApi({ fetch, base: "http://x/" });
+    const picked = api.pickAgent("s-1", 0);
+    release();
+    await expect(picked).rejects.toMatchObject({ status: 409, message: reason });
   });
 });
