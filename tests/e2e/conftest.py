@@ -232,6 +232,13 @@ def page(browser: Any) -> Iterator[Any]:
 
 
 @pytest.fixture
+def other_page(browser: Any) -> Iterator[Any]:
+    """A second 1366 × 768 page, in a browser profile of its own: another person's (a shared
+    session's annotator beside `page`)."""
+    yield from _page(browser, guide_seen=True)
+
+
+@pytest.fixture
 def first_visit(browser: Any) -> Iterator[Any]:
     """A 1366 × 768 page of a fresh browser profile: the app's guide opens by itself."""
     yield from _page(browser, guide_seen=False)
