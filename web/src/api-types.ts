@@ -34,7 +34,7 @@ export interface paths {
         };
         /**
          * Health
-         * @description The server is up; the training worker's pid while it runs (None otherwise).
+         * @description The server is up; the training workers' pids while they run.
          */
         get: operations["health_api_health_get"];
         put?: never;
@@ -726,7 +726,7 @@ export interface components {
         AgentRound: {
             /**
              * Checkpoint
-             * @description the round's checkpoint is there: the person may pick it as the take-away agent
+             * @description the round's checkpoint is there: the person may pick it as take-away agent
              * @default false
              */
             checkpoint: boolean;
@@ -1052,6 +1052,11 @@ export interface components {
              * @description the training worker's process id, if running
              */
             worker_pid: number | null;
+            /**
+             * Worker Pids
+             * @description every running training worker's process id (`serve --training-workers`)
+             */
+            worker_pids?: number[];
         };
         /** JudgementIn */
         JudgementIn: {
