@@ -185,6 +185,7 @@ function drawTakeaway(view: View, agent: AgentOut): void {
       clipUrl: data.roundVideoUrl,
       pending: view.pick.pending,
       busy: data.busy,
+      owner: data.owner !== false,
       error: view.pick.error,
     },
     { pick: (round) => pick(view, agent, round) },

@@ -16,6 +16,9 @@ export interface TakeawayData {
   pending: number | null;
   /** The session is being changed (training continues): no pick meanwhile. */
   busy: boolean;
+  /** Only the session's owner picks (the server answers others 403): the others see the
+   * choice and the clips without the buttons. */
+  owner: boolean;
   /** Why the last pick failed (the server's reason); null when it did not. */
   error: string | null;
 }
@@ -37,6 +40,7 @@ interface Card {
 }
 
 interface View {
+  note: HTMLElement;
   choice: HTMLElement;
   error: HTMLElement;
   list: HTMLUListElement;
@@ -49,6 +53,9 @@ interface View {
 }
 
 const views = new WeakMap<Element, View>();
+const WATCH = "Point at a clip, or press its play button, to watch that round's agent";
+const OWNER_NOTE = `The last round is not always the best. ${WATCH}; the download is the agent you take.`;
+const OTHERS_NOTE = `${WATCH}. The session's owner chooses which one the download is.`;
 
 export function renderTakeaway(element: HTMLElement, data: TakeawayData, handlers: TakeawayHandlers): void {
   const view = memo(views, element, () => build(element));
@@ -64,7 +71,8 @@ export function renderTakeaway(element: HTMLElement, data: TakeawayData, handler
   text(view.choice, choiceText(data.agent));
   text(view.error, data.error ?? "");
   view.error.hidden = data.error === null;
-  for (const r of rounds) updateCard(view.cards.get(r.round)!, r, data.pending, data.busy);
+  for (const r of rounds) updateCard(view.cards.get(r.round)!, r, data.pending, data.busy, data.owner);
+  text(view.note, data.owner ? OWNER_NOTE : OTHERS_NOTE);
   if (view.taking !== null && data.pending === null) {
     // The button pressed is gone with the pick (or stays on a failure): keep the focus near.
     const card = view.cards.get(view.taking);
@@ -74,18 +82,18 @@ export function renderTakeaway(element: HTMLElement, data: TakeawayData, handler
   }
 }
 
-function updateCard(card: Card, r: TakeawayRound, pending: number | null, busy: boolean): void {
+function updateCard(card: Card, r: TakeawayRound, pending: number | null, busy: boolean, owner: boolean): void {
   card.item.classList.toggle("chosen", r.chosen);
   attr(card.item, "aria-current", r.chosen ? "true" : null);
   text(card.score, r.score ?? "not evaluated");
   card.score.classList.toggle("muted", r.score === null);
   card.mark.hidden = !r.chosen;
-  card.take.hidden = r.chosen;
+  card.take.hidden = r.chosen || !owner;
   card.take.disabled = r.blocked !== null || pending !== null || busy;
   attr(card.take, "aria-busy", pending === r.round ? "true" : null);
   text(card.take, pending === r.round ? "Taking…" : "Take this agent");
   text(card.blocked, r.blocked ?? "");
-  card.blocked.hidden = r.blocked === null;
+  card.blocked.hidden = r.blocked === null || !owner;
 }
 
 function buildCard(view: View, r: TakeawayRound, src: string): Card {
@@ -183,6 +191,7 @@ function setPlaying(card: Card, playing: boolean): void {
 }
 
 function build(element: HTMLElement): View {
+  const note = h("p", { class: "takeaway-note muted" });
   const choice = h("p", { class: "takeaway-choice", tabindex: -1, "aria-live": "polite" });
   const error = h("p", { class: "takeaway-error", role: "alert", hidden: true });
   const list = h("ul", { class: "takeaway-list", "aria-label": "The rounds' agents" });
@@ -190,15 +199,10 @@ function build(element: HTMLElement): View {
   element.setAttribute("aria-labelledby", "takeaway-title");
   element.replaceChildren(
     h("h3", { class: "chart-title", id: "takeaway-title" }, "Choose the agent you take away"),
-    h(
-      "p",
-      { class: "takeaway-note muted" },
-      "The last round is not always the best. Point at a clip, or press its play button, to " +
-        "watch that round's agent; the download is the agent you take.",
-    ),
+    note,
     choice,
     error,
     list,
   );
-  return { choice, error, list, cards: new Map(), built: "", handlers: null, taking: null };
+  return { note, choice, error, list, cards: new Map(), built: "", handlers: null, taking: null };
 }
