@@ -78,6 +78,14 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
         "'local': a Ray of this machine) instead of processes of the server; every node needs "
         "groupwise installed",
     )
+    serve.add_argument(
+        "--training-workers",
+        type=int_at_least(1),
+        default=1,
+        metavar="N",
+        help="training worker processes; each trains a share of the sessions, so open "
+        "sessions train on N cores (default 1: on 2 cores PPO has one, the server the other)",
+    )
     for name, kind in SETTING_FLAGS.items():
         serve.add_argument(
             f"--{name.replace('_', '-')}",
@@ -256,6 +264,7 @@ def run(args: argparse.Namespace) -> int:
         token=token,
         allowed_hosts=LOOPBACK_HOSTS if loopback else None,
         ray_address=args.ray,
+        training_workers=args.training_workers,
     )
     try:
         chosen = choose_session(
