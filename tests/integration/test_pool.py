@@ -17,7 +17,7 @@ from groupwise.envs import RenderingUnavailableError, make_env, rendering
 from groupwise.pool.publish import PreparedPool, PublishConfig, load_fragments, prepare_pool
 from groupwise.rl.policy_files import load_policy
 
-GRID = PublishConfig(env="GridWorld", width=64, height=64, workers=2)
+GRID = PublishConfig(env="GridWorld", width=64, height=64, workers=2, clips="eager")
 GRID_SAMPLING = {"size": 20, "length": 30}
 FILES = {
     "pool.json",
@@ -136,7 +136,7 @@ def test_same_seed_gives_byte_identical_clips_in_process_too(
 
 
 def test_hopper_clips_show_the_window(tmp_path: Path) -> None:
-    cfg = PublishConfig(env="Hopper", width=96, height=96, workers=2)
+    cfg = PublishConfig(env="Hopper", width=96, height=96, workers=2, clips="eager")
     pool = prepare_pool(
         cfg,
         load_policy("random", "Hopper"),
@@ -176,7 +176,7 @@ def test_missing_renderer_names_the_system_package(
     monkeypatch.delenv("MUJOCO_GL", raising=False)
     monkeypatch.delenv("PYOPENGL_PLATFORM", raising=False)
     monkeypatch.setattr(rendering, "_backend_works", lambda backend: False)
-    cfg = PublishConfig(env="Hopper", workers=0)
+    cfg = PublishConfig(env="Hopper", workers=0, clips="eager")
     with pytest.raises(RenderingUnavailableError, match="apt-get install libegl1"):
         prepare_pool(
             cfg,
@@ -197,7 +197,7 @@ def test_checkpoint_policy_samples_a_pool(tmp_path: Path) -> None:
     agent.save(checkpoint)
     agent.close()
     policy = load_policy(str(checkpoint), "GridWorld")
-    cfg = PublishConfig(env="GridWorld", width=32, height=32, workers=0)
+    cfg = PublishConfig(env="GridWorld", width=32, height=32, workers=0, clips="eager")
     pool = prepare_pool(cfg, policy, np.random.default_rng(0), tmp_path / "pool", size=4, length=30)
     assert len(pool.clips) == 4
 

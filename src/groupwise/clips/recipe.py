@@ -26,6 +26,7 @@ import hashlib
 import io
 import json
 import tempfile
+from collections.abc import Sequence
 from dataclasses import dataclass
 from importlib import metadata
 from pathlib import Path
@@ -206,7 +207,7 @@ def render_recipe(
 
     env = env if env is not None else cached_env(recipe.settings)
     video = recipe.settings.video
-    if not clip and recipe.poster_state.size:
+    if not clip:
         return RenderedMedia(None, poster_bytes(_poster_frame(recipe, env), video))
     frames = even_crop(window_frames(recipe, env))
     poster = poster_bytes(frames[poster_frame(recipe.frames)], video)
@@ -238,11 +239,32 @@ def window_frames(recipe: ClipRecipe, env: gym.Env[Any, Any]) -> np.ndarray:
 
 
 def _poster_frame(recipe: ClipRecipe, env: gym.Env[Any, Any]) -> np.ndarray:
-    """The poster's frame (H', W', 3), cropped even, from the state before its step − 1."""
+    """The poster's frame (H', W', 3), cropped even: one step from the state before the
+    poster's step − 1, else from the recipe's state, else replayed from the reset."""
     step = recipe.poster_step
-    for _ in _restored_steps(recipe, env, recipe.poster_state, step - 1, step):
-        pass
-    return even_crop(np.asarray(env.render())[None])[0]
+    if recipe.poster_state.size or recipe.origin > 0:
+        state, before = (recipe.state, recipe.origin)
+        if recipe.poster_state.size:
+            state, before = (recipe.poster_state, step - 1)
+        for _ in _restored_steps(recipe, env, state, before, step):
+            pass
+        return even_crop(np.asarray(env.render())[None])[0]
+    return replayed_posters(env, [recipe])[step]
+
+
+def replayed_posters(
+    env: gym.Env[Any, Any], recipes: Sequence[ClipRecipe]
+) -> dict[int, np.ndarray]:
+    """Poster frames (H', W', 3), cropped even, of windows of one episode replayed from its
+    reset (recipes with ``origin == 0``, one reset seed), in one replay: step → frame."""
+    longest = max(recipes, key=lambda r: r.start + r.length)
+    if {r.reset_seed for r in recipes} != {longest.reset_seed} or longest.origin != 0:
+        raise ValueError("posters replayed together must be windows of one episode from its reset")
+    steps = sorted({r.poster_step for r in recipes})
+    windows = replay_windows(
+        env, longest.reset_seed, longest.actions, steps, 1, longest.observations
+    )
+    return {step: even_crop(frames)[0] for step, frames in windows}
 
 
 def _restored_steps(

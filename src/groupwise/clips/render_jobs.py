@@ -16,7 +16,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from groupwise.clips.recipe import ClipRecipe, render_recipe, window_recipe
+from groupwise.clips.recipe import ClipRecipe, render_recipe, replayed_posters, window_recipe
 from groupwise.clips.replay import FrameSettings, even_crop, make_render_env, replay_windows
 from groupwise.clips.store import ClipStore
 from groupwise.clips.timing import ClipTiming
@@ -249,10 +249,15 @@ def run_poster_job(
     job: PosterJob, store: ClipStore, on_clip: Callable[[], None] | None = None
 ) -> JobReport:
     """Keep every window's recipe in `store` and render its poster (unless stored); the
-    reported clip and poster ids are the recipe's (``key.mp4``, ``key.jpg``)."""
+    reported clip and poster ids are the recipe's (``key.mp4``, ``key.jpg``). Windows with
+    a poster snapshot take one step each; the others are replayed, one replay per episode
+    (`recipe.replayed_posters`)."""
     rendered = []
     render_s = encode_s = 0.0
     cpu_before = _children_cpu_s()
+    tick = time.perf_counter()
+    replayed = _replayed_posters([r for _, r in job.windows if r.poster_id() not in store])
+    render_s += time.perf_counter() - tick
     for episode, recipe in job.windows:
         tick = time.perf_counter()
         key = recipe.key
@@ -261,10 +266,14 @@ def run_poster_job(
         mark = time.perf_counter()
         encode_s += mark - tick
         if poster not in store:
-            media = render_recipe(recipe, clip=False)
+            frame = replayed.get((recipe.settings, recipe.reset_seed, recipe.poster_step))
+            if frame is None:
+                image = render_recipe(recipe, clip=False).poster
+            else:
+                image = poster_bytes(frame, recipe.settings.video)
             tick = time.perf_counter()
             render_s += tick - mark
-            store.put_as(media.poster, poster)
+            store.put_as(image, poster)
             encode_s += time.perf_counter() - tick
         rendered.append(RenderedClip(episode, recipe.start, recipe.clip_id(), poster))
         if on_clip is not None:
@@ -276,6 +285,22 @@ def run_poster_job(
         encode_s=encode_s,
         ffmpeg_cpu_s=_children_cpu_s() - cpu_before,
     )
+
+
+def _replayed_posters(
+    recipes: Sequence[ClipRecipe],
+) -> dict[tuple[FrameSettings, int, int], np.ndarray]:
+    """Poster frames of the recipes without snapshots (origin 0, no poster state), one
+    replay per episode: (settings, reset seed, step) → frame."""
+    episodes: dict[tuple[FrameSettings, int], list[ClipRecipe]] = {}
+    for recipe in recipes:
+        if recipe.origin == 0 and recipe.poster_state.size == 0:
+            episodes.setdefault((recipe.settings, recipe.reset_seed), []).append(recipe)
+    frames = {}
+    for (settings, seed), group in episodes.items():
+        for step, frame in replayed_posters(cached_env(settings), group).items():
+            frames[(settings, seed, step)] = frame
+    return frames
 
 
 def _children_cpu_s() -> float:
