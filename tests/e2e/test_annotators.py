@@ -3,8 +3,8 @@ an annotator and hands them their link; two pages, each in a browser profile of 
 one server. A comparison made on one page reaches the other's counters and history through
 the event stream; the annotator cannot undo the owner's comparison and is told why; the two
 pages are offered different suggestions, and a suggestion answered on one page leaves the
-other. Screenshots: annotators-owner.png, annotators-annotator.png, annotators-dialog.png
-(1366 × 768)."""
+other. Screenshots: annotators-owner.png, annotators-annotator.png, annotators-dialog.png,
+annotators-refusal.png (1366 × 768)."""
 
 import re
 import time
@@ -119,6 +119,7 @@ def test_two_people_teach_one_agent(
     expect(_row(ann, "owner").locator(".comparisons")).to_have_text("1")
     expect(history).to_have_count(1)
     assert [j["id"] for j in server.judgements(sid, 0)] == [stored["id"]]
+    shot(ann, "annotators-refusal")
 
     # the annotator answers: the owner sees it, initials and all
     ann.get_by_role("button", name=A_BETTER).click()
@@ -136,6 +137,8 @@ def test_two_people_teach_one_agent(
     expect(_row(owner, person["id"]).locator(".comparisons")).to_have_text("0")
     expect(mine).to_have_count(1)
 
+    # Ann's page reported the round shown: her time shown grows (read again every 10 s)
+    expect(_row(owner, person["id"]).locator(".shown")).not_to_have_text("0:00", timeout=15_000)
     for pg in (owner, ann):  # the bar keeps one line, the names on it
         bar = pg.locator(".statusbar")
         assert bar.evaluate("b => b.scrollWidth <= b.clientWidth && b.clientHeight < 60")

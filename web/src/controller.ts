@@ -38,7 +38,7 @@ export function createController(store: Store, api: Api, options: ControllerOpti
   const pairwise = createPairwiseFlow(ctx, annotator);
   const groups = createGroups(ctx, storage);
   const round = createRoundSync(ctx, groups, pairwise, visible);
-  const people = createPeople(ctx, groups, pairwise);
+  const people = createPeople(ctx, groups, pairwise, visible);
   const events = createEventStream(ctx, round, people);
   const pageSettings = createPageSettings(ctx, storage);
   const sessions = createSessions(ctx, events, round, setUrl, pageSettings);

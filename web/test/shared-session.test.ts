@@ -194,6 +194,26 @@ describe("the counters", () => {
   });
 });
 
+describe("time shown", () => {
+  it("reads the people again every 10 s while a shared round runs on screen, and stops after", async () => {
+    vi.useFakeTimers({ toFake: ["setInterval", "clearInterval"] });
+    try {
+      const { api, store, controller } = setup("groupwise", ANN);
+      const read = vi.spyOn(api, "annotators");
+      await controller.boot("s-demo");
+      expect(read).not.toHaveBeenCalled();
+      vi.advanceTimersByTime(10_000);
+      expect(read).toHaveBeenCalledTimes(1);
+      const s = store.getState().session!;
+      store.dispatch({ type: "session", session: { ...s, phase: "training", timer: { ...s.timer, running: false } }, at: 0 });
+      vi.advanceTimersByTime(30_000);
+      expect(read).toHaveBeenCalledTimes(1);
+    } finally {
+      vi.useRealTimers();
+    }
+  });
+});
+
 describe("the owner's annotators", () => {
   it("adds a person, keeps their link to copy, and removes them", async () => {
     const { store, controller } = setup("groupwise", OWNER);

@@ -1,7 +1,9 @@
 /**
  * A shared session (issue 21): the owner adds and removes people (each gets a link with a
  * token of their own, shown once), and an answer someone else gave takes its suggestion or
- * pair off this page, which shows the next one.
+ * pair off this page, which shows the next one. While a shared round runs on a visible page
+ * the people are read again every `REFRESH_MS`: each one's time shown grows with the clock,
+ * and the event stream sends a state only when something else changed.
  */
 import { type JudgementOut, STALE } from "../api";
 import { afterAnswerElsewhere, isShared, judgementAnnotator, meOf } from "../lib/annotators";
@@ -9,19 +11,43 @@ import type { EffectContext } from "./context";
 import type { GroupEffects } from "./groups";
 import type { PairwiseFlow } from "./pairwise-flow";
 
-export function createPeople({ store, api, fail }: EffectContext, groups: GroupEffects, pairwise: PairwiseFlow) {
+export const REFRESH_MS = 10_000;
+
+export function createPeople(
+  { store, api, fail }: EffectContext,
+  groups: GroupEffects,
+  pairwise: PairwiseFlow,
+  visible: () => boolean,
+) {
   const dispatch = store.dispatch;
   const get = store.getState;
+  let ticking: ReturnType<typeof setInterval> | null = null;
 
-  /** Reads the people and their counters again (the owner's dialog, after a change). */
-  async function refresh(): Promise<void> {
+  /** Reads the people and their counters again (the owner's dialog, after a change);
+   * `quiet`: a failure is not worth a message (the periodic read). */
+  async function refresh(quiet = false): Promise<void> {
     const sid = get().session?.id;
     if (!sid) return;
     try {
       const list = await api.annotators(sid);
       if (list !== STALE) dispatch({ type: "annotators", sid, list });
     } catch (err) {
-      fail(err);
+      if (!quiet) fail(err);
+    }
+  }
+
+  /** Reads the people again every REFRESH_MS while a shared round runs on screen. */
+  function keepTime(): void {
+    const s = get().session;
+    const running = !!s && isShared(s) && s.phase === "ready" && s.timer.running;
+    if (running && !ticking) {
+      ticking = setInterval(() => {
+        const now = get().session;
+        if (now && isShared(now) && now.timer.running && visible()) void refresh(true);
+      }, REFRESH_MS);
+    } else if (!running && ticking) {
+      clearInterval(ticking);
+      ticking = null;
     }
   }
 
@@ -90,6 +116,7 @@ export function createPeople({ store, api, fail }: EffectContext, groups: GroupE
   // Once the session is shared, the server leases what it offers to one person at a time;
   // what this page was offered before is asked for again so that it is leased to it too.
   store.subscribe((state, previous) => {
+    if (state.session !== previous.session) keepTime();
     const s = state.session;
     if (!s || s.id !== previous.session?.id || !isShared(s) || isShared(previous.session)) return;
     if (s.mode === "pairwise") pairwise.reclaim();
