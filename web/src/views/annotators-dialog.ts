@@ -38,9 +38,12 @@ interface View {
   list: HTMLUListElement;
   none: HTMLElement;
   handlers: AnnotatorsDialogHandlers | null;
+  data: AnnotatorsDialogData | null;
   wasOpen: boolean;
   confirm: { id: string; until: number } | null;
   shownCreated: AnnotatorCreated | null;
+  /** What the list shows, so it is rebuilt only when that changes (a focused button stays). */
+  listKey: string;
 }
 
 const views = new WeakMap<Element, View>();
@@ -62,6 +65,7 @@ export function renderAnnotatorsDialog(
 ): void {
   const view = memo(views, element, () => build(element));
   view.handlers = handlers;
+  view.data = data;
   element.hidden = !data.open;
   if (!data.open) {
     view.wasOpen = false;
@@ -84,18 +88,23 @@ export function renderAnnotatorsDialog(
   }
   const others = data.people.filter((p) => p.id !== OWNER_ID);
   view.none.hidden = others.length > 0;
+  const confirming = view.confirm && view.confirm.until > Date.now() ? view.confirm.id : null;
+  const key = JSON.stringify([others.map((p) => [p.id, p.name, p.comparisons, data.colours.get(p.id)]), data.state.busy, confirming]);
+  if (key === view.listKey) return;
+  view.listKey = key;
   view.list.replaceChildren(
     ...others.map((p) => {
-      const confirming = view.confirm?.id === p.id && view.confirm.until > Date.now();
+      const asking = confirming === p.id;
       const remove = h(
         "button",
         {
           type: "button",
-          class: `small remove${confirming ? " confirm" : ""}`,
-          "aria-label": confirming ? `Click again to remove ${p.name}` : `Remove ${p.name}`,
+          class: `small remove${asking ? " confirm" : ""}`,
+          "aria-label": asking ? `Click again to remove ${p.name}` : `Remove ${p.name}`,
+          "data-id": p.id,
           disabled: data.state.busy,
         },
-        confirming ? "Click again" : "Remove",
+        asking ? "Click again" : "Remove",
       );
       remove.addEventListener("click", () => {
         if (view.confirm?.id === p.id && view.confirm.until > Date.now()) {
@@ -104,7 +113,18 @@ export function renderAnnotatorsDialog(
           return;
         }
         view.confirm = { id: p.id, until: Date.now() + CONFIRM_MS };
-        renderAnnotatorsDialog(element, data, handlers);
+        // The list is rebuilt: the focus stays on this person's button if it was there.
+        const again = () => {
+          const active = document.activeElement;
+          const focused = active instanceof HTMLElement && element.contains(active) && active.dataset.id === p.id;
+          renderAnnotatorsDialog(element, view.data!, view.handlers!);
+          if (focused) element.querySelector<HTMLButtonElement>(`.remove[data-id="${CSS.escape(p.id)}"]`)?.focus();
+        };
+        again();
+        // Not clicked again in time: the button reads "Remove" again.
+        window.setTimeout(() => {
+          if (view.confirm?.id === p.id && view.confirm.until <= Date.now()) again();
+        }, CONFIRM_MS + 50);
       });
       return h(
         "li",
@@ -189,9 +209,11 @@ function build(element: HTMLElement): View {
     list,
     none,
     handlers: null,
+    data: null,
     wasOpen: false,
     confirm: null,
     shownCreated: null,
+    listKey: "",
   };
   form.addEventListener("submit", (event) => {
     event.preventDefault();
