@@ -158,10 +158,11 @@ class ProcessBackend:
 
 class RayBackend:
     """Renders as Ray tasks of one CPU each, on the cluster at `address` (joined here unless
-    this process is already connected; None: a local Ray). The tasks import groupwise on the
-    cluster's nodes, so each node needs it installed (with MuJoCo and an offscreen GL)."""
+    this process is already connected; None: a local Ray), at most `capacity` at a time
+    (default: the cluster's CPUs when joined). The tasks import groupwise on the cluster's
+    nodes, so each node needs it installed (with MuJoCo and an offscreen GL)."""
 
-    def __init__(self, address: str | None, capacity: int = 8) -> None:
+    def __init__(self, address: str | None, capacity: int | None = None) -> None:
         import ray
 
         self._ray = ray
@@ -169,7 +170,8 @@ class RayBackend:
         if not ray.is_initialized():
             ray.init(address=address, logging_level=logging.WARNING, log_to_driver=False)
             self._started = True
-        self._capacity = capacity
+        cpus = int(ray.cluster_resources().get("CPU", 1))
+        self._capacity = max(1, capacity if capacity is not None else cpus)
         self._render = ray.remote(num_cpus=1, max_retries=1)(render_recipe_bytes)
         self._warm = ray.remote(num_cpus=1)(warm_recipe_env)
 
@@ -262,6 +264,10 @@ class OnDemandClips:
             flight = self._flights.get(clip_id)
             if flight is not None:
                 return flight.done
+            if clip_id in self.store:  # rendered since the caller looked
+                stored: Future[None] = Future()
+                stored.set_result(None)
+                return stored
             flight = self._flights[clip_id] = _Flight(clip_id, recipe.read_bytes())
             self._waiting.append(flight)
             dropped = self._waiting[:-MAX_WAITING] if len(self._waiting) > MAX_WAITING else []
@@ -337,6 +343,9 @@ def local_renderer(store: ClipStore, workers: int = 2) -> OnDemandClips:
     return OnDemandClips(store, ProcessBackend(workers))
 
 
-def ray_renderer(store: ClipStore, address: str | None, capacity: int = 8) -> OnDemandClips:
-    """On-demand clips of `store` rendered as Ray tasks (`RayBackend`)."""
+def ray_renderer(
+    store: ClipStore, address: str | None, capacity: int | None = None
+) -> OnDemandClips:
+    """On-demand clips of `store` rendered as Ray tasks (`RayBackend`; `capacity` renders at
+    a time, default the cluster's CPUs)."""
     return OnDemandClips(store, RayBackend(address, capacity))

@@ -52,7 +52,8 @@ class AppConfig:
     clip_workers: int = 2
     """Processes of the server that render clips on demand (`clips.on_demand`)."""
     ray_address: str | None = None
-    """Render clips on demand as tasks on this Ray cluster instead (``serve --ray``)."""
+    """Render clips on demand as tasks on this Ray cluster instead (``serve --ray``), as many
+    at a time as it has CPUs."""
 
     @property
     def db_url(self) -> str:

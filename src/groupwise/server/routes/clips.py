@@ -40,7 +40,7 @@ def renderer(request: Request, context: Context) -> OnDemandClips:
         if made is None:
             config = context.config
             if config.ray_address is not None:
-                made = ray_renderer(context.clips, config.ray_address, config.clip_workers)
+                made = ray_renderer(context.clips, config.ray_address)  # the cluster's CPUs
             else:
                 made = local_renderer(context.clips, config.clip_workers)
             state.clip_renderer = made
