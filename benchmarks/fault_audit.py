@@ -1,14 +1,23 @@
-"""What the fault harness's clients were told (`Ledger`), checked against what the SQLite
-database holds (`audit`), read directly with `sqlite3`, not through the app."""
+"""What the fault harness's clients were told (`Ledger`), checked against what the database
+holds (`audit`), read with plain SQL through SQLAlchemy, not through the app's repositories.
+
+The same checks run on SQLite and PostgreSQL: the SQL is portable (the column names
+``left`` and ``right`` are keywords in PostgreSQL, so they are quoted; the JSON columns,
+text in SQLite and ``json`` in PostgreSQL, are typed as SQLAlchemy's `JSON`, which decodes
+both), and the reads cannot write (SQLite opened with ``mode=ro``, PostgreSQL transactions
+``READ ONLY``; `read_only`).
+"""
 
 import dataclasses
-import json
-import sqlite3
 import threading
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+
+from sqlalchemy import JSON, Boolean, Engine, Float, create_engine, text
+from sqlalchemy.engine import make_url
+from sqlalchemy.pool import NullPool
 
 LABELS = {"left": 1.0, "right": 0.0, "equal": 0.5}
 """A judgement's label → its pairs' P(a preferred), a from the left group."""
@@ -56,6 +65,7 @@ class Ledger:
 class Audit:
     """The database against the ledger; the first five counts must be 0."""
 
+    database: str  # the backend and its server's version, "postgresql 15.14"
     lost: int  # answered 2xx, not stored
     duplicated: int  # a client_id stored more than once
     half_stored: int  # a live judgement without its max(m, n) pairs, or pairs without one
@@ -74,19 +84,41 @@ class Audit:
         return dataclasses.replace(self, orphans=orphans, problems=self.problems + extra)
 
 
-def audit(db_path: Path, session_id: str, ledger: Ledger) -> Audit:
-    """Compare the session's judgements and pairs in `db_path` with `ledger`."""
-    with sqlite3.connect(f"file:{db_path}?mode=ro", uri=True, timeout=30) as db:
-        rows = db.execute(
-            "SELECT id, client_id, round_index, left, right, label, undone FROM judgements "
-            "WHERE session_id = ?",
-            (session_id,),
-        ).fetchall()
-        pairs: dict[int, list[tuple[str, str, float]]] = {}
-        for judgement_id, a, b, label in db.execute(
-            "SELECT judgement_id, a, b, label FROM pairs ORDER BY judgement_id, position"
-        ):
-            pairs.setdefault(judgement_id, []).append((a, b, label))
+JUDGEMENTS = text(
+    'SELECT id, client_id, round_index, "left", "right", label, undone FROM judgements '
+    "WHERE session_id = :session"
+).columns(left=JSON, right=JSON, undone=Boolean)
+PAIRS = text("SELECT judgement_id, a, b, label FROM pairs ORDER BY judgement_id, position").columns(
+    label=Float
+)
+
+
+def read_only(url: str) -> Engine:
+    """An engine on `url` that cannot change it (module docstring); dispose of it after use."""
+    parsed = make_url(url)
+    if parsed.get_backend_name() == "sqlite":
+        path = Path(parsed.database or "").resolve()
+        return create_engine(
+            f"sqlite:///file:{path}?mode=ro&uri=true",
+            poolclass=NullPool,
+            connect_args={"timeout": 30},
+        )
+    return create_engine(url, poolclass=NullPool, execution_options={"postgresql_readonly": True})
+
+
+def audit(url: str, session_id: str, ledger: Ledger) -> Audit:
+    """Compare the session's judgements and pairs in the database at `url` (a SQLAlchemy
+    URL, SQLite or PostgreSQL) with `ledger`."""
+    engine = read_only(url)
+    try:
+        with engine.begin() as db:
+            version = ".".join(map(str, db.dialect.server_version_info or ()))
+            rows = db.execute(JUDGEMENTS, {"session": session_id}).all()
+            pairs: dict[int, list[tuple[str, str, float]]] = {}
+            for judgement_id, a, b, label in db.execute(PAIRS):
+                pairs.setdefault(judgement_id, []).append((a, b, label))
+    finally:
+        engine.dispose()
     problems: list[str] = []
     counts = Counter(client_id for _, client_id, *_ in rows)
     duplicated = sum(n - 1 for n in counts.values() if n > 1)
@@ -96,7 +128,6 @@ def audit(db_path: Path, session_id: str, ledger: Ledger) -> Audit:
     problems += [f"pairs of judgement {j}, which is not stored" for j in orphan_pairs]
     half, altered = len(orphan_pairs), 0
     for judgement_id, client_id, round_index, left, right, label, undone in rows:
-        left, right = json.loads(left), json.loads(right)
         own = pairs.get(judgement_id, [])
         body = ledger.bodies.get(client_id)
         if undone:
@@ -124,6 +155,7 @@ def audit(db_path: Path, session_id: str, ledger: Ledger) -> Audit:
     problems += [f"judgement {c} was answered 2xx but is not stored" for c in sorted(lost)]
     problems += ledger.server_errors
     return Audit(
+        database=f"{engine.dialect.name} {version}",
         lost=len(lost),
         duplicated=duplicated,
         half_stored=half,

@@ -1,31 +1,34 @@
 """Benchmark: kill the server or its training worker at random moments under load; nothing
 answered may be lost, duplicated or half-stored, and the session must carry on.
 
-Runs a real `groupwise serve` (uvicorn, SQLite in WAL mode, the training worker) on a
-temporary data directory with a tiny GridWorld session (rounds of 16 behaviours that
-prepare and train in seconds). `clients` threads submit valid judgements over the open
-round's behaviours, each with its own ``client_id``; a request that fails in transit (the
-server died) is sent again with the same ``client_id`` until it gets an answer, so a judgement
-stored just before the kill is answered 200 by the next server instead of stored twice.
+Runs a real `groupwise serve` (uvicorn, the training worker) on a temporary data directory
+and a database of its own (``--db``: SQLite in WAL mode in the data directory, a throw-away
+local PostgreSQL cluster with fsync on, or an empty database at a URL; `benchmarks.database`)
+with a tiny GridWorld session (rounds of 16 behaviours that prepare and train in seconds).
+`clients` threads submit valid judgements over the open round's behaviours, each with its
+own ``client_id``; a request that fails in transit (the server died) is sent again with the
+same ``client_id`` until it gets an answer, so a judgement stored just before the kill is
+answered 200 by the next server instead of stored twice.
 
 Each trial waits until the session is usable again (the round open), sometimes ends the
 round so that the worker trains and prepares the next one, lets the load run for a random
 moment, and then SIGKILLs either the server (the harness starts a new one on the same data,
 which resumes the session) or the worker (the server reports the step failed; the harness
 asks for ``POST /retry``, as the page's button does). Every choice comes from one seeded
-`np.random.Generator`. At the end it stops the server and reads the SQLite database itself
-(`fault_audit.audit`): every judgement answered 2xx is stored exactly once, as sent, with
-its pairs; nothing is half-stored; no worker outlived its server.
+`np.random.Generator`. At the end it stops the server and reads the database itself, with
+the same portable SQL on either backend (`fault_audit.audit`): every judgement answered 2xx
+is stored exactly once, as sent, with its pairs; nothing is half-stored; no worker outlived
+its server.
 
 Recovery time: from the kill until the API answers again with the session not failed and,
 when it is mid-step, a worker running it (a server restart dominates: importing the app).
 
     python -m benchmarks faults
     python -m benchmarks.faults [--trials 100] [--clients 4] [--seed 0] [--fuzz-cases 10000]
-        [--training continuous|rounds]
+        [--training continuous|rounds] [--db sqlite|postgresql|URL]
 
-After the trials it runs the schemathesis fuzz of the live API (`benchmarks.fuzz`) unless
-``--fuzz-cases 0``.
+After the trials it runs the schemathesis fuzz of the live API (`benchmarks.fuzz`, its own
+server on SQLite whatever ``--db`` says) unless ``--fuzz-cases 0``.
 
 Measured on 2 cores shared with other work (load average 9), seed 0, 4 clients: 100 kills
 (43 of the server, 57 of the worker) in 25 min; 21,608 judgements sent, 4,855 answered 2xx
@@ -56,7 +59,9 @@ from typing import Any
 import httpx
 import numpy as np
 
+from benchmarks.database import database
 from benchmarks.fault_audit import Audit, Ledger, audit
+from groupwise.storage import default_url
 
 URL = re.compile(r"open (http://\S+?)/\?session=(s-[0-9a-f]+)")
 POOL = 16
@@ -107,6 +112,9 @@ class FaultConfig:
     round and committing the one before) or "rounds" (PPO only after a round ends)."""
     stage_after_s: float = 2.0
     """Continuous: seconds into a round when the next one is prepared ahead."""
+    db: str = "sqlite"
+    """The server's database: "sqlite" (in the data directory), "postgresql" (a throw-away
+    local cluster, fsync on) or the SQLAlchemy URL of an empty database."""
 
 
 @dataclass
@@ -123,6 +131,7 @@ class Outcome:
     """What a run measured; `audit` is the database's side."""
 
     config: FaultConfig
+    database: str  # how `config.db` was served ("a local PostgreSQL over its unix socket")
     kills: dict[str, int]
     recovery_s: dict[str, list[float]]  # kill → API answers, session resumed, by target
     open_s: dict[str, list[float]]  # kill → the round open again (after any training)
@@ -137,9 +146,10 @@ class Outcome:
 class ServeProcess:
     """`groupwise serve` on a free port of `data` (resuming its session after a restart)."""
 
-    def __init__(self, data: Path, settings: dict[str, Any]) -> None:
+    def __init__(self, data: Path, settings: dict[str, Any], db: str | None) -> None:
         self.data = data
         self.settings = settings
+        self.db = db
         self.log = data.parent / "server.log"
         self.process: subprocess.Popen[str] | None = None
 
@@ -147,6 +157,7 @@ class ServeProcess:
         command = [sys.executable, "-m", "groupwise.cli", "serve", "--env", "GridWorld"]
         command += ["--data", str(self.data), "--port", "0"]
         command += ["--settings", json.dumps(self.settings)]
+        command += ["--db", self.db] if self.db else []
         env = {**os.environ, "PYTHONWARNINGS": "ignore", "PYTHONUNBUFFERED": "1"}
         with open(self.log, "ab") as log:
             self.process = subprocess.Popen(
@@ -216,13 +227,15 @@ def _client(
 class Harness:
     """One run (module docstring)."""
 
-    def __init__(self, config: FaultConfig, data: Path) -> None:
+    def __init__(self, config: FaultConfig, data: Path, db: str | None, described: str) -> None:
         self.config = config
+        self.db_url = db or default_url(data)
+        self.described = described
         self.rng = np.random.default_rng(config.seed)
         settings = {**SETTINGS, "training": config.training}
         if config.training == "continuous":
             settings["stage_after_s"] = config.stage_after_s
-        self.server = ServeProcess(data, settings)
+        self.server = ServeProcess(data, settings, db)
         self.ledger = Ledger()
         self.http = httpx.Client(timeout=15)
         self.worker_pids: set[int] = set()
@@ -274,9 +287,10 @@ class Harness:
                 thread.join(timeout=30)
             self.server.stop()
             self.http.close()
-        result = audit(self.server.data / "groupwise.db", target.session, self.ledger)
+        result = audit(self.db_url, target.session, self.ledger)
         return Outcome(
             config=self.config,
+            database=self.described,
             kills=kills,
             recovery_s=recovery,
             open_s=reopened,
@@ -387,12 +401,12 @@ def _alive(pids: set[int]) -> int:
 
 
 def run(config: FaultConfig) -> Outcome:
-    """One harness run on a temporary data directory."""
-    with tempfile.TemporaryDirectory() as tmp:
+    """One harness run on a temporary data directory and `config.db`."""
+    with tempfile.TemporaryDirectory() as tmp, database(config.db) as (url, described):
         data = Path(tmp) / "data"
         data.mkdir()
         try:
-            return Harness(config, data).run()
+            return Harness(config, data, url, described).run()
         except BaseException:
             log = Path(tmp) / "server.log"
             if log.exists():
@@ -409,12 +423,14 @@ def table(outcome: Outcome) -> str:
     back, reopened = outcome.recovery_s, outcome.open_s
     every = back["server"] + back["worker"]
     lines = [
-        "| trials | server kills | worker kills | sent | acknowledged | retried → 200 | stored "
+        "| database | trials | server kills | worker kills | sent | acknowledged "
+        "| retried → 200 | stored "
         "| lost | duplicated | half-stored | altered | 5xx | stuck | orphan workers "
         "| median recovery s (server / worker) | max recovery s "
         "| median round open again s (server / worker) |",
-        "|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---|",
-        f"| {outcome.config.trials} | {outcome.kills['server']} | {outcome.kills['worker']} "
+        "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|---:|---|",
+        f"| {a.database} | {outcome.config.trials} "
+        f"| {outcome.kills['server']} | {outcome.kills['worker']} "
         f"| {a.sent} | {a.acknowledged} | {outcome.answered_200} | {a.stored} | {a.lost} "
         f"| {a.duplicated} | {a.half_stored} | {a.altered} | {a.server_errors} "
         f"| {outcome.stuck} | {a.orphans} | {_median(every)} "
@@ -423,6 +439,7 @@ def table(outcome: Outcome) -> str:
         f"| {_median(reopened['server'])} / {_median(reopened['worker'])} |",
     ]
     notes = [
+        f"- database: {a.database}, {outcome.database}",
         "- recovery: from the kill until the API answers with the session not failed and, "
         "mid-step, a new worker started (after `POST /retry` for a killed worker); round open "
         "again: until the session is `ready`, which after an ended round includes its training "
@@ -448,22 +465,31 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--fuzz-cases", type=int, default=10_000, help="0: no fuzz")
     parser.add_argument("--training", choices=("continuous", "rounds"), default="continuous")
+    parser.add_argument(
+        "--db",
+        default="sqlite",
+        help="sqlite (default), postgresql (a throw-away local cluster) or a database URL",
+    )
     args = parser.parse_args([] if argv is None else list(argv))
     config = FaultConfig(
-        trials=args.trials, clients=args.clients, seed=args.seed, training=args.training
+        trials=args.trials,
+        clients=args.clients,
+        seed=args.seed,
+        training=args.training,
+        db=args.db,
     )
     outcome = run(config)
     print(
         f"Fault injection: {args.trials} SIGKILLs of `groupwise serve` or its training worker "
         f"while {args.clients} clients submit judgements (GridWorld, 16 behaviours a round, "
-        f"{args.training} training).\n",
+        f"{args.training} training, {outcome.database}).\n",
         flush=True,
     )
     print(table(outcome), flush=True)
     if args.fuzz_cases > 0:
         from benchmarks import fuzz
 
-        print("\n### schemathesis against the live API\n", flush=True)
+        print("\n### schemathesis against the live API (on SQLite)\n", flush=True)
         fuzz.main(["--cases", str(args.fuzz_cases), "--seed", str(args.seed)])
 
 

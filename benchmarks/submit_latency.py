@@ -49,13 +49,14 @@ import tempfile
 import threading
 import time
 import uuid
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
 import httpx
 import numpy as np
+
+from benchmarks.database import database
 
 URL = re.compile(r"open (http://\S+?)/\?session=(s-[0-9a-f]+)")
 SETTINGS = {
@@ -82,21 +83,6 @@ class Run:
     errors: int
     wall_s: float
     worker: str  # the training session's progress when the run ended
-
-
-@contextmanager
-def database(db: str) -> Iterator[tuple[str | None, str]]:
-    """(URL for ``--db``, description): SQLite in the data directory (None), a throw-away
-    PostgreSQL cluster for "postgresql", or the URL given."""
-    if db == "sqlite":
-        yield None, "SQLite in WAL mode"
-    elif db == "postgresql":
-        from tests.postgres import running_cluster
-
-        with running_cluster(durable=True) as cluster:
-            yield cluster.create_database(), "a local PostgreSQL over its unix socket"
-    else:
-        yield db, "PostgreSQL"
 
 
 def start_server(
