@@ -37,7 +37,12 @@ export function posterClip(src: string, poster: string, label: string): PosterCl
   return { frame, video };
 }
 
-const READY_TIMEOUT_MS = 2500;
+/**
+ * How long `startTogether` waits for every clip to be playable. Clips are rendered by the server
+ * when first asked for (issue 22: ~0.4 s a 1.5 s Hopper clip, a group of 8 within 1–6 s on 2
+ * busy cores, posters shown meanwhile), so a group's clips may arrive seconds apart.
+ */
+const READY_TIMEOUT_MS = 6000;
 
 function whenReady(video: HTMLVideoElement): Promise<void> {
   if (video.readyState >= HTMLMediaElement.HAVE_FUTURE_DATA) return Promise.resolve();
