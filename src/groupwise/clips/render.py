@@ -1,4 +1,5 @@
-"""Rendering and encoding the clips of a pool in worker processes.
+"""Rendering and encoding the clips of a pool in worker processes (or, for a pool whose clips
+are rendered on demand, its posters and clip recipes: `render_jobs.PosterJob`).
 
 Work is planned per episode (`render_jobs.plan_jobs`): one replay (`replay.replay_windows`)
 renders all the selected windows of an episode, or of a contiguous chunk of them so that a
