@@ -273,7 +273,9 @@ def report(runs: Sequence[Run], env: str, mode: str, workers: int) -> str:
 
 
 def main(argv: Sequence[str] | None = None) -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     parser.add_argument("--env", default="Hopper")
     parser.add_argument("--n", type=int, nargs="+", default=[200], help="pool sizes")
     parser.add_argument(
