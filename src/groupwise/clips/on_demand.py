@@ -61,6 +61,15 @@ def render_recipe_bytes(recipe: bytes, clip: bool) -> RenderedMedia:
     return render_recipe(ClipRecipe.from_bytes(recipe), clip=clip)
 
 
+def load_renderer() -> None:
+    """Import what rendering needs and choose the GL backend: most of a render process's
+    cold start (about 10 s on a busy 2-core machine), done when the server starts."""
+    from groupwise.clips.recipe import render_recipe  # noqa: F401
+    from groupwise.envs.rendering import ensure_gl_backend
+
+    ensure_gl_backend()
+
+
 def warm_recipe_env(recipe: bytes) -> None:
     """Make this process's rendering env for a recipe's settings and draw one frame."""
     from groupwise.clips.render_jobs import warm_up
@@ -103,6 +112,10 @@ class RenderBackend(Protocol):
         waiting."""
         ...
 
+    def start(self) -> None:
+        """Start the render processes and load the renderer in them, without waiting."""
+        ...
+
     def close(self) -> None: ...
 
 
@@ -142,6 +155,10 @@ class ProcessBackend:
     def warm(self, recipe: bytes) -> None:
         for _ in range(self._workers):
             self._pool().submit(warm_recipe_env, recipe)
+
+    def start(self) -> None:
+        for _ in range(self._workers):
+            self._pool().submit(load_renderer)
 
     def _restart(self) -> None:
         with self._lock:
@@ -185,6 +202,9 @@ class RayBackend:
 
     def warm(self, recipe: bytes) -> None:
         self._warm.remote(recipe)
+
+    def start(self) -> None:
+        """Nothing to start: the cluster's workers are Ray's."""
 
     def close(self) -> None:
         if self._started:

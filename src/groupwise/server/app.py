@@ -41,6 +41,7 @@ from groupwise.server.routes import (
 )
 from groupwise.server.routes import settings as settings_routes
 from groupwise.server.routes import transfer as transfer_routes
+from groupwise.server.routes.clips import start_renderer
 from groupwise.server.routes.frontend import mount_frontend
 from groupwise.server.security import (
     JSON_TYPE,
@@ -76,6 +77,8 @@ def create_app(config: AppConfig) -> FastAPI:
     @contextlib.asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         task = asyncio.create_task(context.supervisor.run()) if config.start_worker else None
+        if config.start_worker:  # a served app: its clip renderer starts with it
+            await asyncio.to_thread(start_renderer, app.state, context)
         try:
             yield
         finally:

@@ -120,7 +120,7 @@ def _message(phase: str, done: int, total: int) -> str:
         "load": "loading the policy and reward model",
         "sample": f"sampling behaviours from the policy: {done:,} / {total:,} steps",
         "dtw": f"measuring how behaviours differ (DTW): {done:,} / {total:,} pairs",
-        "clips": f"rendering clips {done} / {total}",
+        "clips": f"rendering posters {done} / {total} (each clip when first asked for)",
         "suggestions": "computing suggestions",
         "reward": f"fitting the reward model on {total:,} pairs",
         # PPO collects whole rollouts (n_envs × n_steps): the total is what runs

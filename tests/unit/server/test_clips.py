@@ -114,3 +114,13 @@ def test_a_clip_that_cannot_be_rendered_is_a_clear_500_and_stores_nothing(client
         f"{key}.mp4 could not be rendered: RuntimeError: no GL context"
     )
     assert f"{key}.mp4" not in store and store.ids() == []
+
+
+def test_a_served_app_starts_its_clip_renderer_with_it(tmp_path):
+    """The render processes start with the server, not with the first clip a person asks
+    for (that one waited 10-11 s for them on a busy machine)."""
+    from tests.unit.server.conftest import make_client
+
+    with make_client(tmp_path, start_worker=True) as client:
+        backend = client.app.state.clip_renderer.backend  # type: ignore[attr-defined]
+        assert backend._executor is not None  # started, not waiting for a first request
