@@ -6,14 +6,18 @@ one comparison every `--pace` seconds for `--minutes` minutes a round, then "End
 for `--rounds` rounds. Meanwhile it reads the worker's live checkpoint
 (``checkpoints/live/state.json``: PPO steps, written every 30 s) to measure PPO steps per
 minute of session time, and times each judgement's answer and each wait from "End round"
-until the next round is open (the person's wait: the worker prepares the next round ahead
-after the session's `stage_after_s` (60 s), so a round should last longer than that and the
-staging). It measures PPO's single-core throughput the same way as `ppo_throughput` (CPU
-time, learned reward) and prints a Markdown table.
+until the next round is open (the person's wait: the worker's stager prepares the next
+round ahead `--stage-after` seconds into the round, so a round should last longer than that
+and the staging; a person's round lasts minutes, the app's default `stage_after_s` is 60).
+It measures PPO's single-core throughput the same way as `ppo_throughput` (CPU time,
+learned reward) and prints a Markdown table.
 
     python -m benchmarks.continuous [--env Hopper] [--rounds 10] [--minutes 1.5] [--pace 5]
+                                    [--stage-after 30] [--log FILE]
 
-Measured 2026-12-02, Hopper, defaults, 2 cores at load average 1.6: End round → next round
+Before the staged round and the stager process (same day, the next round opened by the
+worker's training job after the slice in progress and sampled on PPO's thread), Hopper,
+defaults, 2 cores at load average 1.6: End round → next round
 open 1.0 s median, 3.2 s p95 (3.8 s max) over 10 rounds; PPO 62,106 steps per minute of
 session time against 83,225 per CPU-minute on one core (0.75×); judgement answers 19 ms
 median, 919 ms p99. At load 5 (other work on the machine): 7.6 / 22.6 s, 0.37×, 35 / 2,434 ms.
@@ -75,6 +79,13 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--rounds", type=int, default=10, help="rounds ended")
     parser.add_argument("--minutes", type=float, default=1.5, help="minutes a round")
     parser.add_argument("--pace", type=float, default=5.0, help="seconds per comparison")
+    parser.add_argument(
+        "--stage-after",
+        type=float,
+        default=30.0,
+        help="the session's stage_after_s: seconds into a round when the next one is prepared "
+        "(a person's round lasts minutes; these rounds last --minutes)",
+    )
     parser.add_argument("--log", type=Path, help="write the server's and worker's log here")
     args = parser.parse_args([] if argv is None else list(argv))
     rng = np.random.default_rng(0)
@@ -87,7 +98,11 @@ def main(argv: Sequence[str] | None = None) -> None:
         try:
             with httpx.Client(base_url=url, timeout=60) as http:
                 wait_for(http, first, "ready")  # the server is up (its CLI session ready)
-                settings = {**SETTINGS, "rounds": args.rounds + 1}
+                settings = {
+                    **SETTINGS,
+                    "rounds": args.rounds + 1,
+                    "stage_after_s": args.stage_after,
+                }
                 session = http.post(
                     "/api/sessions", json={"env": args.env, "settings": settings}
                 ).json()["id"]
@@ -143,7 +158,8 @@ def main(argv: Sequence[str] | None = None) -> None:
         per_minute = float("nan")
     print(
         f"{args.env}, one continuous session, a comparison every {args.pace:g} s for "
-        f"{args.minutes:g} min a round, {args.rounds} rounds, {os.cpu_count()} CPUs, "
+        f"{args.minutes:g} min a round, next round staged {args.stage_after:g} s into it, "
+        f"{args.rounds} rounds, {os.cpu_count()} CPUs, "
         f"load average {os.getloadavg()[0]:.1f}\n"
     )
     print("| measure | value |")
