@@ -15,7 +15,7 @@ import { SPEEDS } from "../lib/page-settings";
 import type { GroupId, Groups } from "../lib/selection";
 import { MAX_GROUP, otherGroup } from "../lib/selection";
 import type { Origin, State } from "../state";
-import { clipVideo, setRate, startTogether, unloadVideo } from "./clips";
+import { clipVideo, loadClips, setRate, startTogether, unloadVideo } from "./clips";
 import { attr, h, kbd, memo, text } from "./dom";
 
 export interface ClipRef {
@@ -303,6 +303,7 @@ function placeClips(view: View, data: ComparisonData): void {
       view.items.delete(id);
     }
   }
+  const fresh: HTMLVideoElement[] = [];
   for (const g of ["A", "B"] as const) {
     const list = view.panels[g].list;
     const other = otherGroup(g);
@@ -311,6 +312,7 @@ function placeClips(view: View, data: ComparisonData): void {
       if (!item) {
         item = clipItem(view, id, data.clipOf(id));
         view.items.set(id, item);
+        fresh.push(item.video);
       }
       if (item.group !== g) {
         item.group = g;
@@ -324,6 +326,7 @@ function placeClips(view: View, data: ComparisonData): void {
     });
     fitGrid(view.panels[g]);
   }
+  loadClips(fresh); // in the groups' order, ahead of clips asked for before
   const members = [...wanted].sort().join(" ");
   if (members !== view.members) {
     view.members = members;

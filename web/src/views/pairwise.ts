@@ -6,7 +6,7 @@
 import type { Label, PairQuery } from "../api";
 import { question } from "../lib/format";
 import { SPEEDS } from "../lib/page-settings";
-import { posterClip, startTogether, unloadVideo, type PosterClip } from "./clips";
+import { loadClips, posterClip, startTogether, unloadVideo, type PosterClip } from "./clips";
 import { h, kbd, memo, text } from "./dom";
 
 export interface PairwiseData {
@@ -90,6 +90,7 @@ export function renderPairwise(element: HTMLElement, data: PairwiseData, handler
       view.left.replaceChildren(l.frame);
       view.right.replaceChildren(r.frame);
       shown.push(l.video, r.video);
+      loadClips(shown); // ahead of any prefetch still waiting
     } else {
       view.left.replaceChildren();
       view.right.replaceChildren();
@@ -98,12 +99,16 @@ export function renderPairwise(element: HTMLElement, data: PairwiseData, handler
   }
   if (srcs.left) keep.add(srcs.left);
   if (srcs.right) keep.add(srcs.right);
-  const pre: HTMLElement[] = [];
+  const pre: PosterClip[] = [];
   for (const src of srcs.next) {
     keep.add(src);
-    if (src !== srcs.left && src !== srcs.right) pre.push(take(src, "next clip (loading)").frame);
+    if (src !== srcs.left && src !== srcs.right) pre.push(take(src, "next clip (loading)"));
   }
-  view.prefetch.replaceChildren(...pre);
+  view.prefetch.replaceChildren(...pre.map((clip) => clip.frame));
+  loadClips(
+    pre.map((clip) => clip.video),
+    "last",
+  );
   for (const [src, clip] of view.videos) {
     if (!keep.has(src)) {
       unloadVideo(clip.video);

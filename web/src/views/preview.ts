@@ -10,6 +10,7 @@ import { clipCaption } from "../lib/clip-timing";
 import { type Bounds, placeBeside } from "../lib/tooltip";
 import type { TreeNode } from "../lib/tree";
 import type { RoundData } from "../state";
+import { loadClips, setClipSource, unloadVideo } from "./clips";
 import { h, text } from "./dom";
 
 export interface PreviewClip {
@@ -53,11 +54,7 @@ export function createPreview(parent: HTMLElement = document.body, bounds?: () =
   let key: string | null = null;
 
   function unload(): void {
-    for (const v of clips.querySelectorAll("video")) {
-      v.pause();
-      v.removeAttribute("src");
-      v.load();
-    }
+    for (const v of clips.querySelectorAll("video")) unloadVideo(v);
     clips.replaceChildren();
   }
 
@@ -88,6 +85,7 @@ export function createPreview(parent: HTMLElement = document.body, bounds?: () =
         unload();
         key = content.key;
         element.classList.toggle("large", content.large);
+        const videos: HTMLVideoElement[] = [];
         for (const clip of content.clips) {
           const video = h("video", {
             muted: true,
@@ -99,10 +97,12 @@ export function createPreview(parent: HTMLElement = document.body, bounds?: () =
             "aria-label": `clip of behaviour ${clip.id}`,
           });
           video.muted = true; // the attribute alone does not mute a script-made video
-          video.src = clip.src;
+          setClipSource(video, clip.src);
+          videos.push(video);
           void video.play().catch(() => undefined);
           clips.append(h("figure", {}, video, h("figcaption", {}, clip.id)));
         }
+        loadClips(videos); // what the pointer is on goes ahead of clips asked for before
       }
       text(title, content.title);
       text(detail, content.detail);
