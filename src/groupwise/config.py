@@ -257,6 +257,14 @@ class TrainingConfig:
     """Continuous training refits the reward model once this many new pairs arrived ..."""
     refit_s: Annotated[float, Field(gt=0)] = 60.0
     """... or this many seconds after the last fit, whichever comes first (with new pairs)."""
+    pretrain_steps: Annotated[int, Field(ge=0)] = 0
+    """PPO steps of unsupervised pre-training before round 0, paid a state-entropy bonus
+    instead of the learned reward (`groupwise.run.pretrain`, PEBBLE), so that the first
+    pools show more different behaviours; 0: none (issue 20)."""
+    pretrain_k: Annotated[int, Field(ge=1, le=100)] = 5
+    """k of the pre-training's k-nearest-neighbour entropy estimate (PEBBLE's 5)."""
+    pretrain_states: Annotated[int, Field(ge=10, le=1_000_000)] = 10_000
+    """Recent states each state's nearest neighbours are looked for among in pre-training."""
 
 
 @dataclass(frozen=True, config=_STRICT)

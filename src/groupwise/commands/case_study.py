@@ -68,6 +68,14 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
     case.add_argument("--out", type=Path, required=True, help="output directory")
     case.add_argument("--no-video", action="store_true", help="skip the video and the strip")
     add_training_arguments(case)
+    case.add_argument(
+        "--pretrain-steps",
+        type=non_negative_int,
+        default=0,
+        metavar="N",
+        help="PPO steps of unsupervised pre-training on a state-entropy bonus before round 0, "
+        "so that the first pools are more diverse (PEBBLE; default 0: none)",
+    )
     add_takeaway_arguments(case)
     case.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
     case.set_defaults(handler=run)
@@ -102,8 +110,11 @@ def run(args: argparse.Namespace) -> int:
             }
         )
         reward = dataclasses.replace(base.reward, use_actions=args.reward_inputs == "obs-act")
+        training = dataclasses.replace(base.training, pretrain_steps=args.pretrain_steps)
         cfg = apply_teacher_options(
-            dataclasses.replace(base, loop=loop, reward=reward), args, target.name
+            dataclasses.replace(base, loop=loop, reward=reward, training=training),
+            args,
+            target.name,
         )
     except ValueError as error:
         raise UsageError(str(error)) from None

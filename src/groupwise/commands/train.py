@@ -25,6 +25,7 @@ FROM_SESSION_EXCLUDES = (
     "training",
     "teacher_pace",
     "teacher_error",
+    "pretrain_steps",
 )
 """Options --from-session takes from DIR itself (its config.json)."""
 
@@ -72,6 +73,13 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
         "place, from its latest checkpoint: --steps N or --rounds N --dm NAME",
     )
     add_training_arguments(train)
+    train.add_argument(
+        "--pretrain-steps",
+        type=non_negative_int,
+        metavar="N",
+        help="PPO steps of unsupervised pre-training on a state-entropy bonus before round 0 "
+        "(PEBBLE; default 0: none)",
+    )
     add_takeaway_arguments(train)
     train.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
     train.set_defaults(handler=run)
@@ -113,6 +121,9 @@ def run(args: argparse.Namespace) -> int:
             args,
             None,
         )
+        if args.pretrain_steps is not None:
+            training = dataclasses.replace(cfg.training, pretrain_steps=args.pretrain_steps)
+            cfg = dataclasses.replace(cfg, training=training)
     except (ValueError, OSError) as error:
         raise UsageError(str(error)) from None
     out = writable_dir(args.out)

@@ -6,6 +6,7 @@ repeats an uninterrupted one.
 """
 
 import logging
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -106,6 +107,33 @@ class PPOAgent:
             reset_num_timesteps=False,
             tb_log_name="ppo",
         )
+
+    def pretrain(
+        self, reward_fn: RewardFn, steps: int, seed: int, report: ProgressFn | None = None
+    ) -> None:
+        """Train `steps` env steps (whole rollouts, seeded as `learn`) on `reward_fn` in
+        place of the learned reward (unsupervised pre-training, `groupwise.run.pretrain`),
+        then forget what only that reward taught: the running return sd and the value
+        function, as PEBBLE resets its critic after pre-training (B-Pref, train_PEBBLE.py).
+        The policy and the observation statistics are kept.
+
+        Raises:
+            ValueError: the agent trains on the env's own reward (no learned reward to swap).
+        """
+        rewarded = self.venv.venv if isinstance(self.venv, VecNormalize) else None
+        if not isinstance(rewarded, LearnedRewardVecEnv):
+            raise ValueError("pre-training needs an agent on a learned reward")
+        own = rewarded.reward_fn
+        rewarded.reward_fn = reward_fn
+        try:
+            self.learn(steps, seed, report)
+        finally:
+            rewarded.reward_fn = own
+        self._normaliser().ret_rms = RunningMeanStd(shape=())
+        policy = self.model.policy
+        heads = ((policy.mlp_extractor.value_net, np.sqrt(2)), (policy.value_net, 1.0))
+        for module, gain in heads:  # SB3's own initialisation (seeded by `learn`)
+            module.apply(partial(policy.init_weights, gain=gain))
 
     def act(self, obs: FloatArray, rng: np.random.Generator, deterministic: bool) -> np.ndarray:
         """Actions for raw observations (B, *obs_shape).

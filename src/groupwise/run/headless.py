@@ -14,6 +14,7 @@ from groupwise.oracles import ORACLES, Feedback
 from groupwise.query.schedule import comparisons_per_round
 from groupwise.run.continuous import continuous_round
 from groupwise.run.final import choose_takeaway, publish_agent
+from groupwise.run.pretrain import pretrain
 from groupwise.run.progress import CallbackList, ProgressBars, RunCallback, as_callback
 from groupwise.run.records import RoundRecord
 from groupwise.run.round import run_round, train_frozen
@@ -54,8 +55,12 @@ def run_rounds(
     """Run the rounds of `round_plan` not run yet, each committed when the run has a
     directory; the one round driver of `run_session`, the case studies and
     `PreferenceComparisons.train`. With `training.mode` "continuous" a feedback round's PPO
-    runs while its timed teacher answers (`run.continuous`), not the plan's steps."""
+    runs while its timed teacher answers (`run.continuous`), not the plan's steps. A run
+    whose agent has not trained yet first pre-trains when `training.pretrain_steps` asks
+    (`run.pretrain`)."""
     plan = round_plan(run.cfg.loop)
+    if run.next_round == 0 and run.agent.num_timesteps == 0:
+        pretrain(run, callback=callback)
     while run.next_round < len(plan):
         budget, steps = plan[run.next_round]
         if budget == 0:  # the final row: PPO on the frozen reward

@@ -1,10 +1,11 @@
 """How a run tells what it is doing: one callback interface, as Stable-Baselines3's.
 
 A `RunCallback` hears each phase of a round as it advances (`on_phase`: "sample",
-"feedback", "reward", "ppo", "eval", "video", "package"; with done / total in the phase's own
-unit: PPO steps, pairs, episodes) and each finished round (`on_round_end`). The CLI shows
-`ProgressBars`; the app's worker writes the phases to the session row
-(`groupwise.worker.progress`); the study and the case studies hear finished rounds.
+"feedback", "reward", "ppo", "eval", "video", "package"; "pretrain" before round 0; with
+done / total in the phase's own unit: PPO steps, pairs, episodes) and each finished round
+(`on_round_end`). The CLI shows `ProgressBars`; the app's worker writes the phases to the
+session row (`groupwise.worker.progress`); the study and the case studies hear finished
+rounds.
 """
 
 from collections.abc import Callable, Sequence
@@ -56,7 +57,7 @@ class ProgressBars(RunCallback):
     """tqdm bars: the rounds of a run, each round's PPO steps, and the rounds' policies the
     take-away choice samples (`groupwise.run.takeaway`)."""
 
-    _BARS: ClassVar[dict[str, str]] = {"ppo": "step", "takeaway": "round"}
+    _BARS: ClassVar[dict[str, str]] = {"ppo": "step", "pretrain": "step", "takeaway": "round"}
 
     def __init__(self, rounds: int, done: int = 0, desc: str = "rounds") -> None:
         self._rounds = tqdm(total=rounds, initial=done, desc=desc, unit="round")

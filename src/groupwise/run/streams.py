@@ -43,6 +43,11 @@ def round_streams(seed: int, round_index: int) -> RoundStreams:
     return RoundStreams(*rng.spawn(5))
 
 
+def pretrain_rng(seed: int) -> np.random.Generator:
+    """The generator of the pre-training before round 0 (`groupwise.run.pretrain`)."""
+    return np.random.default_rng(np.random.SeedSequence([seed, 2**23]))
+
+
 def takeaway_streams(seed: int) -> tuple[np.random.SeedSequence, np.random.Generator]:
     """The take-away choice's streams (`groupwise.run.takeaway`): the seed of every round's
     episodes (each round's generator starts from it, so all rounds play the same reset
