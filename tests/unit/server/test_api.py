@@ -27,7 +27,8 @@ def leaves(node: dict) -> list[dict]:
 
 def test_envs_and_health(client):
     assert "GridWorld" in [env["name"] for env in client.get("/api/envs").json()]
-    assert client.get("/api/health").json() == {"status": "ok", "worker_pid": None}
+    health = client.get("/api/health").json()
+    assert health == {"status": "ok", "worker_pid": None, "worker_pids": []}
 
 
 def test_a_new_session_waits_for_its_first_pool(client):
