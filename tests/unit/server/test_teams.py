@@ -4,7 +4,7 @@ judgements and undos are theirs, suggestions and pairs are leased so two people 
 the same one, the event stream says who answered what, and the owner's actions stay the
 owner's."""
 
-import hashlib
+import dataclasses
 import json
 import threading
 import uuid
@@ -12,38 +12,21 @@ import uuid
 import anyio
 import pytest
 from tests.unit.server.conftest import context_of, make_client
+from tests.unit.storage.conftest import N, prepared
 
 from groupwise.server.context import Viewer
 from groupwise.server.events import session_events
 from groupwise.storage import SessionSettings
 from groupwise.storage import sessions as sessions_repo
 from groupwise.storage.annotators import Caller
-from groupwise.storage.rounds import (
-    BehaviourInput,
-    GroupSuggestionInput,
-    PairInput,
-    PreparedRound,
-    store_prepared_round,
-)
+from groupwise.storage.rounds import GroupSuggestionInput, store_prepared_round
 
-N = 12
-
-
-def _clip(i: int, suffix: str) -> str:
-    return f"{hashlib.sha256(f'{i}{suffix}'.encode()).hexdigest()}.{suffix}"
-
-
-POOL = PreparedRound(
-    behaviours=tuple(
-        BehaviourInput(i, _clip(i, "mp4"), _clip(i, "jpg"), float(i)) for i in range(N)
-    ),
+POOL = dataclasses.replace(
+    prepared(),
     suggestions=(
-        GroupSuggestionInput(("b0", "b1"), ("b2", "b3"), "m1", "m2", 3.0),
-        GroupSuggestionInput(("b4",), ("b5", "b6"), "m3", "m4", 2.0),
-        GroupSuggestionInput(("b7",), ("b8",), "m5", "m6", 1.0),
+        *prepared().suggestions,
+        GroupSuggestionInput(("b7",), ("b8",), "m5", "m6", 0.5),
     ),
-    edges=(PairInput("b0", "b1", 1.0),),
-    queue=(PairInput("b0", "b1", 3.0), PairInput("b2", "b3", 2.0), PairInput("b4", "b5", 1.0)),
 )
 """A hand-made pool: what the judgement, suggestion and pairwise routes need (no clips)."""
 
