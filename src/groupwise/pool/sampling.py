@@ -36,6 +36,7 @@ def sample_pool(
     select: Literal["uncertain", "random"] = "uncertain",
     progress: ProgressFn | None = None,
     snapshot_offsets: Sequence[int] | None = None,
+    processes: int | None = None,
 ) -> BehaviourPool:
     """A pool of (up to) `size` behaviours of `length` steps (module docstring).
 
@@ -46,7 +47,9 @@ def sample_pool(
     `snapshot_offsets` are the steps into each window whose physics state the episodes keep
     (MuJoCo envs); by default those a window's clip and poster are rendered from
     (`ClipTiming.snapshot_offsets`: two states of a few hundred bytes a window), so a clip can
-    be rendered on demand without replaying its episode (`clips.recipe`).
+    be rendered on demand without replaying its episode (`clips.recipe`). `processes` step
+    the episodes' envs (None: every core for large batches; `rl.batch_envs`): the pool is
+    the same whatever it is.
 
     Raises:
         ValueError: `size` < 1 or `oversample` < 1, or episodes too short for a window.
@@ -68,6 +71,7 @@ def sample_pool(
         exploration_fraction,
         progress=progress,
         snapshot_offsets=snapshot_offsets,
+        processes=processes,
     )
     windows = tile_fragments(episodes, length)
     if ensemble is None:

@@ -9,7 +9,9 @@ horizons, so there every episode of a batch has the same length; any other Gymna
 
 `sample_episodes_for_windows` samples as many episodes as it takes to tile a number of
 L-step windows from them, whatever the episodes' lengths turn out to be. Sampling uses its own
-env instances, never the ones PPO trains on.
+env instances, never the ones PPO trains on. The envs of a large batch are stepped on every
+core (`rl.batch_envs`: spawn helper processes step shards of the batch in lock step), while
+the policy and every random draw stay in this process, so the episodes do not depend on it.
 """
 
 import math
@@ -21,11 +23,9 @@ import gymnasium as gym
 import numpy as np
 
 from groupwise.envs.episodes import GIVE_UP_EPISODES, too_short_message
-from groupwise.envs.physics_state import physics_state
 from groupwise.envs.spaces import encode_actions
-from groupwise.envs.targets import TARGET_TOTAL_KEY
-from groupwise.envs.true_reward import TRUE_REWARD_KEY
 from groupwise.pool.fragments import Trajectory
+from groupwise.rl.batch_envs import BatchEnvs, processes_for
 from groupwise.rl.policy import Policy, random_actions
 from groupwise.types import FloatArray, IntArray, ProgressFn
 
@@ -73,12 +73,15 @@ def sample_trajectories(
     rng: np.random.Generator,
     exploration_fraction: float = 0.0,
     max_steps: int | None = None,
+    processes: int | None = None,
 ) -> list[Trajectory]:
     """Run `n_episodes` episodes of `policy` side by side and return them, numbered 0 … n − 1.
 
     Each episode lasts until the env terminates or truncates it, or for `max_steps` steps,
     whichever comes first, so episodes may differ in length. Each is reset with a seed drawn
-    from `rng`, stored in the trajectory for replay.
+    from `rng`, stored in the trajectory for replay. `processes`: how many processes step
+    the envs (`rl.batch_envs`; None: every core for large batches); the episodes are the
+    same whatever it is.
 
     Raises:
         ValueError: `n_episodes` < 1, or the env has no time limit (its spec sets no
@@ -86,7 +89,9 @@ def sample_trajectories(
     """
     if n_episodes < 1:
         raise ValueError(f"need at least one episode, got {n_episodes}")
-    return _sample_batch(make_env, policy, n_episodes, rng, exploration_fraction, max_steps, 0)
+    return _sample_batch(
+        make_env, policy, n_episodes, rng, exploration_fraction, max_steps, 0, processes=processes
+    )
 
 
 def sample_episodes_for_windows(
@@ -101,6 +106,7 @@ def sample_episodes_for_windows(
     max_steps: int | None = None,
     progress: ProgressFn | None = None,
     snapshot_offsets: Sequence[int] = (),
+    processes: int | None = None,
 ) -> list[Trajectory]:
     """Sample episodes until tiling them into `length`-step windows gives >= `n_windows`.
 
@@ -122,6 +128,11 @@ def sample_episodes_for_windows(
     offset o, the physics state before step ``start + o − 1`` goes into the episode's
     `Trajectory.snapshots` (MuJoCo envs; a window's frame o is rendered from it,
     `clips.recipe`).
+
+    `processes` step each batch's envs (`rl.batch_envs.BatchEnvs`: this process and spawn
+    helpers; None: every core for batches of `batch_envs.PARALLEL_MIN_STEPS` steps or more).
+    The random draws all stay here, so the episodes and `rng`'s state afterwards are the
+    same whatever it is.
 
     Raises:
         ValueError: a non-positive count; the env has no time limit and `max_steps` is not
@@ -185,6 +196,7 @@ def sample_episodes_for_windows(
             len(trajectories),
             on_step if progress is not None else None,
             snapshot_steps,
+            processes,
         )
         windows = sum(len(t) // length for t in trajectories)
         if windows == 0:
@@ -246,20 +258,21 @@ def _sample_batch(
     first_episode: int,
     on_step: StepFn | None = None,
     snapshot_steps: frozenset[int] = frozenset(),
+    processes: int | None = 1,
 ) -> list[Trajectory]:
-    envs = [make_env() for _ in range(n_episodes)]
+    probe = make_env()
     try:
-        limit = _step_limit(envs[0], max_steps)
+        limit = _step_limit(probe, max_steps)
+    finally:
+        probe.close()
+    with BatchEnvs(make_env, n_episodes, processes_for(n_episodes, limit, processes)) as envs:
         return _run(
             envs, policy, rng, exploration_fraction, limit, first_episode, on_step, snapshot_steps
         )
-    finally:
-        for env in envs:
-            env.close()
 
 
 def _run(
-    envs: list[gym.Env],
+    envs: BatchEnvs,
     policy: Policy,
     rng: np.random.Generator,
     exploration_fraction: float,
@@ -268,33 +281,36 @@ def _run(
     on_step: StepFn | None = None,
     snapshot_steps: frozenset[int] = frozenset(),
 ) -> list[Trajectory]:
-    space = envs[0].action_space
-    seeds = rng.integers(0, 2**31 - 1, size=len(envs))
-    current = np.stack([env.reset(seed=int(s))[0] for env, s in zip(envs, seeds, strict=True)])
-    explore = exploration_mask(len(envs), limit, exploration_fraction, rng)
-    obs: list[list[np.ndarray]] = [[] for _ in envs]
-    actions: list[list[Any]] = [[] for _ in envs]
-    rewards: list[list[float]] = [[] for _ in envs]
-    scores = np.full(len(envs), np.nan)  # an env's episode score so far, where it has one
-    snapshots: list[dict[int, FloatArray]] = [{} for _ in envs]  # step → state before it
-    running = np.arange(len(envs))  # the envs whose episodes have not ended, in order
+    space = envs.first.action_space
+    n = envs.n
+    seeds = rng.integers(0, 2**31 - 1, size=n)
+    current = np.stack(envs.reset(seeds.tolist()))
+    explore = exploration_mask(n, limit, exploration_fraction, rng)
+    obs: list[list[np.ndarray]] = [[] for _ in range(n)]
+    actions: list[list[Any]] = [[] for _ in range(n)]
+    rewards: list[list[float]] = [[] for _ in range(n)]
+    scores = np.full(n, np.nan)  # an env's episode score so far, where it has one
+    snapshots: list[dict[int, FloatArray]] = [{} for _ in range(n)]  # step → state before it
+    running = np.arange(n)  # the envs whose episodes have not ended, in order
     for t in range(limit):
         action = np.asarray(policy.act(current.astype(np.float32), rng))
         random = explore[running, t]
         if random.any():
             action = action.copy()
             action[random] = random_actions(space, int(random.sum()), rng)
+        indices = running.tolist()
+        results = envs.step(indices, list(action), t in snapshot_steps)
         still, following = [], []
-        snapshot = t in snapshot_steps
-        for i, before, a in zip(running.tolist(), current, action, strict=True):
-            if snapshot and (state := physics_state(envs[i])) is not None:
+        for i, before, a, (after, reward, score, ended, state) in zip(
+            indices, current, action, results, strict=True
+        ):
+            if state is not None:
                 snapshots[i][t] = state
-            after, reward, terminated, truncated, info = envs[i].step(a)
             obs[i].append(before)
             actions[i].append(a)
-            rewards[i].append(float(info.get(TRUE_REWARD_KEY, reward)))
-            scores[i] = float(info.get(TARGET_TOTAL_KEY, math.nan))
-            if not (terminated or truncated):
+            rewards[i].append(reward)
+            scores[i] = score
+            if not ended:
                 still.append(i)
                 following.append(after)
         if on_step is not None:

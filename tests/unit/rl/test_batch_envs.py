@@ -1,0 +1,113 @@
+"""Stepping a sampling batch across processes changes nothing but the speed (issue 22)."""
+
+import os
+import threading
+
+import gymnasium as gym
+import numpy as np
+import pytest
+
+from groupwise.config import RewardConfig
+from groupwise.envs import make_env
+from groupwise.pool.sampling import sample_pool
+from groupwise.reward import RewardEnsemble
+from groupwise.rl.batch_envs import PARALLEL_MIN_STEPS, BatchEnvs, processes_for
+from groupwise.rl.policy import RandomPolicy
+from groupwise.rl.rollout import sample_episodes_for_windows, sample_trajectories
+
+
+def hopper() -> gym.Env:
+    return make_env("Hopper")
+
+
+def falling_hopper() -> gym.Env:
+    return gym.make("Hopper-v5")  # terminates when it falls: episodes of their own lengths
+
+
+def _same(first, second) -> None:
+    assert len(first) == len(second)
+    for a, b in zip(first, second, strict=True):
+        assert a.reset_seed == b.reset_seed and a.episode == b.episode
+        for name in ("obs", "acts", "actions", "true_rewards"):
+            assert getattr(a, name).tobytes() == getattr(b, name).tobytes(), name
+        assert a.snapshots.keys() == b.snapshots.keys()
+        for step, state in a.snapshots.items():
+            assert state.tobytes() == b.snapshots[step].tobytes()
+        assert np.array_equal(a.episode_score, b.episode_score, equal_nan=True)
+
+
+def test_episodes_and_the_generator_are_the_same_whatever_the_processes():
+    policy = RandomPolicy(hopper().action_space)
+    runs = []
+    for processes in (1, 2, 3):
+        rng = np.random.default_rng(7)
+        episodes = sample_episodes_for_windows(
+            hopper, policy, 20, 30, rng, 0.25, max_steps=90, snapshot_offsets=(0, 15),
+            processes=processes,
+        )  # fmt: skip
+        runs.append((episodes, rng.random()))
+    assert any(t.snapshots for t in runs[0][0])
+    for episodes, draw in runs[1:]:
+        _same(runs[0][0], episodes)
+        assert draw == runs[0][1]  # the random draws all stayed in this process
+
+
+def test_episodes_that_end_on_their_own_are_the_same_across_processes():
+    policy = RandomPolicy(falling_hopper().action_space)
+    alone = sample_trajectories(falling_hopper, policy, 7, np.random.default_rng(3), 0.5)
+    spread = sample_trajectories(
+        falling_hopper, policy, 7, np.random.default_rng(3), 0.5, processes=2
+    )
+    assert len({len(t) for t in alone}) > 1
+    _same(alone, spread)
+
+
+def test_a_pool_is_the_same_whatever_the_processes():
+    pools = []
+    for processes in (1, 2):
+        rng = np.random.default_rng(0)
+        ensemble = RewardEnsemble.for_env(hopper, RewardConfig(), rng)
+        pool = sample_pool(
+            hopper, RandomPolicy(hopper().action_space), 12, 40, rng, oversample=2.0,
+            exploration_fraction=0.25, ensemble=ensemble, processes=processes,
+        )  # fmt: skip
+        pools.append((pool, rng.random()))
+    (one, draw), (two, again) = pools
+    assert draw == again
+    assert [f.key for f in one.fragments] == [f.key for f in two.fragments]
+    assert one.predicted_returns.tobytes() == two.predicted_returns.tobytes()
+    assert one.step_variance is not None and two.step_variance is not None
+    assert one.step_variance.tobytes() == two.step_variance.tobytes()
+    _same(one.episodes, two.episodes)
+
+
+def test_a_factory_that_does_not_pickle_steps_every_env_here():
+    lock = threading.Lock()  # cloudpickle refuses a lock in the closure
+
+    def make() -> gym.Env:
+        with lock:
+            return make_env("GridWorld")
+
+    with BatchEnvs(make, 4, processes=2) as envs:
+        assert envs.processes == 1 and len(envs.local) == 4
+
+
+def test_a_helper_that_fails_raises_here():
+    parent = os.getpid()
+
+    def make() -> gym.Env:
+        if os.getpid() != parent:
+            raise RuntimeError("no env in the helper")
+        return make_env("GridWorld")
+
+    with pytest.raises(RuntimeError, match="no env in the helper"), BatchEnvs(make, 4, 2) as envs:
+        assert envs.processes == 2
+        envs.reset([0, 1, 2, 3])
+
+
+def test_large_batches_use_every_core_and_small_ones_one():
+    assert processes_for(4, 10, None) == 1
+    assert processes_for(400, 1000, None) == min(os.cpu_count() or 1, 400)
+    assert processes_for(3, PARALLEL_MIN_STEPS, 8) == 3  # at most one per env
+    with pytest.raises(ValueError):
+        processes_for(4, 10, 0)
