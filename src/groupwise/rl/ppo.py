@@ -6,6 +6,7 @@ repeats an uninterrupted one.
 """
 
 import logging
+from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -15,6 +16,7 @@ import numpy as np
 import torch
 from stable_baselines3 import PPO
 from stable_baselines3.common.logger import Logger
+from stable_baselines3.common.policies import ActorCriticPolicy
 from stable_baselines3.common.running_mean_std import RunningMeanStd
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecMonitor, VecNormalize
 
@@ -136,33 +138,29 @@ class PPOAgent:
             module.apply(partial(policy.init_weights, gain=gain))
 
     def act(self, obs: FloatArray, rng: np.random.Generator, deterministic: bool) -> np.ndarray:
-        """Actions for raw observations (B, *obs_shape).
-
-        Stochastic actions are drawn from the policy's distribution with `rng` (not torch's
-        global generator), greedy ones are its mode; Box actions are clipped to the space
-        as SB3's `predict` does.
-        """
+        """Actions for raw observations (B, *obs_shape) (`policy_actions`)."""
         normalised = self._normaliser().normalize_obs(np.asarray(obs, dtype=np.float32))
-        with torch.no_grad():
-            obs_tensor = torch.as_tensor(normalised, dtype=torch.float32)
-            dist = self.model.policy.get_distribution(obs_tensor).distribution
-        if isinstance(dist, torch.distributions.Categorical):
-            probs = dist.probs.numpy()
-            if deterministic:
-                return probs.argmax(axis=1)
-            draws = rng.random((probs.shape[0], 1))
-            return np.minimum((draws > probs.cumsum(axis=1)).sum(axis=1), probs.shape[1] - 1)
-        if isinstance(dist, torch.distributions.Normal):
-            mean = dist.mean.numpy()
-            actions = (
-                mean
-                if deterministic
-                else mean + dist.stddev.numpy() * rng.standard_normal(mean.shape)
-            )
-            space = self.model.action_space
-            assert isinstance(space, gym.spaces.Box)
-            return np.clip(actions, space.low, space.high).astype(space.dtype)
-        raise TypeError(f"unsupported policy distribution {type(dist).__name__}")
+        assert isinstance(normalised, np.ndarray)  # Box observations
+        return policy_actions(self.model.policy, normalised, rng, deterministic)
+
+    def snapshot(self, deterministic: bool = False) -> "PolicySnapshot":
+        """A frozen, picklable copy of this agent's policy as it acts now: another process
+        can act with it (the worker's curve evaluations) while this one trains on."""
+        norm = self._normaliser()
+        obs_rms, _ = self._running_stats()
+        source = self.model.policy
+        with torch.random.fork_rng(devices=[]):  # its initial weights draw from torch's RNG
+            network = type(source)(**source._get_constructor_parameters())
+        network.load_state_dict(source.state_dict())
+        network.set_training_mode(False)
+        return PolicySnapshot(
+            network,
+            obs_rms.mean.copy() if norm.norm_obs else None,
+            obs_rms.var.copy() if norm.norm_obs else None,
+            norm.epsilon,
+            norm.clip_obs,
+            deterministic,
+        )
 
     def policy(self, deterministic: bool = False) -> "AgentPolicy":
         """This agent as a `Policy` (stochastic for sampling behaviours, greedy for evaluation)."""
@@ -236,6 +234,59 @@ class StandardisedReward:
         self.stats.update(rewards)
         scaled = (rewards - self.stats.mean) / np.sqrt(self.stats.var + self.epsilon)
         return scaled.astype(np.float32)
+
+
+def policy_actions(
+    network: ActorCriticPolicy,
+    normalised: FloatArray,
+    rng: np.random.Generator,
+    deterministic: bool,
+) -> np.ndarray:
+    """Actions of an SB3 actor-critic for normalised observations (B, *obs_shape).
+
+    Stochastic actions are drawn from the policy's distribution with `rng` (not torch's
+    global generator), greedy ones are its mode; Box actions are clipped to the space
+    as SB3's `predict` does.
+    """
+    with torch.no_grad():
+        obs_tensor = torch.as_tensor(normalised, dtype=torch.float32)
+        dist = network.get_distribution(obs_tensor).distribution
+    if isinstance(dist, torch.distributions.Categorical):
+        probs = dist.probs.numpy()
+        if deterministic:
+            return probs.argmax(axis=1)
+        draws = rng.random((probs.shape[0], 1))
+        return np.minimum((draws > probs.cumsum(axis=1)).sum(axis=1), probs.shape[1] - 1)
+    if isinstance(dist, torch.distributions.Normal):
+        mean = dist.mean.numpy()
+        actions = (
+            mean if deterministic else mean + dist.stddev.numpy() * rng.standard_normal(mean.shape)
+        )
+        space = network.action_space
+        assert isinstance(space, gym.spaces.Box)
+        return np.clip(actions, space.low, space.high).astype(space.dtype)
+    raise TypeError(f"unsupported policy distribution {type(dist).__name__}")
+
+
+@dataclass(frozen=True)
+class PolicySnapshot:
+    """A `Policy` frozen from a `PPOAgent` (`PPOAgent.snapshot`): a copy of its network and
+    of its observation normalisation (SB3's `VecNormalize.normalize_obs`: none when
+    `obs_mean` is None), acting exactly as the agent did when it was taken."""
+
+    network: ActorCriticPolicy
+    obs_mean: np.ndarray | None
+    obs_var: np.ndarray | None
+    epsilon: float
+    clip_obs: float
+    deterministic: bool
+
+    def act(self, obs: FloatArray, rng: np.random.Generator) -> np.ndarray:
+        normalised = np.asarray(obs, dtype=np.float32)
+        if self.obs_mean is not None and self.obs_var is not None:
+            scaled = (normalised - self.obs_mean) / np.sqrt(self.obs_var + self.epsilon)
+            normalised = np.clip(scaled, -self.clip_obs, self.clip_obs).astype(np.float32)
+        return policy_actions(self.network, normalised, rng, self.deterministic)
 
 
 class AgentPolicy:

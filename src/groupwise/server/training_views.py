@@ -39,5 +39,6 @@ def summary(points: Sequence[TrainingPoint]) -> schemas.TrainingSummary | None:
 def training_curve(db: Database, session_id: str) -> schemas.TrainingCurve:
     """Every point of the session's curve and the summary. Raises NotFoundError."""
     with db.read() as s:
-        points = list_points(s, session_id)
+        # in time order: an evaluation's point is stored after the fact, as of its snapshot
+        points = sorted(list_points(s, session_id), key=lambda p: (p.at, p.revision))
     return schemas.TrainingCurve(points=[point_out(p) for p in points], summary=summary(points))

@@ -1,18 +1,37 @@
 """The learning curve of a continuous round, as the worker measures it.
 
 Every trained round adds a point from its record (`storage.training.round_point`); a
-continuous round also adds one after each refit and each evaluation of the greedy policy
-(`worker.live`), which runs when the round's PPO slices have trained `EVAL_MIN_S` seconds
-since the last one, or `EVAL_COST` times as long as that evaluation took when that is
-longer: evaluation takes at most about a tenth of the training's time, and a tiny env still
-shows its curve within seconds.
+continuous round also adds one after each refit (`worker.live`) and one for each
+evaluation of the greedy policy's true return. An evaluation takes a snapshot of the policy
+(`PPOAgent.snapshot`) between two PPO slices and runs in a process of its own (`Evaluator`),
+which stores the point as of the snapshot, while PPO trains on: evaluating in the worker
+took a tenth of its PPO time (`benchmarks/continuous.py`, issue 24). The first snapshot is
+taken before the round's first rollout, the next ones once the previous evaluation has
+finished and the slices have trained `EVAL_MIN_S` seconds since it was taken, or `EVAL_COST`
+times as long as it took when that is longer: evaluations take at most about a tenth of the
+evaluating core, and a tiny env still shows its curve within seconds.
 """
+
+import logging
+import time
+from concurrent.futures import Future
+from dataclasses import dataclass
+from datetime import datetime
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from groupwise.rl.rollout import evaluate
+from groupwise.rl.policy import Policy
+from groupwise.rl.rollout import EnvFactory, evaluate
 from groupwise.run.run import Run
 from groupwise.run.streams import eval_rng
+from groupwise.storage.training import add_point
+from groupwise.storage.models import utcnow
+
+if TYPE_CHECKING:
+    from groupwise.rl.ppo import PolicySnapshot
+
+log = logging.getLogger(__name__)
 
 EVAL_MIN_S = 5.0
 """Least seconds of continuous training between two evaluations of the greedy policy."""
@@ -26,12 +45,81 @@ def pool_steps(run: Run) -> int:
     return run.records[-1].env_steps if run.records else 0
 
 
-def true_return(run: Run) -> float | None:
-    """The greedy policy's mean true return over `eval_episodes`, on the same episodes as
-    the rounds' evaluations (`eval_rng`); None when `eval_episodes` is 0."""
+def true_return(make_env: EnvFactory, policy: Policy, episodes: int, seed: int) -> float:
+    """`policy`'s mean true return over `episodes` episodes, the same ones as the rounds'
+    evaluations (`eval_rng`)."""
+    return float(np.mean(evaluate(make_env, policy, episodes, eval_rng(seed))))
+
+
+@dataclass(frozen=True)
+class CurvePoint:
+    """A point of a session's learning curve, with the policy to evaluate for it."""
+
+    session_id: str
+    round_index: int
+    ppo_steps: int
+    pairs: int
+    reward_val_accuracy: float | None
+    pool_steps: int
+    at: datetime
+    env: str
+    episodes: int
+    seed: int
+    policy: "PolicySnapshot"
+
+
+def snapshot(
+    session_id: str, round_index: int, run: Run, val_accuracy: float | None, pool: int
+) -> CurvePoint:
+    """The run's curve point now, with a greedy snapshot of its policy."""
     loop = run.cfg.loop
-    if loop.eval_episodes == 0:
-        return None
-    policy = run.agent.policy(deterministic=True)
-    returns = evaluate(run.make_env, policy, loop.eval_episodes, eval_rng(loop.seed))
-    return float(np.mean(returns))
+    return CurvePoint(
+        session_id=session_id,
+        round_index=round_index,
+        ppo_steps=run.agent.num_timesteps,
+        pairs=len(run.dataset),
+        reward_val_accuracy=val_accuracy,
+        pool_steps=pool,
+        at=utcnow(),
+        env=loop.env,
+        episodes=loop.eval_episodes,
+        seed=loop.seed,
+        policy=run.ppo.snapshot(deterministic=True),
+    )
+
+
+class Evaluator:
+    """One process that evaluates curve points and stores them (module docstring)."""
+
+    def __init__(self, database_url: str) -> None:
+        from groupwise.worker.staging import spawn_process
+
+        self._pool = spawn_process(database_url)
+
+    def submit(self, point: CurvePoint) -> "Future[float]":
+        """Evaluate and store `point`; the future's result is the seconds it took."""
+        return self._pool.submit(_evaluate, point)
+
+    def close(self) -> None:
+        self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _evaluate(point: CurvePoint) -> float:
+    from groupwise.envs import make_env
+    from groupwise.worker.staging import process_db
+
+    tick = time.perf_counter()
+    value = true_return(lambda: make_env(point.env), point.policy, point.episodes, point.seed)
+    with process_db().write() as s:
+        add_point(
+            s,
+            point.session_id,
+            round_index=point.round_index,
+            ppo_steps=point.ppo_steps,
+            true_return=value,
+            pairs=point.pairs,
+            reward_val_accuracy=point.reward_val_accuracy,
+            pool_steps=point.pool_steps,
+            now=point.at,
+        )
+    return time.perf_counter() - tick

@@ -14,7 +14,10 @@ checkpoint and refits on all of them.
 The page sees the agent learn (`worker.curve`): each refit stores a point of the session's
 learning curve (PPO steps, pairs, validation accuracy), and so does each evaluation of the
 greedy policy's true return, the first before the round's first rollout, then whenever the
-slices have trained long enough (`curve.EVAL_MIN_S`, `curve.EVAL_COST`).
+last one has finished and the slices have trained long enough (`curve.EVAL_MIN_S`,
+`curve.EVAL_COST`). Evaluations run on a snapshot of the policy in a process of their own
+(`curve.Evaluator`), so PPO does not wait for them. Every `ACCOUNT_S` seconds a log line
+says where the worker's time went (PPO, refits, reads, checkpoints, ...).
 
 The next round is prepared ahead, `stage_after_s` seconds into the round (a session
 setting), from a snapshot of the policy as it was then, in the stager process
@@ -33,8 +36,10 @@ import logging
 import math
 import shutil
 import time
-from collections.abc import Callable
+from collections import defaultdict
+from collections.abc import Callable, Iterator
 from concurrent.futures import Future, ThreadPoolExecutor
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -67,6 +72,8 @@ CHECKPOINT_S = 30.0
 CONTINUOUS = "continuous"
 SLOW_SLICE_S = 1.5
 """A slice longer than this is logged: a training job waits for the slice in progress."""
+ACCOUNT_S = 60.0
+"""Seconds between the log lines that say where a continuous round's worker time went."""
 
 
 @dataclass
@@ -91,7 +98,39 @@ class LiveTraining:
     evaluated_s: float | None = None
     """`trained_s` at the last evaluation; None before the first."""
     eval_s: float = 0.0
-    """Seconds the last evaluation took."""
+    """Seconds the last finished evaluation took."""
+    evaluating: "Future[float] | None" = None
+    """The evaluation in the evaluator process (`curve.Evaluator`), until it is seen done."""
+    spent: defaultdict[str, float] = dataclasses.field(default_factory=lambda: defaultdict(float))
+    """Worker seconds by activity since `accounted` (`timed`): what is not PPO is PPO's
+    loss, logged every `ACCOUNT_S` seconds."""
+    accounted: float = dataclasses.field(default_factory=time.monotonic)
+
+    @contextmanager
+    def timed(self, activity: str) -> Iterator[None]:
+        """Count the seconds of the block as `activity` in `spent`."""
+        tick = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.spent[activity] += time.perf_counter() - tick
+
+    def account(self) -> None:
+        """Log where the worker's time went since the last such line, once `ACCOUNT_S`
+        seconds have passed (the rest of the wall time: other sessions, jobs, waiting)."""
+        wall = time.monotonic() - self.accounted
+        if wall < ACCOUNT_S:
+            return
+        self.spent["other"] = wall - sum(self.spent.values())
+        parts = ", ".join(
+            f"{name} {seconds:.1f} s ({seconds / wall:.0%})"
+            for name, seconds in sorted(self.spent.items(), key=lambda item: -item[1])
+        )
+        log.info(
+            "session %s round %d, the last %.0f s: %s", self.session_id, self.round, wall, parts
+        )
+        self.spent.clear()
+        self.accounted = time.monotonic()
 
 
 class LiveSessions:
@@ -109,6 +148,7 @@ class LiveSessions:
         self._turns: dict[str, int] = {}
         self._turn = 0
         self._stager: Stager | None = None
+        self._evaluator: curve.Evaluator | None = None
         self._staging = ThreadPoolExecutor(max_workers=1, thread_name_prefix="staging")
         """Waits on the stager process (`worker.staging`), one next round at a time."""
         self._broken: dict[str, int] = {}
@@ -149,24 +189,28 @@ class LiveSessions:
     def _slice(self, job: Job) -> bool:
         """Refit when due and train one rollout; False when the round has no pairs yet."""
         training = self._training(job)
-        with self.db.read() as s:
+        with training.timed("reads"), self.db.read() as s:
             keyed = round_judgements(s, job.session_id, job.round)
-        refitted = training.live.update(keyed, time.monotonic())
+        with training.timed("refits"):
+            refitted = training.live.update(keyed, time.monotonic())
         run = training.run
         if not len(run.dataset):  # PPO starts with the round's first pairs
             return False
         if refitted or training.evaluated_s is None:
             self._point(training, evaluate=training.evaluated_s is None)
         tick = time.perf_counter()
-        training.live.learn(run.ppo.rollout_steps)
+        with training.timed("PPO"):
+            training.live.learn(run.ppo.rollout_steps)
         training.trained_s += time.perf_counter() - tick
-        since = training.trained_s - (training.evaluated_s or 0.0)
-        if since >= max(curve.EVAL_MIN_S, curve.EVAL_COST * training.eval_s):
+        if self._evaluation_due(training):
             self._point(training, evaluate=True)
         if time.monotonic() - training.checkpointed >= CHECKPOINT_S:
-            run.save_live(job.round)
+            with training.timed("checkpoints"):
+                run.save_live(job.round)
             training.checkpointed = time.monotonic()
-        self._stage(job, training)
+        with training.timed("staging"):
+            self._stage(job, training)
+        training.account()
         return True
 
     def _stage(self, job: Job, training: LiveTraining) -> None:
@@ -190,26 +234,47 @@ class LiveSessions:
         self._stager.submit(job, snapshot, steps).result()
 
     def _point(self, training: LiveTraining, *, evaluate: bool) -> None:
-        """Store a point of the learning curve: the steps and last fit now, and the greedy
-        policy's true return with `evaluate`."""
+        """Store a point of the learning curve: the steps and last fit now; with `evaluate`,
+        hand it with a snapshot of the greedy policy to the evaluator process, which stores
+        it with the policy's true return (`curve.Evaluator`)."""
         run, report = training.run, training.live.report
-        value = None
+        accuracy = None if report is None else report.validation_accuracy
         if evaluate:
-            tick = time.perf_counter()
-            value = curve.true_return(run)
-            training.eval_s = time.perf_counter() - tick
             training.evaluated_s = training.trained_s
-        with self.db.write() as s:
+        if evaluate and run.cfg.loop.eval_episodes > 0:
+            with training.timed("snapshots"):
+                point = curve.snapshot(
+                    training.session_id, training.round, run, accuracy, training.pool_steps
+                )
+            if self._evaluator is None:
+                self._evaluator = curve.Evaluator(self.db.url)
+            training.evaluating = self._evaluator.submit(point)
+            return
+        with training.timed("writes"), self.db.write() as s:
             add_point(
                 s,
                 training.session_id,
                 round_index=training.round,
                 ppo_steps=run.agent.num_timesteps,
-                true_return=value,
+                true_return=None,
                 pairs=len(run.dataset),
-                reward_val_accuracy=None if report is None else report.validation_accuracy,
+                reward_val_accuracy=accuracy,
                 pool_steps=training.pool_steps,
             )
+
+    def _evaluation_due(self, training: LiveTraining) -> bool:
+        """Whether to evaluate the policy again (`worker.curve`): the last evaluation has
+        finished and the slices have trained long enough since."""
+        if training.evaluating is not None:
+            if not training.evaluating.done():
+                return False
+            try:
+                training.eval_s = training.evaluating.result()
+            except Exception:
+                log.exception("session %s: evaluating the policy failed", training.session_id)
+            training.evaluating = None
+        since = training.trained_s - (training.evaluated_s or 0.0)
+        return since >= max(curve.EVAL_MIN_S, curve.EVAL_COST * training.eval_s)
 
     def take(self, job: Job) -> LiveTraining:
         """The live training of `job`'s round, to end it (the training job): this worker's,
@@ -238,6 +303,8 @@ class LiveSessions:
         self._staging.shutdown(wait=True, cancel_futures=True)
         if self._stager is not None:
             self._stager.close()
+        if self._evaluator is not None:
+            self._evaluator.close()
 
     def _training(self, job: Job) -> LiveTraining:
         training = self._live.get(job.session_id)

@@ -38,12 +38,7 @@ class Stager:
 
     def __init__(self, database_url: str, data_dir: Path) -> None:
         self.data_dir = data_dir
-        self._pool = ProcessPoolExecutor(
-            max_workers=1,
-            mp_context=multiprocessing.get_context("spawn"),
-            initializer=_start,
-            initargs=(database_url, logging.getLogger("groupwise").getEffectiveLevel()),
-        )
+        self._pool = spawn_process(database_url)
 
     def submit(self, job: Job, snapshot: Path, ppo_steps: int) -> "Future[None]":
         """Prepare and stage round `job.round + 1` from `snapshot` (`Run.save_policy`,
@@ -54,13 +49,30 @@ class Stager:
         self._pool.shutdown(wait=True, cancel_futures=True)
 
 
+def spawn_process(database_url: str) -> ProcessPoolExecutor:
+    """One "spawn" process beside the worker, set up as the worker is (`process_db`): the
+    stager's, and the learning curve's evaluator (`curve.Evaluator`)."""
+    return ProcessPoolExecutor(
+        max_workers=1,
+        mp_context=multiprocessing.get_context("spawn"),
+        initializer=_start,
+        initargs=(database_url, logging.getLogger("groupwise").getEffectiveLevel()),
+    )
+
+
 _db: "Database | None" = None
 _render: "RenderPool | None" = None
 
 
+def process_db() -> "Database":
+    """The database connection of a process `spawn_process` started."""
+    assert _db is not None, "this process was not started by spawn_process"
+    return _db
+
+
 def _start(database_url: str, log_level: int) -> None:
-    """The stager process's start: one thread per numeric library (the worker's
-    environment says so for numba and OpenMP), its log, its database connection."""
+    """A process's start: one thread per numeric library (the worker's environment says so
+    for numba and OpenMP), its log, its database connection."""
     import torch
 
     from groupwise.storage import Database
@@ -80,12 +92,12 @@ def _stage(job: Job, data_dir: Path, snapshot: Path, ppo_steps: int) -> None:
     from groupwise.worker.jobs import publish_staged, stage_next
 
     global _render
-    assert _db is not None, "the stager process was not started by Stager"
+    db = process_db()
     render = _render = _render or RenderPool(0)  # renders here (module docstring)
     try:
         with Run.create(job.settings.run_config(job.env)) as run:  # writes nothing
             run.load_policy(snapshot)
             offer = stage_next(job, run)
-        publish_staged(job, offer, _db, data_dir, render, ppo_steps)
+        publish_staged(job, offer, db, data_dir, render, ppo_steps)
     finally:
         shutil.rmtree(snapshot, ignore_errors=True)

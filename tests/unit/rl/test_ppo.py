@@ -1,4 +1,5 @@
 import dataclasses
+import pickle
 import tempfile
 
 import numpy as np
@@ -35,6 +36,19 @@ def test_stochastic_actions_come_from_the_given_generator_and_stay_in_bounds():
     b = agent.act(obs, np.random.default_rng(3), deterministic=False)
     np.testing.assert_array_equal(a, b)
     assert a.std() > 0.1 and np.all(np.abs(a) <= 1.0)
+
+
+def test_a_snapshot_acts_as_the_agent_did_when_taken_and_travels_by_pickle():
+    agent = PPOAgent(make, SMALL, seed=0, reward_fn=lambda obs, acts: -np.abs(acts[:, 0]))
+    agent.learn(256, seed=1)  # the observation statistics are no longer the identity
+    obs = np.array([[-0.5, 0.0], [-0.9, -0.03], [0.3, 0.05]], dtype=np.float32)
+    for deterministic in (True, False):
+        snapshot = pickle.loads(pickle.dumps(agent.snapshot(deterministic)))
+        then = agent.act(obs, np.random.default_rng(4), deterministic)
+        np.testing.assert_array_equal(snapshot.act(obs, np.random.default_rng(4)), then)
+    agent.learn(256, seed=2)  # the agent trains on; the snapshot stays as it was
+    np.testing.assert_array_equal(snapshot.act(obs, np.random.default_rng(4)), then)
+    assert not np.array_equal(agent.act(obs, np.random.default_rng(4), False), then)
 
 
 def _weights(agent: PPOAgent) -> dict[str, np.ndarray]:

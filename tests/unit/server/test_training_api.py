@@ -2,6 +2,7 @@
 of a continuous round (driven in-process, `Worker.train_live`) and of trained rounds."""
 
 import json
+import time
 
 import anyio
 import pytest
@@ -33,24 +34,48 @@ def _events(client, sid, last_event_id, count):
     return anyio.run(read)
 
 
+def _curve_when(client, sid: str, evaluated: int) -> dict:
+    """The session's curve once `evaluated` of its points have a true return (the evaluator
+    process stores them as it finishes)."""
+    deadline = time.monotonic() + 120
+    while True:
+        curve_ = client.get(f"/api/sessions/{sid}/training").json()
+        if sum(p["true_return"] is not None for p in curve_["points"]) >= evaluated:
+            return curve_
+        assert time.monotonic() < deadline, curve_
+        time.sleep(0.05)
+
+
 def test_a_continuous_round_shows_its_steps_fits_and_true_returns(client, monkeypatch):
-    monkeypatch.setattr(curve, "EVAL_MIN_S", 0.0)  # evaluate after every slice
+    monkeypatch.setattr(curve, "EVAL_MIN_S", 0.0)  # evaluate as soon as the last is done
     monkeypatch.setattr(curve, "EVAL_COST", 0.0)
     sid = new_session(client, training="continuous")["id"]
     run_worker_once(client)  # round 0 open
     assert client.get(f"/api/sessions/{sid}/training").json() == {"points": [], "summary": None}
     worker = Worker(context_of(client).db, context_of(client).data_dir, poll_s=0.1)
-    worker.train_live()  # no pairs yet: no PPO, no point
-    assert client.get(f"/api/sessions/{sid}/training").json()["points"] == []
-    post_judgement(client, sid, ["b0", "b1"], ["b2"])
-    worker.train_live()
-    worker.train_live()
-    curve_ = client.get(f"/api/sessions/{sid}/training").json()
+    try:
+        worker.train_live()  # no pairs yet: no PPO, no point
+        assert client.get(f"/api/sessions/{sid}/training").json()["points"] == []
+        post_judgement(client, sid, ["b0", "b1"], ["b2"])
+        # the first fit, the policy before any PPO handed to the evaluator process, a rollout
+        # (the evaluator is still starting: no second evaluation yet)
+        worker.train_live()
+        _curve_when(client, sid, evaluated=1)
+        worker.train_live()  # that evaluation is done: the next, after the second rollout
+        curve_ = _curve_when(client, sid, evaluated=2)
+        # the evaluator's return is the greedy policy's as the worker would measure it
+        run = worker.live._live[sid].run  # its policy is still the one evaluated last
+        loop = run.cfg.loop
+        here = curve.true_return(
+            run.make_env, run.agent.policy(True), loop.eval_episodes, loop.seed
+        )
+    finally:
+        worker.live.close()
     points = curve_["points"]
-    # the first fit and the policy before any PPO, then one evaluation per rollout
-    assert [p["ppo_steps"] for p in points] == [0, ROLLOUT, 2 * ROLLOUT]
+    assert [p["ppo_steps"] for p in points] == [0, 2 * ROLLOUT]
     assert all(p["true_return"] is not None for p in points)
     assert {(p["round"], p["pairs"], p["pool_steps"]) for p in points} == {(0, 2, 0)}
+    assert points[-1]["true_return"] == pytest.approx(here, rel=1e-12)
     assert curve_["summary"] == {
         "round": 0,
         "ppo_steps": 2 * ROLLOUT,
@@ -68,9 +93,8 @@ def test_a_continuous_round_shows_its_steps_fits_and_true_returns(client, monkey
         "judgement",
         "training",
         "training",
-        "training",
     ]
-    assert [data["ppo_steps"] for _, data in events[2:]] == [0, ROLLOUT, 2 * ROLLOUT]
+    assert [data["ppo_steps"] for _, data in events[2:]] == [0, 2 * ROLLOUT]
 
 
 @pytest.mark.parametrize("training", ["rounds", "continuous"])

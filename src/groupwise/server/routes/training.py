@@ -13,5 +13,5 @@ router = APIRouter(prefix="/api/sessions/{session_id}", tags=["training"], respo
 @router.get("/training")
 def training(session_id: SessionId, context: Context) -> TrainingCurve:
     """The points of the session's learning curve (PPO steps, true return, last refit, the
-    pool's age) in the order the worker wrote them, and the newest as a summary."""
+    pool's age) in time order, and the newest as a summary."""
     return training_views.training_curve(context.db, session_id)
