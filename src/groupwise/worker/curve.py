@@ -12,7 +12,6 @@ times as long as it took when that is longer: evaluations take at most about a t
 evaluating core, and a tiny env still shows its curve within seconds.
 """
 
-import logging
 import time
 from concurrent.futures import Future
 from dataclasses import dataclass
@@ -25,13 +24,11 @@ from groupwise.rl.policy import Policy
 from groupwise.rl.rollout import EnvFactory, evaluate
 from groupwise.run.run import Run
 from groupwise.run.streams import eval_rng
-from groupwise.storage.training import add_point
 from groupwise.storage.models import utcnow
+from groupwise.storage.training import add_point
 
 if TYPE_CHECKING:
     from groupwise.rl.ppo import PolicySnapshot
-
-log = logging.getLogger(__name__)
 
 EVAL_MIN_S = 5.0
 """Least seconds of continuous training between two evaluations of the greedy policy."""

@@ -18,6 +18,7 @@ answers become training by the same function.
 import json
 import logging
 import math
+import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import partial
@@ -31,12 +32,13 @@ from groupwise.oracles import STRATEGIES
 from groupwise.pool.behaviours import BehaviourPool
 from groupwise.pool.files import load_pool
 from groupwise.pool.publish import PublishConfig, publish_pool
+from groupwise.preferences.judgement import Judgement
 from groupwise.query.strategies import Query, QueryStrategy
 from groupwise.run.agent_package import SETTINGS_FILE
 from groupwise.run.checkpoint import STATE_FILE, checkpoint_dir
-from groupwise.run.progress import RunCallback
+from groupwise.run.progress import RunCallback, as_callback
 from groupwise.run.records import RoundRecord
-from groupwise.run.round import Offer, begin_round, end_round
+from groupwise.run.round import Offer, begin_round, end_round, finish_round
 from groupwise.run.run import Run
 from groupwise.storage import Database, SessionSettings
 from groupwise.storage.judgements import round_judgements
@@ -268,6 +270,8 @@ def train(
     r = job.round
     opened = live is not None and open_staged(job, db)
     record = commit_round(job, db, data_dir, progress, live)
+    if live is not None:
+        live.run.close()
     checkpoint = checkpoint_of(job.session_id, r)
     with db.write() as s:
         if opened:
@@ -318,34 +322,52 @@ def commit_round(
     progress: RunCallback | None,
     live: "LiveTraining | None" = None,
 ) -> RoundRecord:
-    """`end_round` of round `job.round` on its stored judgements: on `live`'s run (no PPO
-    steps), else on the run as the round before left it (`ppo_steps_per_round`)."""
+    """Commit round `job.round` on its stored judgements: on `live`'s run, its last fit
+    brought up to date (`LiveRound.update`, as the headless continuous round ends: no PPO
+    steps, no second fit of the same pairs) and left open for the next round; else
+    `end_round` on the run as the round before left it (`ppo_steps_per_round`), closed."""
     settings, r = job.settings, job.round
     if progress is not None:
         progress.on_phase("load", 0, 1)
     with db.read() as s:
         pool_dir = get_round(s, job.session_id, r).pool_dir
         keyed = round_judgements(s, job.session_id, r)
+    if live is not None:
+        return _commit_live(live, keyed, job.elapsed_s, progress)
     if pool_dir is None:
         raise FileNotFoundError(f"round {r} has no pool directory")
     offer = published_offer(data_dir / pool_dir, r, settings.comparisons_per_round, job.mode)
-    steps = settings.ppo_steps_per_round
-    if live is not None:
-        run, steps = live.run, 0
-        run.dataset = live.live.base  # end_round adds the round's pairs once more
-    else:
-        run = open_run(job, data_dir, r - 1)
-    with run:
-        record = end_round(
+    with open_run(job, data_dir, r - 1) as run:
+        return end_round(
             run,
             offer,
             [judgement for _, judgement in keyed],
-            steps,
+            settings.ppo_steps_per_round,
             keys=[key for key, _ in keyed],
             feedback_s=job.elapsed_s,
             callback=progress,
         )
-        run.drop_live()
+
+
+def _commit_live(
+    live: "LiveTraining",
+    keyed: Sequence[tuple[int, Judgement]],
+    feedback_s: float,
+    progress: RunCallback | None,
+) -> RoundRecord:
+    round_ = live.live
+    round_.update(keyed, time.monotonic(), final=True)
+    round_.timer.seconds["feedback_s"] = feedback_s
+    record = finish_round(
+        live.run,
+        round_.offer,
+        [judgement for _, judgement in keyed],
+        round_.report,
+        round_.timer,
+        as_callback(progress),
+        asked=None,
+    )
+    live.run.drop_live()
     return record
 
 

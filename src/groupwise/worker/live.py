@@ -363,7 +363,8 @@ class LiveSessions:
                     job, round=pending, phase=TRAINING, elapsed_s=math.nan
                 )
                 training = self._resume_round(earlier)
-                record = commit_round(earlier, self.db, self.data_dir, None, training)
+                with training.run:
+                    record = commit_round(earlier, self.db, self.data_dir, None, training)
             with self.db.write() as s:
                 checkpoint = checkpoint_of(job.session_id, pending)
                 record_training(s, job.session_id, pending, checkpoint, record.stats())
