@@ -10,10 +10,14 @@ on demand (the app's default) a poster per behaviour and each clip's recipe; wit
 ``--clips eager`` every clip as before — and the round's rows (`worker.offers`). The
 render workers are started and warm before the clock starts, as in the long-lived worker.
 
-Per phase: wall s, CPU s of every process (this one with its threads, the render workers),
-the CPU floor on this machine (CPU s / cores: the wall time if the phase's work were spread
-over every core) and wall / floor (2 on 2 cores: one core busy). "on screen" is their sum:
-from sampling to the round's rows, when the page can show posters, tree and suggestions.
+Sampling steps its envs on the free cores (`rl.batch_envs`; `--sample-processes P` fixes
+the number, 1: in this process only, as before); the pool is the same either way.
+
+Per phase: wall s, CPU s of every process (this one with its threads, the render workers and
+the sampling helpers), the CPU floor on this machine (CPU s / cores: the wall time if the
+phase's work were spread over every core) and wall / floor (2 on 2 cores: one core busy).
+"on screen" is their sum: from sampling to the round's rows, when the page can show
+posters, tree and suggestions.
 
 Then the first-frame budget of clips on demand: a real server (`create_app`, no worker) on
 the pool's store; request → first byte of a clip not rendered yet, one at a time (p50 / p95
@@ -22,6 +26,7 @@ asked at once (the comparison view), the last first byte.
 
     python -m benchmarks.pool_prep [--env Hopper] [--n 200 [1000]] [--lengths 30 default]
                                    [--clips on_demand|eager] [--workers 2] [--clip-requests 20]
+                                   [--sample-processes P]
 """
 
 import argparse
@@ -131,6 +136,7 @@ def prepare(
     render: RenderPool,
     out: Path,
     seed: int,
+    processes: int | None = None,
 ) -> tuple[Run, PreparedPool]:
     """Round 0 of a session with `settings`, as the worker prepares it (module docstring)."""
     cfg = settings.run_config(env)
@@ -144,7 +150,7 @@ def prepare(
         pool = sample_pool(
             lambda: make_env(env), policy, n, loop.fragment_length, rng,
             exploration_fraction=loop.exploration_fraction, oversample=loop.pool_oversample,
-            ensemble=ensemble, select=loop.pool_selection,
+            ensemble=ensemble, select=loop.pool_selection, processes=processes,
         )  # fmt: skip
     with run.phase("DTW"):
         pool.measure_distances(cfg=cfg.tree)
@@ -287,6 +293,12 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--clips", choices=["on_demand", "eager"], default="on_demand")
     parser.add_argument("--workers", type=int, default=2, help="render workers")
     parser.add_argument("--clip-requests", type=int, default=20, help="cold clips asked for")
+    parser.add_argument(
+        "--sample-processes",
+        type=int,
+        default=None,
+        help="processes stepping the sampled envs (default: the free cores for large batches)",
+    )
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args([] if argv is None else list(argv))
     ensure_gl_backend()
@@ -300,8 +312,9 @@ def main(argv: Sequence[str] | None = None) -> None:
                 settings = SessionSettings(pool_size=n, fragment_length=steps).for_env(args.env)
                 with tempfile.TemporaryDirectory() as tmp:
                     run, published = prepare(
-                        args.env, n, settings, args.clips, render, Path(tmp), args.seed
-                    )
+                        args.env, n, settings, args.clips, render, Path(tmp), args.seed,
+                        args.sample_processes,
+                    )  # fmt: skip
                     if args.clips == "on_demand" and args.clip_requests > 0:
                         measure_on_demand(run, published, Path(tmp), args.clip_requests)
                 runs.append(run)

@@ -48,7 +48,7 @@ def sample_pool(
     (MuJoCo envs); by default those a window's clip and poster are rendered from
     (`ClipTiming.snapshot_offsets`: two states of a few hundred bytes a window), so a clip can
     be rendered on demand without replaying its episode (`clips.recipe`). `processes` step
-    the episodes' envs (None: every core for large batches; `rl.batch_envs`): the pool is
+    the episodes' envs (None: the free cores for large batches; `rl.batch_envs`): the pool is
     the same whatever it is.
 
     Raises:

@@ -9,8 +9,8 @@ horizons, so there every episode of a batch has the same length; any other Gymna
 
 `sample_episodes_for_windows` samples as many episodes as it takes to tile a number of
 L-step windows from them, whatever the episodes' lengths turn out to be. Sampling uses its own
-env instances, never the ones PPO trains on. The envs of a large batch are stepped on every
-core (`rl.batch_envs`: spawn helper processes step shards of the batch in lock step), while
+env instances, never the ones PPO trains on. The envs of a large batch are stepped on the
+free cores (`rl.batch_envs`: helper processes step shards of the batch in lock step), while
 the policy and every random draw stay in this process, so the episodes do not depend on it.
 """
 
@@ -80,7 +80,7 @@ def sample_trajectories(
     Each episode lasts until the env terminates or truncates it, or for `max_steps` steps,
     whichever comes first, so episodes may differ in length. Each is reset with a seed drawn
     from `rng`, stored in the trajectory for replay. `processes`: how many processes step
-    the envs (`rl.batch_envs`; None: every core for large batches); the episodes are the
+    the envs (`rl.batch_envs`; None: the free cores for large batches); the episodes are the
     same whatever it is.
 
     Raises:
@@ -130,7 +130,7 @@ def sample_episodes_for_windows(
     `clips.recipe`).
 
     `processes` step each batch's envs (`rl.batch_envs.BatchEnvs`: this process and spawn
-    helpers; None: every core for batches of `batch_envs.PARALLEL_MIN_STEPS` steps or more).
+    helpers; None: `batch_envs.processes_for`, the free cores for large batches).
     The random draws all stay here, so the episodes and `rng`'s state afterwards are the
     same whatever it is.
 

@@ -11,7 +11,7 @@ from groupwise.config import RewardConfig
 from groupwise.envs import make_env
 from groupwise.pool.sampling import sample_pool
 from groupwise.reward import RewardEnsemble
-from groupwise.rl.batch_envs import PARALLEL_MIN_STEPS, BatchEnvs, processes_for
+from groupwise.rl.batch_envs import PARALLEL_MIN_STEPS, BatchEnvs, free_cores, processes_for
 from groupwise.rl.policy import RandomPolicy
 from groupwise.rl.rollout import sample_episodes_for_windows, sample_trajectories
 
@@ -105,9 +105,13 @@ def test_a_helper_that_fails_raises_here():
         envs.reset([0, 1, 2, 3])
 
 
-def test_large_batches_use_every_core_and_small_ones_one():
+def test_large_batches_use_the_free_cores_and_small_ones_one(monkeypatch):
+    cores = len(os.sched_getaffinity(0))
+    monkeypatch.setattr(os, "getloadavg", lambda: (1.0, 1.0, 1.0))  # this process alone
     assert processes_for(4, 10, None) == 1
-    assert processes_for(400, 1000, None) == min(os.cpu_count() or 1, 400)
-    assert processes_for(3, PARALLEL_MIN_STEPS, 8) == 3  # at most one per env
+    assert processes_for(400, 1000, None) == min(cores, 400) == free_cores()
+    monkeypatch.setattr(os, "getloadavg", lambda: (1.0 + 2 * cores, 0.0, 0.0))  # all busy
+    assert processes_for(400, 1000, None) == 1
+    assert processes_for(3, PARALLEL_MIN_STEPS, 8) == 3  # asked for: at most one per env
     with pytest.raises(ValueError):
         processes_for(4, 10, 0)
