@@ -28,6 +28,7 @@ import subprocess
 import sys
 from collections.abc import Callable, Sequence
 from multiprocessing.connection import Connection
+from pathlib import Path
 from typing import Any
 
 import cloudpickle
@@ -222,13 +223,24 @@ def _start_helpers(make_env: EnvFactory, bounds: np.ndarray) -> list[_Helper]:
     for lo, hi in itertools.pairwise(bounds[1:]):
         ours, theirs = socket.socketpair()
         process = subprocess.Popen(
-            [sys.executable, "-m", __name__, str(theirs.fileno())], pass_fds=[theirs.fileno()]
+            [sys.executable, "-m", "groupwise.rl.batch_envs", str(theirs.fileno())],
+            pass_fds=[theirs.fileno()],
+            env=_helper_env(),
         )
         theirs.close()
         conn = Connection(ours.detach())
         conn.send((sys.path, factory, int(hi - lo)))
         helpers.append(_Helper(process, conn))
     return helpers
+
+
+def _helper_env() -> dict[str, str]:
+    """This process's environment, with groupwise's own directory first on PYTHONPATH: the
+    helper finds this copy of the package whatever put it on this process's path."""
+    env = dict(os.environ)
+    here = str(Path(__file__).resolve().parents[2])
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (here, env.get("PYTHONPATH")) if p)
+    return env
 
 
 def _pickled(make_env: EnvFactory) -> bytes:
