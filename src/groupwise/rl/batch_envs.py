@@ -13,9 +13,10 @@ and generator state with 1, 2 and 3).
 A helper is a fresh interpreter (``python -m groupwise.rl.batch_envs``; not forked: numba's
 OpenMP layer, used for DTW in the worker, kills forked children; not a multiprocessing
 spawn child, which would import the parent's main module first) talking over a socket pair.
-It costs about a second to start (its imports), which is why `processes_for` uses helpers
-only for batches of many steps, and only on cores other work leaves free (`free_cores`); a
-factory that cannot be pickled falls back to stepping every env here.
+A helper answers about 0.8 s after it starts (0.4 CPU-seconds of imports), which is why
+`processes_for` uses helpers only for batches of many steps, and only on cores other work
+leaves free (`free_cores`); a factory that cannot be pickled falls back to stepping every
+env here.
 """
 
 import contextlib
@@ -51,7 +52,7 @@ step when a snapshot was asked for, else None)."""
 
 PARALLEL_MIN_STEPS = 40_000
 """Env steps (episodes × their step limit) from which `processes_for` spreads a batch over
-the cores: a helper's start (about 1 CPU-second of imports) is then a few per cent of the
+the cores: a helper's start (about 0.4 CPU-seconds of imports) is then a few per cent of the
 work (a Hopper step is about 0.2 ms with its Python)."""
 
 
@@ -73,8 +74,8 @@ def free_cores() -> int:
     (the 1-minute load average, this process not counted), rounded, at least 1.
 
     Helpers only pay where cores are idle: in lock step, a shard whose process waits for a
-    core holds up every other one, and a helper costs a second of imports. On the shared
-    2-core machine at load 4 (another session's two processes) two processes sampled a
+    core holds up every other one, and a helper costs 0.4 CPU-seconds of imports. On the
+    shared 2-core machine at load 4 (another session's two processes) two processes sampled a
     200-behaviour Hopper pool in 14.8 s against 13.7 s for one (issue 22).
     """
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
@@ -106,7 +107,7 @@ class BatchEnvs:
     """`n` envs made by `make_env`, numbered 0 … n − 1, stepped across `processes` processes
     (this one and `processes` − 1 helpers; module docstring). Use as a context manager.
 
-    `envs[0]` is always made here (for its action space and spec).
+    Env 0 is always made here (`first`: the batch's action space and spec).
     """
 
     def __init__(self, make_env: EnvFactory, n: int, processes: int = 1) -> None:
