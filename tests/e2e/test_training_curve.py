@@ -45,7 +45,8 @@ def test_a_continuous_round_shows_ppo_steps_and_the_true_return_growing(
     expect(panel.locator(".training-steps")).to_have_text(re.compile(r"^[\d,]+ PPO steps$"))
     expect(panel).to_contain_text(re.compile(r"Last refit: \d+ pairs?"))
     expect(panel).to_contain_text(re.compile(r"Pool sampled [\d,]+ PPO steps? ago"))
-    expect(panel.locator("circle.curve-point").first).to_be_attached()  # the policy before PPO
+    # the policy before PPO, evaluated in the worker's evaluator process
+    expect(panel.locator("circle.curve-point").first).to_be_attached(timeout=60_000)
     first = _steps(page)
     # the worker evaluates again after a few seconds of training: more steps, more points
     page.wait_for_function(

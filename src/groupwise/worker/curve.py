@@ -92,6 +92,7 @@ class Evaluator:
         from groupwise.worker.staging import spawn_process
 
         self._pool = spawn_process(database_url)
+        self._pool.submit(_warm_up)  # its start and imports now, not with the first point
 
     def submit(self, point: CurvePoint) -> "Future[float]":
         """Evaluate and store `point`; the future's result is the seconds it took."""
@@ -99,6 +100,10 @@ class Evaluator:
 
     def close(self) -> None:
         self._pool.shutdown(wait=True, cancel_futures=True)
+
+
+def _warm_up() -> None:
+    import groupwise.envs  # noqa: F401
 
 
 def _evaluate(point: CurvePoint) -> float:

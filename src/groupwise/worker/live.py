@@ -197,13 +197,13 @@ class LiveSessions:
         if not len(run.dataset):  # PPO starts with the round's first pairs
             return False
         if refitted or training.evaluated_s is None:
-            self._point(training, evaluate=training.evaluated_s is None)
+            self._point(training, refit=refitted, evaluate=training.evaluated_s is None)
         tick = time.perf_counter()
         with training.timed("PPO"):
             training.live.learn(run.ppo.rollout_steps)
         training.trained_s += time.perf_counter() - tick
         if self._evaluation_due(training):
-            self._point(training, evaluate=True)
+            self._point(training, refit=False, evaluate=True)
         if time.monotonic() - training.checkpointed >= CHECKPOINT_S:
             with training.timed("checkpoints"):
                 run.save_live(job.round)
@@ -233,34 +233,39 @@ class LiveSessions:
             self._stager = Stager(self.db.url, self.data_dir)
         self._stager.submit(job, snapshot, steps).result()
 
-    def _point(self, training: LiveTraining, *, evaluate: bool) -> None:
-        """Store a point of the learning curve: the steps and last fit now; with `evaluate`,
-        hand it with a snapshot of the greedy policy to the evaluator process, which stores
-        it with the policy's true return (`curve.Evaluator`)."""
+    def _point(self, training: LiveTraining, *, refit: bool, evaluate: bool) -> None:
+        """Store a point of the learning curve: with `refit`, the steps and the fit now; then,
+        with `evaluate`, hand the point with a snapshot of the greedy policy to the evaluator
+        process, which stores it with the policy's true return when it has it
+        (`curve.Evaluator`)."""
         run, report = training.run, training.live.report
         accuracy = None if report is None else report.validation_accuracy
+        evaluating = evaluate and run.cfg.loop.eval_episodes > 0
+        if refit or not evaluating:
+            with training.timed("writes"), self.db.write() as s:
+                add_point(
+                    s,
+                    training.session_id,
+                    round_index=training.round,
+                    ppo_steps=run.agent.num_timesteps,
+                    true_return=None,
+                    pairs=len(run.dataset),
+                    reward_val_accuracy=accuracy,
+                    pool_steps=training.pool_steps,
+                )
         if evaluate:
             training.evaluated_s = training.trained_s
-        if evaluate and run.cfg.loop.eval_episodes > 0:
+        if evaluating:
             with training.timed("snapshots"):
                 point = curve.snapshot(
                     training.session_id, training.round, run, accuracy, training.pool_steps
                 )
-            if self._evaluator is None:
-                self._evaluator = curve.Evaluator(self.db.url)
-            training.evaluating = self._evaluator.submit(point)
-            return
-        with training.timed("writes"), self.db.write() as s:
-            add_point(
-                s,
-                training.session_id,
-                round_index=training.round,
-                ppo_steps=run.agent.num_timesteps,
-                true_return=None,
-                pairs=len(run.dataset),
-                reward_val_accuracy=accuracy,
-                pool_steps=training.pool_steps,
-            )
+            training.evaluating = self._evaluator_process().submit(point)
+
+    def _evaluator_process(self) -> curve.Evaluator:
+        if self._evaluator is None:
+            self._evaluator = curve.Evaluator(self.db.url)
+        return self._evaluator
 
     def _evaluation_due(self, training: LiveTraining) -> bool:
         """Whether to evaluate the policy again (`worker.curve`): the last evaluation has
@@ -385,6 +390,8 @@ class LiveSessions:
         sampled = sampled_at(self.data_dir / pool_dir)
         pool_steps = curve.pool_steps(run) if sampled is None else sampled
         live.update(keyed, now, final=True)
+        if run.cfg.loop.eval_episodes > 0:
+            self._evaluator_process()  # started now: the round's first evaluation is near
         log.info(
             "session %s: round %d trains continuously%s",
             job.session_id,

@@ -71,9 +71,12 @@ def test_a_continuous_round_shows_its_steps_fits_and_true_returns(client, monkey
         )
     finally:
         worker.live.close()
-    points = curve_["points"]
-    assert [p["ppo_steps"] for p in points] == [0, 2 * ROLLOUT]
-    assert all(p["true_return"] is not None for p in points)
+    points = curve_["points"]  # in time order: an evaluation's point as of its snapshot
+    assert [(p["ppo_steps"], p["true_return"] is None) for p in points] == [
+        (0, True),  # the first fit, stored at once
+        (0, False),  # the policy before PPO, evaluated
+        (2 * ROLLOUT, False),
+    ]
     assert {(p["round"], p["pairs"], p["pool_steps"]) for p in points} == {(0, 2, 0)}
     assert points[-1]["true_return"] == pytest.approx(here, rel=1e-12)
     assert curve_["summary"] == {
@@ -93,8 +96,13 @@ def test_a_continuous_round_shows_its_steps_fits_and_true_returns(client, monkey
         "judgement",
         "training",
         "training",
+        "training",
     ]
-    assert [data["ppo_steps"] for _, data in events[2:]] == [0, 2 * ROLLOUT]
+    assert [(d["ppo_steps"], d["true_return"] is None) for _, d in events[2:]] == [
+        (0, True),
+        (0, False),
+        (2 * ROLLOUT, False),
+    ]
 
 
 @pytest.mark.parametrize("training", ["rounds", "continuous"])
