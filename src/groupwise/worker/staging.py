@@ -16,6 +16,7 @@ end then prepares the next round as in rounds mode.
 
 import logging
 import multiprocessing
+import os
 import shutil
 from concurrent.futures import Future, ProcessPoolExecutor
 from pathlib import Path
@@ -60,6 +61,11 @@ def spawn_process(database_url: str) -> ProcessPoolExecutor:
     )
 
 
+NICENESS = 5
+"""Added to the stager's and the evaluator's niceness: on a busy machine their work waits for
+PPO and the web server instead of taking turns with them (the next round is ready minutes
+ahead; a curve point may come a little later)."""
+
 _db: "Database | None" = None
 _render: "RenderPool | None" = None
 
@@ -71,13 +77,15 @@ def process_db() -> "Database":
 
 
 def _start(database_url: str, log_level: int) -> None:
-    """A process's start: one thread per numeric library (the worker's environment says so
-    for numba and OpenMP), its log, its database connection."""
+    """A process's start: a lower priority than the worker's PPO and the web server
+    (`NICENESS`), one thread per numeric library (the worker's environment says so for
+    numba and OpenMP), its log, its database connection."""
     import torch
 
     from groupwise.storage import Database
 
     global _db
+    os.nice(NICENESS)
     torch.set_num_threads(1)
     logging.basicConfig(
         level=logging.WARNING, format="%(asctime)s %(levelname)s %(name)s: %(message)s"
