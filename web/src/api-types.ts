@@ -604,7 +604,7 @@ export interface paths {
         /**
          * Training
          * @description The points of the session's learning curve (PPO steps, true return, last refit, the
-         *     pool's age) in the order the worker wrote them, and the newest as a summary.
+         *     pool's age) in time order, and the newest as a summary.
          */
         get: operations["training_api_sessions__session_id__training_get"];
         put?: never;
