@@ -89,17 +89,17 @@ class Evaluator:
     """One process that evaluates curve points and stores them (module docstring)."""
 
     def __init__(self, database_url: str) -> None:
-        from groupwise.worker.staging import spawn_process
+        from groupwise.worker.staging import BackgroundProcess
 
-        self._pool = spawn_process(database_url)
-        self._pool.submit(_warm_up)  # its start and imports now, not with the first point
+        self._process = BackgroundProcess(database_url)
+        self._process.submit(_warm_up)  # its start and imports now, not with the first point
 
     def submit(self, point: CurvePoint) -> "Future[float]":
         """Evaluate and store `point`; the future's result is the seconds it took."""
-        return self._pool.submit(_evaluate, point)
+        return self._process.submit(_evaluate, point)
 
     def close(self) -> None:
-        self._pool.shutdown(wait=True, cancel_futures=True)
+        self._process.close()
 
 
 def _warm_up() -> None:

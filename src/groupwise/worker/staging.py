@@ -18,9 +18,11 @@ import logging
 import multiprocessing
 import os
 import shutil
+from collections.abc import Callable
 from concurrent.futures import Future, ProcessPoolExecutor
+from concurrent.futures.process import BrokenProcessPool
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, TypeVar
 
 from groupwise.worker.jobs import Job
 
@@ -29,6 +31,7 @@ if TYPE_CHECKING:
     from groupwise.storage import Database
 
 log = logging.getLogger(__name__)
+T = TypeVar("T")
 
 SNAPSHOT_DIR = "stage"
 """``checkpoints/stage``: the policy snapshot the next round is sampled from."""
@@ -39,26 +42,46 @@ class Stager:
 
     def __init__(self, database_url: str, data_dir: Path) -> None:
         self.data_dir = data_dir
-        self._pool = spawn_process(database_url)
+        self._process = BackgroundProcess(database_url)
 
     def submit(self, job: Job, snapshot: Path, ppo_steps: int) -> "Future[None]":
         """Prepare and stage round `job.round + 1` from `snapshot` (`Run.save_policy`,
         sampled after `ppo_steps` PPO steps)."""
-        return self._pool.submit(_stage, job, self.data_dir, snapshot, ppo_steps)
+        return self._process.submit(_stage, job, self.data_dir, snapshot, ppo_steps)
+
+    def close(self) -> None:
+        self._process.close()
+
+
+class BackgroundProcess:
+    """One "spawn" process beside the worker, set up as the worker is (`process_db`), at a
+    lower priority (`NICENESS`): the stager's, and the learning curve's evaluator
+    (`curve.Evaluator`). One that died (killed for memory, say) is started again by the
+    next `submit`; what it was doing fails with `BrokenProcessPool`."""
+
+    def __init__(self, database_url: str) -> None:
+        self.database_url = database_url
+        self._pool = self._spawn()
+
+    def submit(self, fn: Callable[..., T], /, *args: object) -> "Future[T]":
+        try:
+            return self._pool.submit(fn, *args)
+        except BrokenProcessPool:
+            log.warning("a background process of the worker died; starting another")
+            self._pool.shutdown(wait=False, cancel_futures=True)
+            self._pool = self._spawn()
+            return self._pool.submit(fn, *args)
 
     def close(self) -> None:
         self._pool.shutdown(wait=True, cancel_futures=True)
 
-
-def spawn_process(database_url: str) -> ProcessPoolExecutor:
-    """One "spawn" process beside the worker, set up as the worker is (`process_db`): the
-    stager's, and the learning curve's evaluator (`curve.Evaluator`)."""
-    return ProcessPoolExecutor(
-        max_workers=1,
-        mp_context=multiprocessing.get_context("spawn"),
-        initializer=_start,
-        initargs=(database_url, logging.getLogger("groupwise").getEffectiveLevel()),
-    )
+    def _spawn(self) -> ProcessPoolExecutor:
+        return ProcessPoolExecutor(
+            max_workers=1,
+            mp_context=multiprocessing.get_context("spawn"),
+            initializer=_start,
+            initargs=(self.database_url, logging.getLogger("groupwise").getEffectiveLevel()),
+        )
 
 
 NICENESS = 5
@@ -71,8 +94,8 @@ _render: "RenderPool | None" = None
 
 
 def process_db() -> "Database":
-    """The database connection of a process `spawn_process` started."""
-    assert _db is not None, "this process was not started by spawn_process"
+    """The database connection of a `BackgroundProcess`."""
+    assert _db is not None, "this process is not a BackgroundProcess"
     return _db
 
 
