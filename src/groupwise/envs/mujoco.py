@@ -9,17 +9,17 @@ through ``max_episode_steps``). What differs from the standard v5 env:
 - All: frames default to 240×240, are rendered with `FastMujocoRendering` (Hopper, Walker2d
   and HalfCheetah with a camera tracking the torso; Reacher with Gymnasium's fixed view), and
   the reward is copied into ``info["true_reward"]``.
+- Hopper, Walker2d, HalfCheetah: the stock env's `step` computes each term once
+  (`lean_mujoco`), bit for bit the same.
 """
 
 from typing import Any
 
 import gymnasium as gym
-from gymnasium.envs.mujoco.half_cheetah_v5 import HalfCheetahEnv
-from gymnasium.envs.mujoco.hopper_v5 import HopperEnv
 from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
 from gymnasium.envs.mujoco.reacher_v5 import ReacherEnv
-from gymnasium.envs.mujoco.walker2d_v5 import Walker2dEnv
 
+from groupwise.envs.lean_mujoco import LeanHalfCheetahEnv, LeanHopperEnv, LeanWalker2dEnv
 from groupwise.envs.rendering import DEFAULT_FRAME_SIZE, FastMujocoRendering
 from groupwise.envs.true_reward import TrueRewardInfo
 
@@ -44,7 +44,7 @@ def make_hopper(
 ) -> gym.Env[Any, Any]:
     """Hopper-v5 (obs 11, act 3) that keeps going when unhealthy; `kwargs` go to HopperEnv."""
     return _make(
-        HopperEnv, "torso", render_mode, width, height, terminate_when_unhealthy=False, **kwargs
+        LeanHopperEnv, "torso", render_mode, width, height, terminate_when_unhealthy=False, **kwargs
     )
 
 
@@ -56,7 +56,13 @@ def make_walker2d(
 ) -> gym.Env[Any, Any]:
     """Walker2d-v5 (obs 17, act 6) that keeps going when unhealthy; `kwargs` go to Walker2dEnv."""
     return _make(
-        Walker2dEnv, "torso", render_mode, width, height, terminate_when_unhealthy=False, **kwargs
+        LeanWalker2dEnv,
+        "torso",
+        render_mode,
+        width,
+        height,
+        terminate_when_unhealthy=False,
+        **kwargs,
     )
 
 
@@ -67,7 +73,7 @@ def make_half_cheetah(
     **kwargs: Any,
 ) -> gym.Env[Any, Any]:
     """HalfCheetah-v5 (obs 17, act 6); `kwargs` go to HalfCheetahEnv."""
-    return _make(HalfCheetahEnv, "torso", render_mode, width, height, **kwargs)
+    return _make(LeanHalfCheetahEnv, "torso", render_mode, width, height, **kwargs)
 
 
 def make_reacher(

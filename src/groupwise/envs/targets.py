@@ -210,7 +210,7 @@ def make_hopper_backflip(
     """Hopper-v5 that keeps going when unhealthy (a flip is), reward 0, backflip score."""
     return _make(
         "hopper-backflip",
-        "gymnasium.envs.mujoco.hopper_v5:HopperEnv",
+        "groupwise.envs.lean_mujoco:LeanHopperEnv",
         render_mode,
         width,
         height,
@@ -228,7 +228,7 @@ def make_half_cheetah_standup(
     """HalfCheetah-v5, reward 0, stand-up-and-sit score."""
     return _make(
         "halfcheetah-standup",
-        "gymnasium.envs.mujoco.half_cheetah_v5:HalfCheetahEnv",
+        "groupwise.envs.lean_mujoco:LeanHalfCheetahEnv",
         render_mode,
         width,
         height,
@@ -245,7 +245,7 @@ def make_walker2d_splits(
     """Walker2d-v5 that keeps going when unhealthy, reward 0, splits score."""
     return _make(
         "walker-splits",
-        "gymnasium.envs.mujoco.walker2d_v5:Walker2dEnv",
+        "groupwise.envs.lean_mujoco:LeanWalker2dEnv",
         render_mode,
         width,
         height,
