@@ -59,6 +59,30 @@ def _control_cost(weight: float, action: Any) -> Any:
     return weight * np.add.reduce(np.square(action), axis=None)
 
 
+def _upright_step(env: "LeanHopperEnv | LeanWalker2dEnv", action: Any) -> StepReturn:
+    """The stock v5 `step` of Hopper and Walker2d (the same in both), ``is_healthy`` once:
+    the env's own property (Walker2d's gives a NumPy bool, which the info keeps)."""
+    x_after, x_velocity = _simulate(env, action, env._lean_shape, env._lean_dt)
+    observation = _observation(env, env._exclude_current_positions_from_observation, 10)
+    healthy = env.is_healthy
+    forward_reward = env._forward_reward_weight * x_velocity
+    healthy_reward = healthy * env._healthy_reward
+    ctrl_cost = _control_cost(env._ctrl_cost_weight, action)
+    reward = forward_reward + healthy_reward - ctrl_cost
+    terminated = (not healthy) and env._terminate_when_unhealthy
+    info = {
+        "x_position": x_after,
+        "z_distance_from_origin": env.data.qpos[1] - env.init_qpos[1],
+        "x_velocity": x_velocity,
+        "reward_forward": forward_reward,
+        "reward_ctrl": -ctrl_cost,
+        "reward_survive": healthy_reward,
+    }
+    if env.render_mode == "human":
+        env.render()
+    return observation, reward, terminated, False, info
+
+
 class LeanHopperEnv(HopperEnv):
     """Hopper-v5 whose `step` evaluates ``is_healthy`` once (module docstring)."""
 
@@ -80,25 +104,7 @@ class LeanHopperEnv(HopperEnv):
         return bool(np.logical_and(min_state < state, state < max_state).all())
 
     def step(self, action: Any) -> StepReturn:
-        x_after, x_velocity = _simulate(self, action, self._lean_shape, self._lean_dt)
-        observation = _observation(self, self._exclude_current_positions_from_observation, 10)
-        healthy = self.is_healthy
-        forward_reward = self._forward_reward_weight * x_velocity
-        healthy_reward = healthy * self._healthy_reward
-        ctrl_cost = _control_cost(self._ctrl_cost_weight, action)
-        reward = forward_reward + healthy_reward - ctrl_cost
-        terminated = (not healthy) and self._terminate_when_unhealthy
-        info = {
-            "x_position": x_after,
-            "z_distance_from_origin": self.data.qpos[1] - self.init_qpos[1],
-            "x_velocity": x_velocity,
-            "reward_forward": forward_reward,
-            "reward_ctrl": -ctrl_cost,
-            "reward_survive": healthy_reward,
-        }
-        if self.render_mode == "human":
-            self.render()
-        return observation, reward, terminated, False, info
+        return _upright_step(self, action)
 
 
 class LeanWalker2dEnv(Walker2dEnv):
@@ -110,25 +116,7 @@ class LeanWalker2dEnv(Walker2dEnv):
         self._lean_shape = (self.model.nu,)
 
     def step(self, action: Any) -> StepReturn:
-        x_after, x_velocity = _simulate(self, action, self._lean_shape, self._lean_dt)
-        observation = _observation(self, self._exclude_current_positions_from_observation, 10)
-        healthy = self.is_healthy  # the stock property: a NumPy bool, which the info keeps
-        forward_reward = self._forward_reward_weight * x_velocity
-        healthy_reward = healthy * self._healthy_reward
-        ctrl_cost = _control_cost(self._ctrl_cost_weight, action)
-        reward = forward_reward + healthy_reward - ctrl_cost
-        terminated = (not healthy) and self._terminate_when_unhealthy
-        info = {
-            "x_position": x_after,
-            "z_distance_from_origin": self.data.qpos[1] - self.init_qpos[1],
-            "x_velocity": x_velocity,
-            "reward_forward": forward_reward,
-            "reward_ctrl": -ctrl_cost,
-            "reward_survive": healthy_reward,
-        }
-        if self.render_mode == "human":
-            self.render()
-        return observation, reward, terminated, False, info
+        return _upright_step(self, action)
 
 
 class LeanHalfCheetahEnv(HalfCheetahEnv):
