@@ -195,6 +195,8 @@ class LiveSessions:
             refitted = training.live.update(keyed, time.monotonic())
         run = training.run
         if not len(run.dataset):  # PPO starts with the round's first pairs
+            training.spent.clear()  # waiting for them is no loss of PPO's: not accounted
+            training.accounted = time.monotonic()
             return False
         if refitted or training.evaluated_s is None:
             self._point(training, refit=refitted, evaluate=training.evaluated_s is None)
