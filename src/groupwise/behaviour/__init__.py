@@ -10,7 +10,14 @@ Pure numpy/scipy/numba; no torch, FastAPI or SB3. A round uses it as
     payload = to_json(tree, leaf_extra={i: {"clip": url_i} ...})
 """
 
-from groupwise.behaviour.dtw import band_window, dtw_distance, dtw_matrix, warm_up
+from groupwise.behaviour.dtw import (
+    band_window,
+    dtw_distance,
+    dtw_matrix,
+    kernel_threads,
+    set_kernel_threads,
+    warm_up,
+)
 from groupwise.behaviour.features import (
     Standardiser,
     fit_standardiser,
@@ -53,12 +60,14 @@ __all__ = [
     "from_json",
     "geometric_thresholds",
     "group_candidates",
+    "kernel_threads",
     "leaf_order",
     "linear_thresholds",
     "linkage_matrix",
     "medoids",
     "pool_features",
     "raw_sequences",
+    "set_kernel_threads",
     "step_features",
     "to_json",
     "warm_up",

@@ -58,9 +58,10 @@ GridWorld groupwise cells side by side on two cores took 108 s each instead of 2
 every kernel launch restores the OpenMP limits it found (threadpoolctl).
 """
 
+import contextlib
 import math
 import time
-from collections.abc import Sequence
+from collections.abc import Iterator, Sequence
 
 import numba
 import numpy as np
@@ -231,6 +232,32 @@ def _rows_per_launch(n: int) -> int:
     every chunk is the same work."""
     rows = max(2 * numba.get_num_threads(), math.ceil(n / 10))
     return rows + rows % 2
+
+
+def set_kernel_threads(n: int) -> int:
+    """The kernels this thread launches from now on run on `n` threads (at most numba's
+    NUMBA_NUM_THREADS, at least 1); returns the count before.
+
+    A process that shares its cores with other work (the app's worker, whose PPO wants one
+    thread) starts with NUMBA_NUM_THREADS = its cores, sets one thread here, and raises the
+    count only around a distance matrix it computes while nothing else of its own runs
+    (`kernel_threads` in `worker.jobs.prepare`).
+    """
+    with threadpool_limits(limits=None, user_api="openmp"):  # starting the layer resets it
+        before = numba.get_num_threads()
+        most = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
+        numba.set_num_threads(max(1, min(n, most)))
+    return before
+
+
+@contextlib.contextmanager
+def kernel_threads(n: int) -> Iterator[int]:
+    """`set_kernel_threads(n)` within the block; yields the count set."""
+    before = set_kernel_threads(n)
+    try:
+        yield numba.get_num_threads()
+    finally:
+        set_kernel_threads(before)
 
 
 def warm_up() -> float:

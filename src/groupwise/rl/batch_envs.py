@@ -27,6 +27,7 @@ import os
 import socket
 import subprocess
 import sys
+import time
 from collections.abc import Callable, Sequence
 from multiprocessing.connection import Connection
 from pathlib import Path
@@ -69,18 +70,63 @@ def processes_for(n_envs: int, limit: int, processes: int | None) -> int:
     return max(1, min(free_cores(), n_envs))
 
 
-def free_cores() -> int:
-    """The cores this process may run on (its affinity) less those other work keeps busy
-    (the 1-minute load average, this process not counted), rounded, at least 1.
+def free_cores(sample_s: float = 0.2) -> int:
+    """The cores this process may run on (its affinity) that are idle now, rounded, at least 1:
+    the share of CPU time the whole machine spent idle over the next `sample_s` seconds
+    (/proc/stat), while this process sleeps and so is not counted. Where there is no
+    /proc/stat: the cores less the 1-minute load average, less 1 for this process.
 
     Helpers only pay where cores are idle: in lock step, a shard whose process waits for a
     core holds up every other one, and a helper costs 0.4 CPU-seconds of imports. On the
     shared 2-core machine at load 4 (another session's two processes) two processes sampled a
-    200-behaviour Hopper pool in 14.8 s against 13.7 s for one (issue 22).
+    200-behaviour Hopper pool in 14.8 s against 13.7 s for one (issue 22). The load average
+    remembers a minute: the app's worker, just done preparing one session's pool on both
+    cores, read load 1.8 and sampled the next, 1,000 behaviours, in one process (18 s
+    against 13 s in two).
     """
     cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    cores = cores or 1
+    before = _cpu_times()
+    if before is not None:
+        time.sleep(sample_s)
+        after = _cpu_times()
+        if after is not None:
+            return max(1, min(cores, round(idle_cores(before, after))))
     busy = max(0.0, os.getloadavg()[0] - 1.0) if hasattr(os, "getloadavg") else 0.0
-    return max(1, min(cores or 1, round((cores or 1) - busy)))
+    return max(1, min(cores, round(cores - busy)))
+
+
+def idle_cores(before: Sequence[int], after: Sequence[int]) -> float:
+    """Cores idle between two readings of /proc/stat's per-CPU lines (`_cpu_times`): each
+    CPU's idle and iowait share of its time in between, summed."""
+    idle = 0.0
+    for busy0, idle0, busy1, idle1 in zip(
+        before[0::2], before[1::2], after[0::2], after[1::2], strict=True
+    ):
+        total = (busy1 - busy0) + (idle1 - idle0)
+        idle += (idle1 - idle0) / total if total > 0 else 1.0
+    return idle
+
+
+def _cpu_times() -> list[int] | None:
+    """Busy and idle jiffies of each CPU this process may run on, flattened ([busy0, idle0,
+    busy1, idle1, ...]); None where /proc/stat cannot be read."""
+    allowed = os.sched_getaffinity(0) if hasattr(os, "sched_getaffinity") else None
+    try:
+        lines = Path("/proc/stat").read_text().splitlines()
+    except OSError:
+        return None
+    times: list[int] = []
+    for line in lines:
+        name, *fields = line.split()
+        if not name.startswith("cpu") or name == "cpu":
+            continue
+        if allowed is not None and int(name[3:]) not in allowed:
+            continue
+        values = [int(f) for f in fields[:8]]  # user nice system idle iowait irq softirq steal
+        idle = values[3] + values[4]
+        times += [sum(values) - idle, idle]
+    return times or None
 
 
 def step_envs(

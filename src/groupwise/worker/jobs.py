@@ -25,6 +25,7 @@ from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from groupwise.behaviour import kernel_threads
 from groupwise.clips.render import RenderPool
 from groupwise.clips.store import ClipStore
 from groupwise.config import RunConfig
@@ -34,11 +35,12 @@ from groupwise.pool.files import load_pool
 from groupwise.pool.publish import PublishConfig, publish_pool
 from groupwise.preferences.judgement import Judgement
 from groupwise.query.strategies import Query, QueryStrategy
+from groupwise.rl.batch_envs import free_cores
 from groupwise.run.agent_package import SETTINGS_FILE
 from groupwise.run.checkpoint import STATE_FILE, checkpoint_dir
 from groupwise.run.progress import RunCallback, as_callback
 from groupwise.run.records import RoundRecord
-from groupwise.run.round import Offer, begin_round, end_round, finish_round
+from groupwise.run.round import Offer, begin_round, end_round, finish_round, pool_oversample
 from groupwise.run.run import Run
 from groupwise.storage import Database, SessionSettings
 from groupwise.storage.judgements import round_judgements
@@ -112,7 +114,8 @@ def prepare(
     """Prepare round `job.round`'s offer and open the round (module docstring)."""
     settings = job.settings
     progress.on_phase("load", 0, 1)
-    with open_run(job, data_dir, job.round - 1) as run:
+    # nothing else of this worker runs meanwhile: the distances take the free cores
+    with open_run(job, data_dir, job.round - 1) as run, kernel_threads(free_cores()):
         offer = begin_round(
             run,
             session_strategy(run.cfg, job.mode),
@@ -189,7 +192,7 @@ def published_round(
         publish_config(run_config, settings.frame_size, render.workers),
         pool,
         data_dir / round_directory(session_id, pool.round),
-        oversample=run_config.loop.pool_oversample,
+        oversample=pool_oversample(run_config.loop, pool.round),
         exploration_fraction=run_config.loop.exploration_fraction,
         store=ClipStore(data_dir / "clips"),
         render_pool=render,

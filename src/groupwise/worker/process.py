@@ -7,9 +7,13 @@ the server and it share only the database and the data directory. A job that rai
 its session ``failed`` with the error, and the worker goes on serving the other sessions.
 
 Started by the server's `Supervisor` with the "spawn" context (numba's threading layer kills
-forked children) and with one thread per numeric library: NUMBA_NUM_THREADS and
-OMP_NUM_THREADS are set to 1 before the process starts, and torch to one thread inside it
-(numba's OpenMP layer otherwise resets torch to every core, and the nets are tiny).
+forked children) and with one thread per numeric library: OMP_NUM_THREADS is set to 1
+before the process starts, torch to one thread inside it (numba's OpenMP layer otherwise
+resets torch to every core, and the nets are tiny), and the DTW kernels to one thread
+(`behaviour.set_kernel_threads`). NUMBA_NUM_THREADS is the cores, so that preparing a round,
+while nothing else of the worker's runs, measures its distances on the cores other work
+leaves free (`jobs.prepare`); the kernels are compiled (or loaded from numba's cache) at
+the start, not in a user's first round.
 
 The worker leads a process group of its own, which its render processes and their ffmpeg
 encoders join: the supervisor ends the whole group when it stops the worker or finds it
@@ -39,7 +43,13 @@ if TYPE_CHECKING:  # the server imports this module; only the worker process nee
 
 log = logging.getLogger(__name__)
 
-THREAD_ENV = {"NUMBA_NUM_THREADS": "1", "OMP_NUM_THREADS": "1", "MKL_NUM_THREADS": "1"}
+THREAD_ENV = {
+    "NUMBA_NUM_THREADS": str(
+        len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    ),
+    "OMP_NUM_THREADS": "1",
+    "MKL_NUM_THREADS": "1",
+}
 """Set in the environment the worker is spawned with (see the module docstring)."""
 
 
@@ -64,11 +74,15 @@ def worker_main(
     signal.signal(signal.SIGTERM, _stop)
     import torch
 
+    from groupwise.behaviour import set_kernel_threads, warm_up
+
     torch.set_num_threads(1)
     logging.basicConfig(
         level=logging.WARNING, format="%(asctime)s %(levelname)s %(name)s: %(message)s"
     )
     logging.getLogger("groupwise").setLevel(log_level)
+    set_kernel_threads(1)
+    log.info("DTW kernels ready in %.1f s", warm_up())
     db = Database(database_url, pool_size=2)
     Worker(db, Path(data_dir), poll_s, shard).run()
 

@@ -105,11 +105,13 @@ def _start(database_url: str, log_level: int) -> None:
     numba and OpenMP), its log, its database connection."""
     import torch
 
+    from groupwise.behaviour import set_kernel_threads
     from groupwise.storage import Database
 
     global _db
     os.nice(NICENESS)
     torch.set_num_threads(1)
+    set_kernel_threads(1)
     logging.basicConfig(
         level=logging.WARNING, format="%(asctime)s %(levelname)s %(name)s: %(message)s"
     )

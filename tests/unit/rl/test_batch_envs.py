@@ -106,12 +106,53 @@ def test_a_helper_that_fails_raises_here():
 
 
 def test_large_batches_use_the_free_cores_and_small_ones_one(monkeypatch):
+    from groupwise.rl import batch_envs
+
     cores = len(os.sched_getaffinity(0))
-    monkeypatch.setattr(os, "getloadavg", lambda: (1.0, 1.0, 1.0))  # this process alone
-    assert processes_for(4, 10, None) == 1
-    assert processes_for(400, 1000, None) == min(cores, 400) == free_cores()
-    monkeypatch.setattr(os, "getloadavg", lambda: (1.0 + 2 * cores, 0.0, 0.0))  # all busy
+    readings = iter([])
+
+    def cpu_times():
+        return next(readings)
+
+    monkeypatch.setattr(batch_envs, "_cpu_times", cpu_times)
+    idle = [0, 0] * cores, [0, 100] * cores  # every core idle in between
+    readings = iter(idle * 2)
+    assert processes_for(4, 10, None) == 1  # small: no reading taken
+    assert processes_for(400, 1000, None) == min(cores, 400) == free_cores(0.0)
+    readings = iter([[0, 0] * cores, [95, 5] * cores])  # all busy
     assert processes_for(400, 1000, None) == 1
+    monkeypatch.setattr(batch_envs, "_cpu_times", lambda: None)  # no /proc/stat
+    monkeypatch.setattr(os, "getloadavg", lambda: (1.0, 1.0, 1.0))  # this process alone
+    assert free_cores(0.0) == cores
+    monkeypatch.setattr(os, "getloadavg", lambda: (1.0 + 2 * cores, 0.0, 0.0))  # all busy
+    assert free_cores(0.0) == 1
+
+
+def test_idle_cores_sums_each_cores_idle_share():
+    from groupwise.rl.batch_envs import idle_cores
+
+    # core 0: 30 busy, 70 idle jiffies in between; core 1: all idle; core 2: no time passed
+    assert idle_cores([10, 20, 0, 0, 5, 5], [40, 90, 0, 50, 5, 5]) == pytest.approx(2.7)
+
+
+def test_the_free_cores_fall_when_a_core_is_kept_busy():
+    import subprocess
+    import sys
+
+    if len(os.sched_getaffinity(0)) < 2:
+        pytest.skip("one core")
+    spinner = subprocess.Popen([sys.executable, "-c", "while True: pass"])
+    try:
+        import time
+
+        time.sleep(0.5)
+        assert free_cores(0.5) <= len(os.sched_getaffinity(0)) - 1
+    finally:
+        spinner.kill()
+        spinner.wait()
+
+
+def test_the_processes_asked_for_are_kept_at_one_per_env():
     assert processes_for(3, PARALLEL_MIN_STEPS, 8) == 3  # asked for: at most one per env
     with pytest.raises(ValueError):
         processes_for(4, 10, 0)
