@@ -130,8 +130,11 @@ def test_backflip_case_study_writes_rounds_video_and_strip(tmp_path, capsys):
 )
 def test_other_targets_and_decision_makers_run(tmp_path, target, dm, seconds):
     out = tmp_path / target
-    assert _case_study(out, target, dm, seconds, "--no-video", "--reward-inputs", "obs-act") == 0
-    assert json.loads((out / CONFIG_FILE).read_text())["reward"]["use_actions"] is True
+    args = ("--no-video", "--reward-inputs", "obs-act", "--ppo", "mujoco")
+    assert _case_study(out, target, dm, seconds, *args) == 0
+    config = json.loads((out / CONFIG_FILE).read_text())
+    assert config["reward"]["use_actions"] is True
+    assert config["ppo"]["learning_rate"] == 3e-4 and config["ppo"]["net_arch"] == [64, 64]
     rows = _rows(out)
     assert len(rows) == 2 and int(rows[1]["comparisons_total"]) == 20
     assert int(rows[1]["judgements_total"]) > 0

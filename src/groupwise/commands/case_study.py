@@ -62,6 +62,13 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
         "action cost, and a clip shows states) or [obs ; act] as in the study",
     )
     case.add_argument(
+        "--ppo",
+        choices=("study", "mujoco"),
+        default="study",
+        help="PPO settings (config.PPO_PRESETS): the study's (SPEC §3) or PPO's own MuJoCo "
+        "settings (lr 3e-4, clip 0.2, γ 0.99, 64 × 64)",
+    )
+    case.add_argument(
         "--eval-episodes", type=positive_int, default=5, help="episodes scored after each round"
     )
     case.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
@@ -83,7 +90,7 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
 
 def run(args: argparse.Namespace) -> int:
     from groupwise.clips.timing import clip_timing, default_clip_seconds, env_step_seconds
-    from groupwise.config import LoopConfig, RunConfig
+    from groupwise.config import PPO_PRESETS, LoopConfig, RunConfig
     from groupwise.oracles import ORACLES
     from groupwise.run.agent_package import AGENT_ZIP
     from groupwise.run.takeaway import TakeawayConfig
@@ -112,7 +119,9 @@ def run(args: argparse.Namespace) -> int:
         reward = dataclasses.replace(base.reward, use_actions=args.reward_inputs == "obs-act")
         training = dataclasses.replace(base.training, pretrain_steps=args.pretrain_steps)
         cfg = apply_teacher_options(
-            dataclasses.replace(base, loop=loop, reward=reward, training=training),
+            dataclasses.replace(
+                base, loop=loop, reward=reward, training=training, ppo=PPO_PRESETS[args.ppo]
+            ),
             args,
             target.name,
         )

@@ -8,7 +8,7 @@ feedback will, and the budget is what stands in the way. After every `every` ste
 greedy policy is scored on the target as the case study scores it (`evaluate_target`).
 
     python -m groupwise.study.target_reference --target walker-splits --steps 204800 \\
-        --every 40960 --seeds 0 1 2 --out OUT
+        --every 40960 --seeds 0 1 2 [--ppo study|mujoco] --out OUT
 """
 
 import argparse
@@ -22,7 +22,7 @@ from typing import Any, SupportsFloat
 import gymnasium as gym
 import numpy as np
 
-from groupwise.config import PPOConfig
+from groupwise.config import PPO_PRESETS, PPOConfig
 from groupwise.envs import TARGETS, Target, make_env
 from groupwise.envs.targets import TARGET_SCORE_KEY
 from groupwise.rl.ppo import PPOAgent
@@ -109,6 +109,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--every", type=int, default=40_960, help="steps between scorings")
     parser.add_argument("--seeds", type=int, nargs="+", default=[0])
     parser.add_argument("--eval-episodes", type=int, default=5)
+    parser.add_argument("--ppo", choices=sorted(PPO_PRESETS), default="study", help="PPO settings")
     parser.add_argument("--out", type=Path, required=True)
     args = parser.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
@@ -116,9 +117,9 @@ def main(argv: Sequence[str] | None = None) -> None:
     points = []
     for seed in args.seeds:
         points += train_on_score(
-            target, PPOConfig(), args.steps, args.every, seed, args.eval_episodes
+            target, PPO_PRESETS[args.ppo], args.steps, args.every, seed, args.eval_episodes
         )
-        write_points(points, args.out / f"{target.name}-{REFERENCE_FILE}")
+        write_points(points, args.out / f"{target.name}-{args.ppo}-{REFERENCE_FILE}")
     for p in points:
         print(
             f"{p.target} seed {p.seed} steps {p.steps}: score {p.score_mean:.2f} ± "
