@@ -147,8 +147,8 @@ TARGETS: dict[str, Target] = {
             moment_s=1.0,
             description=(
                 "longest hold, s, of a split: thighs >= 90° apart, torso within 60° of "
-                "vertical, both feet on the floor; step score: separation, rad, × "
-                "uprightness × share of feet down"
+                "vertical, both feet on the floor; step score: separation, rad, up to 90°, × "
+                "uprightness × share of feet down (its most, π/2, is a split held)"
             ),
             start=SplitsScorer,
         ),
