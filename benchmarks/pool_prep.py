@@ -3,15 +3,13 @@ phase, and how long a clip rendered on demand takes to reach the page.
 
 For each window length (30 steps, the study's L, and the env's default clip, 1.5 s = 188
 Hopper steps) and each pool size, the app's round 0 (`SessionSettings` defaults, random
-policy, a fresh reward ensemble): `sample_pool` (N windows; `--round 1` samples as later
-rounds do, 2× windows with the ensemble's most uncertain kept, `run.round.pool_oversample`),
-DTW in the tree config's band on the free cores (as the worker's prepare job), the tree,
-the Groupwise-DM's suggestions
+policy, a fresh reward ensemble): `sample_pool` (2× windows, the ensemble's most uncertain
+kept), DTW in the tree config's band, the tree, the Groupwise-DM's suggestions
 (`worker.jobs.session_strategy`, 2× the comparison budget), then `publish_pool` — with clips
 on demand (the app's default) a poster per behaviour and each clip's recipe; with
 ``--clips eager`` every clip as before — and the round's rows (`worker.offers`). The
 render workers are started and the DTW kernels compiled before the clock starts, as in the
-long-lived worker.
+long-lived worker; DTW runs on the idle cores, as in the worker's prepare job.
 
 Sampling steps its envs on the free cores (`rl.batch_envs`; `--sample-processes P` fixes
 the number, 1: in this process only, as before); the pool is the same either way.
@@ -29,7 +27,7 @@ asked at once (the comparison view), the last first byte.
 
     python -m benchmarks.pool_prep [--env Hopper] [--n 200 [1000]] [--lengths 30 default]
                                    [--clips on_demand|eager] [--workers 2] [--clip-requests 20]
-                                   [--sample-processes P] [--round R]
+                                   [--sample-processes P]
 """
 
 import argparse
@@ -61,7 +59,6 @@ from groupwise.pool.sampling import sample_pool
 from groupwise.reward import RewardEnsemble
 from groupwise.rl.batch_envs import free_cores
 from groupwise.rl.policy_files import load_policy
-from groupwise.run.round import pool_oversample
 from groupwise.storage import SessionSettings
 from groupwise.worker.jobs import offered_queries, publish_config, session_strategy
 from groupwise.worker.offers import prepared_round
@@ -144,10 +141,8 @@ def prepare(
     out: Path,
     seed: int,
     processes: int | None = None,
-    round_index: int = 0,
 ) -> tuple[Run, PreparedPool]:
-    """Round 0 of a session with `settings`, as the worker prepares it (module docstring);
-    `round_index` > 0 samples as that round would (still from the random policy)."""
+    """Round 0 of a session with `settings`, as the worker prepares it (module docstring)."""
     cfg = settings.run_config(env)
     loop = cfg.loop
     rng = np.random.default_rng(seed)
@@ -158,9 +153,8 @@ def prepare(
     with run.phase("sample"):
         pool = sample_pool(
             lambda: make_env(env), policy, n, loop.fragment_length, rng,
-            exploration_fraction=loop.exploration_fraction,
-            oversample=pool_oversample(loop, round_index), ensemble=ensemble,
-            select=loop.pool_selection, processes=processes,
+            exploration_fraction=loop.exploration_fraction, oversample=loop.pool_oversample,
+            ensemble=ensemble, select=loop.pool_selection, processes=processes,
         )  # fmt: skip
     with run.phase("DTW"), kernel_threads(free_cores()):
         pool.measure_distances(cfg=cfg.tree)
@@ -236,14 +230,11 @@ def measure_on_demand(run: Run, published: PreparedPool, data_dir: Path, request
         run.group_s = max(times) if times else float("nan")
 
 
-def report(
-    runs: Sequence[Run], env: str, mode: str, workers: int, round_index: int, oversample: float
-) -> str:
+def report(runs: Sequence[Run], env: str, mode: str, workers: int) -> str:
     cores = os.cpu_count() or 1
     lines = [
-        f"Pool preparation, {env}, random policy, a fresh ensemble, round {round_index} with app "
-        f"settings ({oversample:g}× windows sampled, 240×240, {workers} render workers), clips "
-        f"{mode}; {cores} "
+        f"Pool preparation, {env}, random policy, a fresh ensemble (round 0), app settings "
+        f"(2× windows sampled, 240×240, {workers} render workers), clips {mode}; {cores} "
         f"CPUs, MUJOCO_GL={os.environ.get('MUJOCO_GL', '')}. floor = CPU s / {cores} cores; "
         "ratio = wall / floor. load: 1-min load average after the phase.",
         "",
@@ -312,9 +303,6 @@ def main(argv: Sequence[str] | None = None) -> None:
         default=None,
         help="processes stepping the sampled envs (default: the free cores for large batches)",
     )
-    parser.add_argument(
-        "--round", type=int, default=0, help="sample as this round does (0: N windows)"
-    )
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args([] if argv is None else list(argv))
     ensure_gl_backend()
@@ -330,14 +318,13 @@ def main(argv: Sequence[str] | None = None) -> None:
                 with tempfile.TemporaryDirectory() as tmp:
                     run, published = prepare(
                         args.env, n, settings, args.clips, render, Path(tmp), args.seed,
-                        args.sample_processes, args.round,
+                        args.sample_processes,
                     )  # fmt: skip
                     if args.clips == "on_demand" and args.clip_requests > 0:
                         measure_on_demand(run, published, Path(tmp), args.clip_requests)
                 runs.append(run)
                 print(f"[{n} × {run.steps} steps done]", file=sys.stderr, flush=True)
-    oversample = pool_oversample(SessionSettings().run_config(args.env).loop, args.round)
-    print(report(runs, args.env, args.clips, args.workers, args.round, oversample))
+    print(report(runs, args.env, args.clips, args.workers))
 
 
 if __name__ == "__main__":

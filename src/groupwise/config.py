@@ -195,8 +195,7 @@ class LoopConfig:
     pool_cap: Annotated[int, Field(ge=2)] = 200
     """... capped at this many behaviours."""
     pool_oversample: Annotated[float, Field(ge=1)] = 2.0
-    """Sample episodes for this many times N windows, of which N are kept (from round 1:
-    round 0's ensemble has learned nothing, so it samples N; `run.round.begin_round`) ..."""
+    """Sample episodes for this many times N windows, of which N are kept ..."""
     pool_selection: Literal["uncertain", "random"] = "uncertain"
     """... those the ensemble is most uncertain about (SPEC §3.2), or a random N."""
     candidate_pairs: PositiveInt = 10

@@ -206,24 +206,3 @@ def test_a_live_round_refits_when_due_and_an_undo_counts(tmp_path):
         assert len(run.dataset) == len(derive_pairs([a], cfg.loop, 0, [0])) == 3
         assert live.update([(0, a), (2, b)], clock=301.0, final=True)  # final: any change
         assert run.dataset.rounds.tolist() == [0] * 4
-
-
-def test_round_zero_samples_the_pool_size_and_later_rounds_oversample():
-    from groupwise.oracles import ORACLES
-    from groupwise.pool.fragments import tile_fragments
-    from groupwise.run.round import begin_round, pool_oversample
-    from groupwise.run.streams import round_streams
-
-    loop = CONTINUOUS.loop
-    assert (pool_oversample(loop, 0), pool_oversample(loop, 1)) == (1.0, loop.pool_oversample)
-    with Run.create(CONTINUOUS, None) as run:
-        for index in (0, 1):
-            offer = begin_round(
-                run, ORACLES["groupwise"](CONTINUOUS).queries, 8,
-                streams=round_streams(loop.seed, index), round_index=index,
-            )  # fmt: skip
-            windows = len(tile_fragments(offer.pool.episodes, loop.fragment_length))
-            last = len(offer.pool.episodes[-1].obs) // loop.fragment_length
-            wanted = pool_oversample(loop, index) * len(offer.pool)
-            # whole episodes until the windows wanted: at most one episode's more
-            assert wanted <= windows < wanted + max(1, last)

@@ -71,15 +71,6 @@ def pool_size(loop: LoopConfig, budget: int) -> int:
     return min(loop.pool_cap, max(2, math.ceil(loop.pool_factor * budget)))
 
 
-def pool_oversample(loop: LoopConfig, round_index: int) -> float:
-    """How many times N windows round `round_index` samples: `loop.pool_oversample` from
-    round 1, 1 in round 0. An ensemble that has seen no preference ranks nothing: on Hopper's
-    app pools (200 of 1.5 s, random policy) its most uncertain half spread their returns no
-    wider than N windows sampled (sd 51.6 against 50.3, 4 seeds), and the half thrown away
-    was half the round's sampling (issue 22)."""
-    return loop.pool_oversample if round_index > 0 else 1.0
-
-
 def begin_round(
     run: Run,
     strategy: QueryStrategy,
@@ -95,7 +86,7 @@ def begin_round(
     does): sample the pool from the current policy
     (the `pool_oversample` × N windows the ensemble is most uncertain about, or a random N,
     `loop.pool_selection`), build its tree, and let `strategy` propose `n_queries` (default
-    `budget`) comparisons of it (`pool_oversample`: round 0 samples N windows).
+    `budget`) comparisons of it.
 
     `streams` are the round's (`round_streams`); pass them to continue their `feedback`
     stream with a simulated teacher, as `run_round` does. `callback` hears the phases
@@ -113,7 +104,7 @@ def begin_round(
         streams.sample,
         round_index=index,
         exploration_fraction=loop.exploration_fraction,
-        oversample=pool_oversample(loop, index),
+        oversample=loop.pool_oversample,
         ensemble=run.ensemble,
         select=loop.pool_selection,
         progress=lambda done, total: callback.on_phase("sample", done, total),

@@ -40,7 +40,7 @@ from groupwise.run.agent_package import SETTINGS_FILE
 from groupwise.run.checkpoint import STATE_FILE, checkpoint_dir
 from groupwise.run.progress import RunCallback, as_callback
 from groupwise.run.records import RoundRecord
-from groupwise.run.round import Offer, begin_round, end_round, finish_round, pool_oversample
+from groupwise.run.round import Offer, begin_round, end_round, finish_round
 from groupwise.run.run import Run
 from groupwise.storage import Database, SessionSettings
 from groupwise.storage.judgements import round_judgements
@@ -192,7 +192,7 @@ def published_round(
         publish_config(run_config, settings.frame_size, render.workers),
         pool,
         data_dir / round_directory(session_id, pool.round),
-        oversample=pool_oversample(run_config.loop, pool.round),
+        oversample=run_config.loop.pool_oversample,
         exploration_fraction=run_config.loop.exploration_fraction,
         store=ClipStore(data_dir / "clips"),
         render_pool=render,
