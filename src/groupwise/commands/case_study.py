@@ -14,6 +14,7 @@ from groupwise.commands.arguments import (
     positive_int,
     writable_dir,
 )
+from groupwise.config import PPO_PRESETS
 from groupwise.envs import TARGETS
 
 
@@ -63,7 +64,7 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
     )
     case.add_argument(
         "--ppo",
-        choices=("study", "mujoco"),
+        choices=sorted(PPO_PRESETS),
         default="study",
         help="PPO settings (config.PPO_PRESETS): the study's (SPEC §3) or PPO's own MuJoCo "
         "settings (lr 3e-4, clip 0.2, γ 0.99, 64 × 64)",
@@ -90,7 +91,7 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
 
 def run(args: argparse.Namespace) -> int:
     from groupwise.clips.timing import clip_timing, default_clip_seconds, env_step_seconds
-    from groupwise.config import PPO_PRESETS, LoopConfig, RunConfig
+    from groupwise.config import LoopConfig, RunConfig
     from groupwise.oracles import ORACLES
     from groupwise.run.agent_package import AGENT_ZIP
     from groupwise.run.takeaway import TakeawayConfig

@@ -60,6 +60,17 @@ class TargetEvaluation:
     def stretch_rate(self, target: Target) -> float:
         return float(np.mean([target.stretches(s) for s in self.scores]))
 
+    def summary(self, target: Target) -> dict[str, float]:
+        """The target score's mean and sd, the success and stretch rates and the mean sum
+        of step scores, under the names of `CaseRecord`'s columns."""
+        return {
+            "target_score_mean": float(self.scores.mean()),
+            "target_score_std": float(self.scores.std()),
+            "success_rate": self.success_rate(target),
+            "stretch_rate": self.stretch_rate(target),
+            "true_return_mean": float(self.returns.mean()),
+        }
+
 
 def evaluate_target(
     make_env: EnvFactory, policy: Policy, n_episodes: int, rng: np.random.Generator
@@ -162,11 +173,7 @@ class CaseRecord:
             tied_share_total=float(dataset.tied().mean()) if len(dataset) else math.nan,
             label_error_untied_total=dataset.label_error_rate(untied=True),
             env_steps=record.env_steps,
-            target_score_mean=float(evaluation.scores.mean()),
-            target_score_std=float(evaluation.scores.std()),
-            success_rate=evaluation.success_rate(target),
-            stretch_rate=evaluation.stretch_rate(target),
-            true_return_mean=float(evaluation.returns.mean()),
+            **evaluation.summary(target),
             sample_s=record.sample_s,
             feedback_s=record.feedback_s,
             reward_s=record.reward_s,

@@ -48,11 +48,11 @@ class ReferencePoint:
     target: str
     seed: int
     steps: int
-    score_mean: float
-    score_std: float
+    target_score_mean: float
+    target_score_std: float
     success_rate: float
     stretch_rate: float
-    return_mean: float
+    true_return_mean: float
     """Mean sum of the step scores: what PPO maximised."""
 
 
@@ -77,16 +77,7 @@ def train_on_score(
             lambda: make_env(target.env), agent.policy(deterministic=True), eval_episodes, rng
         )
         points.append(
-            ReferencePoint(
-                target=target.name,
-                seed=seed,
-                steps=agent.num_timesteps,
-                score_mean=float(evaluation.scores.mean()),
-                score_std=float(evaluation.scores.std()),
-                success_rate=evaluation.success_rate(target),
-                stretch_rate=evaluation.stretch_rate(target),
-                return_mean=float(evaluation.returns.mean()),
-            )
+            ReferencePoint(target.name, seed, agent.num_timesteps, **evaluation.summary(target))
         )
         log.info("%s seed %d: %s", target.name, seed, points[-1])
     return points
@@ -122,8 +113,9 @@ def main(argv: Sequence[str] | None = None) -> None:
         write_points(points, args.out / f"{target.name}-{args.ppo}-{REFERENCE_FILE}")
     for p in points:
         print(
-            f"{p.target} seed {p.seed} steps {p.steps}: score {p.score_mean:.2f} ± "
-            f"{p.score_std:.2f}, success {p.success_rate:.0%}, return {p.return_mean:.1f}"
+            f"{p.target} seed {p.seed} steps {p.steps}: score {p.target_score_mean:.2f} ± "
+            f"{p.target_score_std:.2f}, success {p.success_rate:.0%}, "
+            f"return {p.true_return_mean:.1f}"
         )
 
 
