@@ -130,14 +130,16 @@ def test_backflip_case_study_writes_rounds_video_and_strip(tmp_path, capsys):
 )
 def test_other_targets_and_decision_makers_run(tmp_path, target, dm, seconds):
     out = tmp_path / target
-    args = ("--no-video", "--reward-inputs", "obs-act", "--ppo", "mujoco")
+    args = ("--no-video", "--reward-inputs", "obs-act", "--ppo", "mujoco", "--pairs", "24")
     assert _case_study(out, target, dm, seconds, *args) == 0
     config = json.loads((out / CONFIG_FILE).read_text())
+    assert config["loop"]["pair_cap"] == pytest.approx(24 / 20)
     assert config["reward"]["use_actions"] is True
     assert config["ppo"]["learning_rate"] == 3e-4 and config["ppo"]["net_arch"] == [64, 64]
     rows = _rows(out)
     assert len(rows) == 2 and int(rows[1]["comparisons_total"]) == 20
     assert int(rows[1]["judgements_total"]) > 0
+    assert int(rows[0]["pairs_total"]) <= 2 and int(rows[1]["pairs_total"]) <= 2 + 21
     assert not (out / VIDEO_FILE).exists()
     assert [f.name for f in CaseRecord.__dataclass_fields__.values()] == COLUMNS
 
@@ -148,6 +150,8 @@ def test_other_targets_and_decision_makers_run(tmp_path, target, dm, seconds):
         (["--target", "hopper-backflip", "--dm", "psychic"], "psychic"),
         (["--target", "cartwheel"], "invalid choice"),
         (["--target", "hopper-backflip", "--seconds", "0"], "> 0"),
+        (["--target", "hopper-backflip", "--pairs", "0"], ">= 1"),
+        (["--target", "walker-splits", "--pairs", "paper", "--training", "continuous"], "rounds"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_code_2(tmp_path, capsys, args, message):

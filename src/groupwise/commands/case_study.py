@@ -28,6 +28,23 @@ def _positive_float(text: str) -> float:
     return value
 
 
+def _pair_budget(text: str) -> int | str:
+    if text == "paper":
+        return text
+    return positive_int(text)
+
+
+def pair_cap(pairs: int | str | None, target: str, comparisons: int) -> float | None:
+    """`LoopConfig.pair_cap` for at most `pairs` preference pairs over a run of `comparisons`
+    ("paper": the pairs of the paper's case study of `target`; None: no cap)."""
+    from groupwise.run.continuous import PAPER_CASES
+
+    if pairs is None:
+        return None
+    budget = PAPER_CASES[target][0] if pairs == "paper" else int(pairs)
+    return budget / comparisons
+
+
 def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
     case = subparsers.add_parser(
         "case-study",
@@ -47,6 +64,14 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
         type=positive_int,
         default=1000,
         help="total comparisons over the rounds (a group comparison gives several pairs)",
+    )
+    case.add_argument(
+        "--pairs",
+        type=_pair_budget,
+        metavar="P|paper",
+        help="at most P preference pairs over the run ('paper': the pairs the paper's person "
+        "gave for this target): each round keeps at most ⌊P / comparisons × its comparisons⌋ "
+        "of its pairs (LoopConfig.pair_cap; default: every pair)",
     )
     case.add_argument("--rounds", type=positive_int, default=10, help="feedback rounds")
     case.add_argument("--steps", type=positive_int, default=100_000, help="PPO steps per round")
@@ -114,6 +139,7 @@ def run(args: argparse.Namespace) -> int:
                 "steps": args.steps * args.rounds,
                 "fragment_length": length,
                 "eval_episodes": 0,  # the case study scores the target itself
+                "pair_cap": pair_cap(args.pairs, target.name, args.preferences),
                 "seed": args.seed,
             }
         )
@@ -128,6 +154,8 @@ def run(args: argparse.Namespace) -> int:
         )
     except ValueError as error:
         raise UsageError(str(error)) from None
+    if cfg.loop.pair_cap is not None and cfg.training.mode == "continuous":
+        raise UsageError("--pairs caps each round's pairs: use it with --training rounds")
     out = writable_dir(args.out)
     study = run_case_study(
         cfg,
