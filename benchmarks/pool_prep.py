@@ -154,6 +154,7 @@ def prepare(
         pool = sample_pool(
             lambda: make_env(env), policy, n, loop.fragment_length, rng,
             exploration_fraction=loop.exploration_fraction, oversample=loop.pool_oversample,
+            max_extra=loop.pool_extra_max,
             ensemble=ensemble, select=loop.pool_selection, processes=processes,
         )  # fmt: skip
     with run.phase("DTW"), kernel_threads(free_cores()):

@@ -1,11 +1,12 @@
 """A round's pool: enough windows, the most uncertain kept, or a random subset."""
 
 import numpy as np
+import pytest
 
 from groupwise.config import RewardConfig
 from groupwise.envs import make_env
 from groupwise.pool.fragments import stack_fragments, tile_fragments
-from groupwise.pool.sampling import sample_pool
+from groupwise.pool.sampling import sample_pool, windows_to_sample
 from groupwise.reward import RewardEnsemble
 from groupwise.rl.policy import RandomPolicy
 
@@ -41,3 +42,25 @@ def test_the_most_uncertain_windows_are_kept_or_a_random_subset():
     assert len(random) == 20
     assert {f.key for f in random.fragments} != {f.key for f in uncertain.fragments}
     assert random.step_variance is not None
+
+
+def test_windows_to_sample_caps_the_oversample_beyond_the_pool():
+    assert windows_to_sample(200, 2.0, 500) == 400  # a pool up to the cap: the whole oversample
+    assert windows_to_sample(500, 2.0, 500) == 1000
+    assert windows_to_sample(1000, 2.0, 500) == 1500
+    assert windows_to_sample(1000, 2.0) == 2000  # no limit
+    assert windows_to_sample(7, 1.5, 0) == 7 and windows_to_sample(7, 1.5) == 11
+    for size, oversample, extra in ((0, 2.0, 1), (5, 0.5, 1), (5, 2.0, -1)):
+        with pytest.raises(ValueError, match="need size"):
+            windows_to_sample(size, oversample, extra)
+
+
+def test_a_capped_oversample_samples_fewer_windows():
+    policy = RandomPolicy(_make().action_space)
+    ensemble = RewardEnsemble.for_env(_make, RewardConfig(), np.random.default_rng(0))
+    pool = sample_pool(
+        _make, policy, 20, 30, np.random.default_rng(1), oversample=3.0, max_extra=5,
+        ensemble=ensemble,
+    )  # fmt: skip
+    assert len(pool) == 20
+    assert 25 <= sum(len(t) // 30 for t in pool.episodes) < 60

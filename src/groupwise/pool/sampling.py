@@ -1,8 +1,9 @@
 """Sampling a round's behaviour pool from a policy (SPEC §3.1–3.2).
 
 Episodes of the policy (with random exploration mixed in) are cut into non-overlapping
-windows of L steps; of `oversample` × N windows the N the reward ensemble is most uncertain
-about are kept (a uniformly random N without an ensemble). The headless loop, the app and
+windows of L steps; of `oversample` × N windows (at most `max_extra` beyond N:
+`windows_to_sample`) the N the reward ensemble is most uncertain about are kept (a uniformly
+random N without an ensemble). The headless loop, the app and
 `groupwise pool` all sample through `sample_pool`.
 """
 
@@ -32,6 +33,7 @@ def sample_pool(
     round_index: int = 0,
     exploration_fraction: float = 0.0,
     oversample: float = 1.0,
+    max_extra: int | None = None,
     ensemble: RewardEnsemble | None = None,
     select: Literal["uncertain", "random"] = "uncertain",
     progress: ProgressFn | None = None,
@@ -52,10 +54,10 @@ def sample_pool(
     the same whatever it is.
 
     Raises:
-        ValueError: `size` < 1 or `oversample` < 1, or episodes too short for a window.
+        ValueError: `size` < 1, `oversample` < 1 or `max_extra` < 0, or episodes too short
+            for a window.
     """
-    if size < 1 or oversample < 1.0:
-        raise ValueError(f"need size >= 1 and oversample >= 1, got {size} and {oversample}")
+    n_windows = windows_to_sample(size, oversample, max_extra)
     if snapshot_offsets is None:
         probe = make_env()
         try:
@@ -65,7 +67,7 @@ def sample_pool(
     episodes = sample_episodes_for_windows(
         make_env,
         policy,
-        math.ceil(size * oversample),
+        n_windows,
         length,
         rng,
         exploration_fraction,
@@ -92,6 +94,22 @@ def sample_pool(
         step_variance(step[:, keep]),
         episodes=tuple(episodes),
     )
+
+
+def windows_to_sample(size: int, oversample: float, max_extra: int | None = None) -> int:
+    """How many windows a pool of `size` behaviours is chosen from: ⌈`oversample` × size⌉,
+    at most `max_extra` beyond `size` (None: no limit).
+
+    Raises:
+        ValueError: `size` < 1, `oversample` < 1 or `max_extra` < 0.
+    """
+    if size < 1 or oversample < 1.0 or (max_extra is not None and max_extra < 0):
+        raise ValueError(
+            f"need size >= 1, oversample >= 1 and max_extra >= 0, got {size}, {oversample} "
+            f"and {max_extra}"
+        )
+    extra = math.ceil(size * oversample) - size
+    return size + (extra if max_extra is None else min(extra, max_extra))
 
 
 def _random_subset(n: int, size: int, rng: np.random.Generator) -> IntArray:
