@@ -3,8 +3,9 @@ phase, and how long a clip rendered on demand takes to reach the page.
 
 For each window length (30 steps, the study's L, and the env's default clip, 1.5 s = 188
 Hopper steps) and each pool size, the app's round 0 (`SessionSettings` defaults, random
-policy, a fresh reward ensemble): `sample_pool` (2× windows, the ensemble's most uncertain
-kept), DTW in the tree config's band, the tree, the Groupwise-DM's suggestions
+policy, a fresh reward ensemble): `sample_pool` (2 N windows, at most 1,000 or N:
+`LoopConfig.pool_windows_max`; the ensemble's most uncertain kept), DTW in the tree
+config's band, the tree, the Groupwise-DM's suggestions
 (`worker.jobs.session_strategy`, 2× the comparison budget), then `publish_pool` — with clips
 on demand (the app's default) a poster per behaviour and each clip's recipe; with
 ``--clips eager`` every clip as before — and the round's rows (`worker.offers`). The
@@ -154,7 +155,7 @@ def prepare(
         pool = sample_pool(
             lambda: make_env(env), policy, n, loop.fragment_length, rng,
             exploration_fraction=loop.exploration_fraction, oversample=loop.pool_oversample,
-            max_extra=loop.pool_extra_max,
+            max_windows=loop.pool_windows_max,
             ensemble=ensemble, select=loop.pool_selection, processes=processes,
         )  # fmt: skip
     with run.phase("DTW"), kernel_threads(free_cores()):
@@ -235,7 +236,8 @@ def report(runs: Sequence[Run], env: str, mode: str, workers: int) -> str:
     cores = os.cpu_count() or 1
     lines = [
         f"Pool preparation, {env}, random policy, a fresh ensemble (round 0), app settings "
-        f"(2× windows sampled, 240×240, {workers} render workers), clips {mode}; {cores} "
+        f"(N of max(N, min(2 N, 1,000)) windows sampled: LoopConfig.pool_windows_max; 240×240, "
+        f"{workers} render workers), clips {mode}; {cores} "
         f"CPUs, MUJOCO_GL={os.environ.get('MUJOCO_GL', '')}. floor = CPU s / {cores} cores; "
         "ratio = wall / floor. load: 1-min load average after the phase.",
         "",

@@ -68,7 +68,7 @@ def pools(run_dir: Path, cache: Path, size: int, seed: int) -> list[tuple[int, P
                 round_index=after + 1,
                 exploration_fraction=0.25,
                 oversample=cfg.loop.pool_oversample,
-                max_extra=cfg.loop.pool_extra_max,
+                max_windows=cfg.loop.pool_windows_max,
                 ensemble=run.ensemble,
             )
             distances = dtw_matrix(pool_features(pool.fragments))

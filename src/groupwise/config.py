@@ -196,10 +196,12 @@ class LoopConfig:
     """... capped at this many behaviours."""
     pool_oversample: Annotated[float, Field(ge=1)] = 2.0
     """Sample episodes for this many times N windows, of which N are kept ..."""
-    pool_extra_max: Annotated[int, Field(ge=0)] | None = 500
-    """... but at most this many windows beyond N (None: no limit). Sampling is most of a
-    large round's preparation (a 1,000-behaviour app round: 38 of 55 CPU-s), while pools of
-    up to this size, every headless run's among them, keep the whole oversample (issue 22)."""
+    pool_windows_max: Annotated[int, Field(ge=2)] | None = 1000
+    """... of at most this many windows, or N where N is more (None: no limit). Sampling is
+    most of a large round's preparation (a 1,000-behaviour app round sampling 2,000
+    windows: 38 of 55 CPU-s), and the selection matters less once the pool is larger than
+    a person compares in a round; pools of up to 500, every headless run's among them,
+    keep the whole oversample (issue 22)."""
     pool_selection: Literal["uncertain", "random"] = "uncertain"
     """... those the ensemble is most uncertain about (SPEC §3.2), or a random N."""
     candidate_pairs: PositiveInt = 10

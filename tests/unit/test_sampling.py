@@ -44,22 +44,23 @@ def test_the_most_uncertain_windows_are_kept_or_a_random_subset():
     assert random.step_variance is not None
 
 
-def test_windows_to_sample_caps_the_oversample_beyond_the_pool():
-    assert windows_to_sample(200, 2.0, 500) == 400  # a pool up to the cap: the whole oversample
-    assert windows_to_sample(500, 2.0, 500) == 1000
-    assert windows_to_sample(1000, 2.0, 500) == 1500
+def test_windows_to_sample_caps_the_windows_not_the_pool():
+    assert windows_to_sample(200, 2.0, 1000) == 400  # a pool up to half the cap: 2 × N
+    assert windows_to_sample(500, 2.0, 1000) == 1000
+    assert windows_to_sample(700, 2.0, 1000) == 1000
+    assert windows_to_sample(1000, 2.0, 1000) == 1000 == windows_to_sample(1000, 2.0, 10)
     assert windows_to_sample(1000, 2.0) == 2000  # no limit
-    assert windows_to_sample(7, 1.5, 0) == 7 and windows_to_sample(7, 1.5) == 11
-    for size, oversample, extra in ((0, 2.0, 1), (5, 0.5, 1), (5, 2.0, -1)):
+    assert windows_to_sample(7, 1.5) == 11
+    for size, oversample, cap in ((0, 2.0, 1), (5, 0.5, 1), (5, 2.0, 0)):
         with pytest.raises(ValueError, match="need size"):
-            windows_to_sample(size, oversample, extra)
+            windows_to_sample(size, oversample, cap)
 
 
 def test_a_capped_oversample_samples_fewer_windows():
     policy = RandomPolicy(_make().action_space)
     ensemble = RewardEnsemble.for_env(_make, RewardConfig(), np.random.default_rng(0))
     pool = sample_pool(
-        _make, policy, 20, 30, np.random.default_rng(1), oversample=3.0, max_extra=5,
+        _make, policy, 20, 30, np.random.default_rng(1), oversample=3.0, max_windows=25,
         ensemble=ensemble,
     )  # fmt: skip
     assert len(pool) == 20

@@ -1,10 +1,10 @@
 """Sampling a round's behaviour pool from a policy (SPEC §3.1–3.2).
 
 Episodes of the policy (with random exploration mixed in) are cut into non-overlapping
-windows of L steps; of `oversample` × N windows (at most `max_extra` beyond N:
+windows of L steps; of `oversample` × N windows (at most `max_windows`, never fewer than N:
 `windows_to_sample`) the N the reward ensemble is most uncertain about are kept (a uniformly
-random N without an ensemble). The headless loop, the app and
-`groupwise pool` all sample through `sample_pool`.
+random N without an ensemble). The headless loop, the app and `groupwise pool` all sample
+through `sample_pool`.
 """
 
 import math
@@ -33,7 +33,7 @@ def sample_pool(
     round_index: int = 0,
     exploration_fraction: float = 0.0,
     oversample: float = 1.0,
-    max_extra: int | None = None,
+    max_windows: int | None = None,
     ensemble: RewardEnsemble | None = None,
     select: Literal["uncertain", "random"] = "uncertain",
     progress: ProgressFn | None = None,
@@ -54,10 +54,10 @@ def sample_pool(
     the same whatever it is.
 
     Raises:
-        ValueError: `size` < 1, `oversample` < 1 or `max_extra` < 0, or episodes too short
-            for a window.
+        ValueError: `size` < 1, `oversample` < 1 or `max_windows` < 1, or episodes too
+            short for a window.
     """
-    n_windows = windows_to_sample(size, oversample, max_extra)
+    n_windows = windows_to_sample(size, oversample, max_windows)
     if snapshot_offsets is None:
         probe = make_env()
         try:
@@ -96,20 +96,20 @@ def sample_pool(
     )
 
 
-def windows_to_sample(size: int, oversample: float, max_extra: int | None = None) -> int:
+def windows_to_sample(size: int, oversample: float, max_windows: int | None = None) -> int:
     """How many windows a pool of `size` behaviours is chosen from: ⌈`oversample` × size⌉,
-    at most `max_extra` beyond `size` (None: no limit).
+    at most `max_windows` (None: no limit), and never fewer than `size`.
 
     Raises:
-        ValueError: `size` < 1, `oversample` < 1 or `max_extra` < 0.
+        ValueError: `size` < 1, `oversample` < 1 or `max_windows` < 1.
     """
-    if size < 1 or oversample < 1.0 or (max_extra is not None and max_extra < 0):
+    if size < 1 or oversample < 1.0 or (max_windows is not None and max_windows < 1):
         raise ValueError(
-            f"need size >= 1, oversample >= 1 and max_extra >= 0, got {size}, {oversample} "
-            f"and {max_extra}"
+            f"need size >= 1, oversample >= 1 and max_windows >= 1, got {size}, {oversample} "
+            f"and {max_windows}"
         )
-    extra = math.ceil(size * oversample) - size
-    return size + (extra if max_extra is None else min(extra, max_extra))
+    wanted = math.ceil(size * oversample)
+    return wanted if max_windows is None else max(size, min(wanted, max_windows))
 
 
 def _random_subset(n: int, size: int, rng: np.random.Generator) -> IntArray:

@@ -105,7 +105,7 @@ def begin_round(
         round_index=index,
         exploration_fraction=loop.exploration_fraction,
         oversample=loop.pool_oversample,
-        max_extra=loop.pool_extra_max,
+        max_windows=loop.pool_windows_max,
         ensemble=run.ensemble,
         select=loop.pool_selection,
         progress=lambda done, total: callback.on_phase("sample", done, total),
