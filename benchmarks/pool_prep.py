@@ -53,6 +53,7 @@ from groupwise.behaviour import warm_up as warm_up_dtw
 from groupwise.clips.render import RenderPool
 from groupwise.clips.replay import FrameSettings
 from groupwise.clips.store import ClipStore
+from groupwise.config import LoopConfig
 from groupwise.envs import make_env
 from groupwise.envs.rendering import ensure_gl_backend
 from groupwise.pool.publish import PreparedPool, publish_pool
@@ -142,6 +143,7 @@ def prepare(
     out: Path,
     seed: int,
     processes: int | None = None,
+    windows_max: int | None = LoopConfig.pool_windows_max,
 ) -> tuple[Run, PreparedPool]:
     """Round 0 of a session with `settings`, as the worker prepares it (module docstring)."""
     cfg = settings.run_config(env)
@@ -155,7 +157,7 @@ def prepare(
         pool = sample_pool(
             lambda: make_env(env), policy, n, loop.fragment_length, rng,
             exploration_fraction=loop.exploration_fraction, oversample=loop.pool_oversample,
-            max_windows=loop.pool_windows_max,
+            max_windows=windows_max,
             ensemble=ensemble, select=loop.pool_selection, processes=processes,
         )  # fmt: skip
     with run.phase("DTW"), kernel_threads(free_cores()):
@@ -232,11 +234,21 @@ def measure_on_demand(run: Run, published: PreparedPool, data_dir: Path, request
         run.group_s = max(times) if times else float("nan")
 
 
-def report(runs: Sequence[Run], env: str, mode: str, workers: int) -> str:
+def settle(timeout_s: float = 15.0) -> None:
+    """Wait until every core is idle (at most `timeout_s`): a render worker that lost the
+    race for the warm-up jobs may still be importing, and sampling, which asks `free_cores`
+    how many processes to step in, would then take one core for the whole pool."""
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1
+    deadline = time.monotonic() + timeout_s
+    while free_cores(0.5) < cores and time.monotonic() < deadline:
+        pass
+
+
+def report(runs: Sequence[Run], env: str, mode: str, workers: int, windows_max: int | None) -> str:
     cores = os.cpu_count() or 1
     lines = [
         f"Pool preparation, {env}, random policy, a fresh ensemble (round 0), app settings "
-        f"(N of max(N, min(2 N, 1,000)) windows sampled: LoopConfig.pool_windows_max; 240×240, "
+        f"(N of max(N, min(2 N, {windows_max or '∞'})) windows sampled; 240×240, "
         f"{workers} render workers), clips {mode}; {cores} "
         f"CPUs, MUJOCO_GL={os.environ.get('MUJOCO_GL', '')}. floor = CPU s / {cores} cores; "
         "ratio = wall / floor. load: 1-min load average after the phase.",
@@ -306,6 +318,12 @@ def main(argv: Sequence[str] | None = None) -> None:
         default=None,
         help="processes stepping the sampled envs (default: the free cores for large batches)",
     )
+    parser.add_argument(
+        "--windows-max",
+        type=lambda text: None if text == "none" else int(text),
+        default=LoopConfig.pool_windows_max,
+        help="windows a pool is chosen from at most (LoopConfig.pool_windows_max; 'none': 2 N)",
+    )
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args([] if argv is None else list(argv))
     ensure_gl_backend()
@@ -318,16 +336,17 @@ def main(argv: Sequence[str] | None = None) -> None:
             for n in args.n:
                 steps = None if length == "default" else int(length)
                 settings = SessionSettings(pool_size=n, fragment_length=steps).for_env(args.env)
+                settle()  # as the long-lived worker's cores are when a round is asked for
                 with tempfile.TemporaryDirectory() as tmp:
                     run, published = prepare(
                         args.env, n, settings, args.clips, render, Path(tmp), args.seed,
-                        args.sample_processes,
+                        args.sample_processes, args.windows_max,
                     )  # fmt: skip
                     if args.clips == "on_demand" and args.clip_requests > 0:
                         measure_on_demand(run, published, Path(tmp), args.clip_requests)
                 runs.append(run)
                 print(f"[{n} × {run.steps} steps done]", file=sys.stderr, flush=True)
-    print(report(runs, args.env, args.clips, args.workers))
+    print(report(runs, args.env, args.clips, args.workers, args.windows_max))
 
 
 if __name__ == "__main__":
