@@ -14,7 +14,12 @@ from groupwise.clips.video import probe
 from groupwise.envs import TARGETS, horizon
 from groupwise.run.run import CONFIG_FILE, RESULTS_FILE
 from groupwise.study.case_study import CASE_FILE, STRIP_FILE, SUMMARY_FILE, VIDEO_FILE, CaseRecord
-from groupwise.study.case_study_table import curves_figure, markdown_row
+from groupwise.study.case_study_table import (
+    curves_figure,
+    markdown_row,
+    strips_figure,
+    summary_rows,
+)
 
 COLUMNS = [
     "round",
@@ -111,6 +116,12 @@ def test_backflip_case_study_writes_rounds_video_and_strip(tmp_path, capsys):
 
     png = curves_figure([out, out], tmp_path / "curves.png").read_bytes()
     assert png.startswith(b"\x89PNG") and len(png) > 5000
+    strips = np.asarray(Image.open(strips_figure([out], tmp_path / "strips.png")))
+    assert strips.shape[0] > 100 and strips.std() > 10  # the strip, titled
+    succeeded = summary["final"]["success_rate"] >= 0.6
+    cells = summary_rows([out, out])[0].split(" | ")
+    assert cells[:3] == ["| hopper-backflip", "groupwise", "2"]
+    assert cells[3] == f"**{2 * succeeded}/2**" and cells[6] == "20"
     row = markdown_row(out).split(" | ")
     assert row[:3] == ["| hopper-backflip", "groupwise", "0"] and row[3] == "20"
     assert row[-3] == f"{round(summary['final']['success_rate'] * 2)}/2"

@@ -6,9 +6,13 @@ prints a Markdown table (target, DM, seed, comparisons, preference pairs, share 
 between behaviours of equal target score, label error on the others, the greedy policy's
 target score after each round, success and stretch rates at the end, wall time), read
 from each run's ``case-study.csv`` and ``summary.json`` and, for the ties, its last
-checkpoint's preference dataset. With ``--figure PNG`` it also draws each run's target score against
-its preference pairs, one panel per target, the success threshold dashed. It is how
-``docs/results/case-studies/README.md`` and its ``curves.png`` were made.
+checkpoint's preference dataset. Above it, the summary: per target and DM, the seeds whose
+greedy policy succeeds (at least `SEED_SUCCESS` of its final episodes reach the threshold)
+after the last round and as the take-away agent, and the pairs and comparisons used. With
+``--figure PNG`` it also draws each run's target score against its preference pairs, one
+panel per target, the success threshold dashed; with ``--strips PNG`` the five-frame strip
+of each target's and DM's best final episode. It is how
+``docs/results/case-studies/README.md`` and its figures were made.
 """
 
 import argparse
@@ -25,6 +29,41 @@ HEADER = (
     "(untied) | target score after each round | success | stretch | wall |\n"
     "|---|---|---:|---:|---:|---:|---:|---|---:|---:|---:|"
 )
+
+
+SEED_SUCCESS = 0.6
+"""A seed succeeds when this share of its final greedy episodes (3 of 5) reach the threshold."""
+
+SUMMARY_HEADER = (
+    "| target | DM | seeds | successful seeds, last round | as take-away agent | stretch "
+    "| comparisons | preference pairs |\n|---|---|---:|---:|---:|---:|---:|---:|"
+)
+
+
+def summary_rows(runs: Sequence[Path]) -> list[str]:
+    """One Markdown row per target and DM of `runs` (module docstring), in order of first
+    appearance."""
+    cells: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    for run in runs:
+        summary, _ = _read(run)
+        cells.setdefault((summary["target"]["name"], summary["decision_maker"]), []).append(summary)
+    rows = []
+    for (target, dm), summaries in cells.items():
+        last = sum(s["final"]["success_rate"] >= SEED_SUCCESS for s in summaries)
+        kept = sum(s.get("takeaway", s["final"])["success_rate"] >= SEED_SUCCESS for s in summaries)
+        stretch = sum(s["final"]["stretch_rate"] >= SEED_SUCCESS for s in summaries)
+        n = len(summaries)
+        rows.append(
+            f"| {target} | {dm} | {n} | **{last}/{n}** | {kept}/{n} | {stretch}/{n} "
+            f"| {_span(s['comparisons'] for s in summaries)} "
+            f"| {_span(s['preference_pairs'] for s in summaries)} |"
+        )
+    return rows
+
+
+def _span(values: Any) -> str:
+    low, high = min(values := list(values)), max(values)
+    return f"{low:,}" if low == high else f"{low:,}–{high:,}"
 
 
 def _read(run: Path) -> tuple[dict[str, Any], list[dict[str, str]]]:
@@ -89,13 +128,57 @@ def curves_figure(runs: Sequence[Path], path: Path) -> Path:
     return path
 
 
+def strips_figure(runs: Sequence[Path], path: Path) -> Path:
+    """The five-frame strip (``strip.png``) of each target's and DM's run with the best filmed
+    episode, one row each, titled with the run's seed and final success. Needs Matplotlib.
+
+    Raises:
+        ValueError: no run has a strip (they ran with ``--no-video``).
+    """
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+    from PIL import Image
+
+    best: dict[tuple[str, str], tuple[float, Path, dict[str, Any]]] = {}
+    for run in runs:
+        summary, _ = _read(run)
+        if not (run / "strip.png").is_file() or "filmed" not in summary:
+            continue
+        key = (summary["target"]["name"], summary["decision_maker"])
+        score = float(summary["filmed"]["score"])
+        if key not in best or score > best[key][0]:
+            best[key] = (score, run, summary)
+    if not best:
+        raise ValueError("no run has a strip.png (run without --no-video)")
+    figure = Figure(figsize=(10, 2.3 * len(best)), dpi=100, layout="constrained")
+    FigureCanvasAgg(figure)
+    axes = figure.subplots(len(best), 1, squeeze=False)[:, 0]
+    for ax, ((target, dm), (score, run, summary)) in zip(axes, sorted(best.items()), strict=True):
+        ax.imshow(Image.open(run / "strip.png"))
+        ax.set_axis_off()
+        seed = json.loads((run / "config.json").read_text())["loop"]["seed"]
+        ax.set_title(
+            f"{target}, {dm}, seed {seed}: best final episode {score:.2f} "
+            f"{summary['target']['unit']}, success {summary['final']['success_rate']:.0%}",
+            fontsize=9,
+        )
+    figure.savefig(path)
+    return path
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("runs", nargs="+", type=Path, help="case-study output directories")
     parser.add_argument("--figure", type=Path, help="also draw the curves into this PNG")
+    parser.add_argument("--strips", type=Path, help="also put the best strips into this PNG")
     args = parser.parse_args(argv)
     if args.figure:
         curves_figure(args.runs, args.figure)
+    if args.strips:
+        strips_figure(args.runs, args.strips)
+    print(SUMMARY_HEADER)
+    print("\n".join(summary_rows(args.runs)))
+    print()
     print(HEADER)
     for run in args.runs:
         print(markdown_row(run))
