@@ -20,6 +20,7 @@ from groupwise.study.case_study_table import (
     strips_figure,
     summary_rows,
 )
+from groupwise.study.splits_posture import replay_posture
 
 COLUMNS = [
     "round",
@@ -152,6 +153,10 @@ def test_other_targets_and_decision_makers_run(tmp_path, target, dm, seconds):
     assert int(rows[1]["judgements_total"]) > 0
     assert int(rows[0]["pairs_total"]) <= 2 and int(rows[1]["pairs_total"]) <= 2 + 21
     assert not (out / VIDEO_FILE).exists()
+    if target == "walker-splits":  # its last round's posture, over the evaluation episodes
+        chosen, shares = replay_posture(out)
+        assert chosen == 1 and shares["steps"] == 2 * horizon("Walker2d-splits")
+        assert 0.0 <= shares["all"] <= min(shares["split"], shares["upright"], shares["feet_2"])
     assert [f.name for f in CaseRecord.__dataclass_fields__.values()] == COLUMNS
 
 

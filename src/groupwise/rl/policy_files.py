@@ -8,12 +8,13 @@ from groupwise.envs import make_env
 from groupwise.rl.policy import Policy, RandomPolicy
 
 
-def load_policy(spec: str, env: str) -> Policy:
+def load_policy(spec: str, env: str, deterministic: bool = False) -> Policy:
     """ "random", or a checkpoint directory (``policy.zip`` + ``vecnormalize.npz``, as
     written by `groupwise train` under ``<out>/checkpoints/round-NNNN/``).
 
     A checkpoint is loaded with the PPO settings of its run's ``config.json`` when that is
-    found two levels up, the defaults otherwise; it acts stochastically.
+    found two levels up, the defaults otherwise; it acts stochastically unless `deterministic`
+    (the greedy policy; a random policy is random either way).
 
     Raises:
         FileNotFoundError: the directory has no ``policy.zip``.
@@ -35,4 +36,4 @@ def load_policy(spec: str, env: str) -> Policy:
     ppo = dataclasses.replace(ppo, n_envs=1, tensorboard=False)
     agent = PPOAgent(lambda: make_env(env), ppo, seed=0)
     agent.load(directory)
-    return agent.policy(deterministic=False)
+    return agent.policy(deterministic=deterministic)

@@ -1,0 +1,116 @@
+"""The walker's posture under a case-study run's greedy policy: why a split is not held.
+
+    python -m groupwise.study.splits_posture RUN_DIR [RUN_DIR ...] [--round R]
+
+For each ``groupwise case-study --target walker-splits`` run directory: the policy of its
+last round (or round R) replays the case study's evaluation episodes (the same reset
+seeds, `run.streams.eval_rng`), and a Markdown row gives the share of steps at which each
+condition of a held split holds (`envs.scorers.SplitsScorer`): the thighs at least 90°
+apart, the torso within 60° of vertical, 0, 1 or 2 feet on the floor, and all three at
+once; then the median separation and tilt, degrees. A run that never holds a split shows
+which condition its policy settled without.
+"""
+
+import argparse
+import json
+import math
+from collections.abc import Sequence
+from pathlib import Path
+from typing import cast
+
+import numpy as np
+from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
+
+from groupwise.envs import TARGETS, make_env
+from groupwise.envs.body_state import BodyState
+from groupwise.envs.scorers import GROUNDED, SPLIT_ANGLE, UPRIGHT, WALKER_FEET, wrap_angle
+from groupwise.rl.policy_files import load_policy
+from groupwise.run.checkpoint import checkpoint_dir
+from groupwise.run.run import CONFIG_FILE
+from groupwise.run.streams import eval_rng
+from groupwise.study.case_study import evaluate_target
+from groupwise.types import FloatArray
+
+HEADER = (
+    "| run | round | steps | split ≥ 90° | upright (≤ 60°) | feet down 0 / 1 / 2 | all three "
+    "| median separation | median tilt |\n|---|---:|---:|---:|---:|---|---:|---:|---:|"
+)
+
+
+def posture_shares(separation: FloatArray, tilt: FloatArray, feet: np.ndarray) -> dict[str, float]:
+    """Shares of steps by each condition of a held split, and the medians (radians), from
+    per-step thigh separation and torso tilt (rad, ≥ 0) and feet on the floor (0–2).
+
+    Raises:
+        ValueError: no steps, or arrays of different lengths.
+    """
+    if len(separation) == 0 or not len(separation) == len(tilt) == len(feet):
+        raise ValueError(f"need equal, non-empty arrays, got {len(separation)}, {len(tilt)}, "
+                         f"{len(feet)}")  # fmt: skip
+    split, upright = separation >= SPLIT_ANGLE, tilt <= UPRIGHT
+    return {
+        "steps": float(len(separation)),
+        "split": float(split.mean()),
+        "upright": float(upright.mean()),
+        **{f"feet_{k}": float((feet == k).mean()) for k in range(len(WALKER_FEET) + 1)},
+        "all": float((split & upright & (feet == len(WALKER_FEET))).mean()),
+        "separation": float(np.median(separation)),
+        "tilt": float(np.median(tilt)),
+    }
+
+
+def replay_posture(run: Path, round_index: int | None = None) -> tuple[int, dict[str, float]]:
+    """The round replayed (the last by default) and `posture_shares` over its evaluation
+    episodes, as the case study evaluated them (module docstring)."""
+    config = json.loads((run / CONFIG_FILE).read_text())
+    loop = config["loop"]
+    target = TARGETS["walker-splits"]
+    if loop["env"] != target.env:
+        raise ValueError(f"{run} is a run on {loop['env']}, not the walker's splits")
+    summary = json.loads((run / "summary.json").read_text())
+    episodes = len(summary["final"]["scores"])
+    rounds = sorted(int(p.name.split("-")[1]) for p in (run / "checkpoints").glob("round-*"))
+    chosen = rounds[-1] if round_index is None else round_index
+    policy = load_policy(str(checkpoint_dir(run, chosen)), target.env, deterministic=True)
+    factory = lambda: make_env(target.env)  # noqa: E731
+    evaluation = evaluate_target(factory, policy, episodes, eval_rng(loop["seed"]))
+    separation, tilt, feet = [], [], []
+    for seed, actions in zip(evaluation.reset_seeds, evaluation.actions, strict=True):
+        env = factory()
+        try:
+            env.reset(seed=seed)
+            for action in actions:
+                env.step(action)
+                state = BodyState.read(cast(MujocoEnv, env.unwrapped))
+                separation.append(abs(float(state.qpos[3] - state.qpos[6])))
+                tilt.append(abs(wrap_angle(state.pitch)))
+                feet.append(sum(state.bottoms[f] <= GROUNDED for f in WALKER_FEET))
+        finally:
+            env.close()
+    return chosen, posture_shares(np.array(separation), np.array(tilt), np.array(feet))
+
+
+def markdown_row(run: Path, chosen: int, shares: dict[str, float]) -> str:
+    feet = " / ".join(f"{shares[f'feet_{k}']:.2f}" for k in range(len(WALKER_FEET) + 1))
+    return (
+        f"| {run.name} | {chosen} | {int(shares['steps'])} | {shares['split']:.2f} "
+        f"| {shares['upright']:.2f} | {feet} | **{shares['all']:.2f}** "
+        f"| {math.degrees(shares['separation']):.0f}° | {math.degrees(shares['tilt']):.0f}° |"
+    )
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("runs", nargs="+", type=Path, help="walker-splits case-study runs")
+    parser.add_argument(
+        "--round", type=int, help="the round whose policy to replay (default: last)"
+    )
+    args = parser.parse_args(argv)
+    print(HEADER)
+    for run in args.runs:
+        print(markdown_row(run, *replay_posture(run, args.round)), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

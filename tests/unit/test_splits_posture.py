@@ -1,0 +1,28 @@
+"""The walker's posture shares: each condition of a held split counted per step."""
+
+import math
+
+import numpy as np
+import pytest
+
+from groupwise.study.splits_posture import posture_shares
+
+
+def test_each_condition_and_all_three_are_shares_of_the_steps():
+    separation = np.radians([100.0, 100.0, 150.0, 30.0])
+    tilt = np.radians([10.0, 70.0, 50.0, 0.0])
+    feet = np.array([2, 2, 1, 2])
+    shares = posture_shares(separation, tilt, feet)
+    assert shares["steps"] == 4
+    assert shares["split"] == 0.75 and shares["upright"] == 0.75
+    assert (shares["feet_0"], shares["feet_1"], shares["feet_2"]) == (0.0, 0.25, 0.75)
+    assert shares["all"] == 0.25  # only the first step holds all three
+    assert shares["separation"] == pytest.approx(math.radians(100.0))
+    assert shares["tilt"] == pytest.approx(math.radians(30.0))
+
+
+def test_empty_or_uneven_steps_are_refused():
+    with pytest.raises(ValueError, match="non-empty"):
+        posture_shares(np.zeros(0), np.zeros(0), np.zeros(0))
+    with pytest.raises(ValueError, match="non-empty"):
+        posture_shares(np.zeros(2), np.zeros(3), np.zeros(2))
