@@ -83,12 +83,16 @@ def markdown_row(run: Path) -> str:
     scores = ", ".join(f"{float(r['target_score_mean']):.2f}" for r in rows)
     final = summary["final"]
     episodes = len(final["scores"])
+    ties, error = "–", "–"  # no pairs: nothing tied, nothing labelled
+    if len(dataset):
+        ties = f"{dataset.tied().mean():.2f}"
+        error = f"{dataset.label_error_rate(untied=True):.2f}"
     success = round(final["success_rate"] * episodes)
     stretch = round(final["stretch_rate"] * episodes)
     return (
         f"| {summary['target']['name']} | {summary['decision_maker']} | {seed} "
         f"| {int(last['comparisons_total'])} | {int(last['pairs_total']):,} "
-        f"| {dataset.tied().mean():.2f} | {dataset.label_error_rate(untied=True):.2f} "
+        f"| {ties} | {error} "
         f"| {scores} | {success}/{episodes} | {stretch}/{episodes} "
         f"| {float(last['wall_s']):.0f} s |"
     )
@@ -150,7 +154,7 @@ def strips_figure(runs: Sequence[Path], path: Path) -> Path:
             best[key] = (score, run, summary)
     if not best:
         raise ValueError("no run has a strip.png (run without --no-video)")
-    figure = Figure(figsize=(10, 2.3 * len(best)), dpi=100, layout="constrained")
+    figure = Figure(figsize=(10, 2.3 * len(best)), dpi=72, layout="constrained")
     FigureCanvasAgg(figure)
     axes = figure.subplots(len(best), 1, squeeze=False)[:, 0]
     for ax, ((target, dm), (score, run, summary)) in zip(axes, sorted(best.items()), strict=True):
