@@ -5,10 +5,11 @@
 # pairwise at the same comparisons) and target in TARGETS (default: all three).
 # Comparisons per target are chosen so that the Groupwise-DM's pairs reach the paper's
 # (--pairs paper caps them there): backflip 380 (1,032 pairs), stand-up 260 (601), splits 240 (616).
-# Usage: bash docs/results/case-studies/paper-pairs/run.sh OUT_DIR [PARALLEL] [DMS] [TARGETS] [STEPS]
+# EXTRA: further case-study options for every run (e.g. "--pretrain-steps 100000").
+# Usage: bash docs/results/case-studies/paper-pairs/run.sh OUT_DIR [PARALLEL] [DMS] [TARGETS] [STEPS] [EXTRA]
 set -euo pipefail
 out=${1:?out}; parallel=${2:-2}; dms=${3:-groupwise pairwise}
-targets=${4:-walker-splits halfcheetah-standup hopper-backflip}; steps=${5:-40000}
+targets=${4:-walker-splits halfcheetah-standup hopper-backflip}; steps=${5:-40000}; extra=${6:-}
 mkdir -p "$out"
 export OMP_NUM_THREADS=1 MUJOCO_GL=${MUJOCO_GL:-egl}
 declare -A comparisons=([walker-splits]=240 [halfcheetah-standup]=260 [hopper-backflip]=380)
@@ -27,4 +28,4 @@ declare -A comparisons=([walker-splits]=240 [halfcheetah-standup]=260 [hopper-ba
   rm -rf "$dir"
   groupwise case-study --target "$target" --dm "$dm" --preferences "$comparisons" \
     --pairs paper --rounds 5 --steps '"$steps"' --teacher-error 0.12 --ppo mujoco --seed "$seed" \
-    --out "$dir" -q > "$dir.log" 2>&1 && echo "done $dir $(date +%H:%M)" || echo "FAILED $dir"'
+    '"$extra"' --out "$dir" -q > "$dir.log" 2>&1 && echo "done $dir $(date +%H:%M)" || echo "FAILED $dir"'
