@@ -149,6 +149,15 @@ GROUNDED = 0.05
 WALKER_FEET = ("foot_geom", "foot_left_geom")
 
 
+def split_posture(state: BodyState) -> tuple[float, float, int]:
+    """What a split is judged by (`SplitsScorer`): the thighs' separation, rad; the torso's
+    tilt from vertical, rad (≥ 0); and how many feet are on the floor (0–2)."""
+    separation = abs(float(state.qpos[3] - state.qpos[6]))  # right, left thigh
+    tilt = abs(wrap_angle(state.pitch))
+    feet = sum(state.bottoms[foot] <= GROUNDED for foot in WALKER_FEET)
+    return separation, tilt, feet
+
+
 class SplitsScorer:
     """The splits (Walker2d): thighs far apart, torso upright, both feet on the floor.
 
@@ -169,14 +178,12 @@ class SplitsScorer:
         self.longest = 0
 
     def step(self, state: BodyState) -> float:
-        separation = abs(float(state.qpos[3] - state.qpos[6]))  # right, left thigh
-        tilt = abs(wrap_angle(state.pitch))
-        feet = [state.bottoms[foot] <= GROUNDED for foot in WALKER_FEET]
-        holding = separation >= SPLIT_ANGLE and tilt <= UPRIGHT and all(feet)
+        separation, tilt, feet = split_posture(state)
+        holding = separation >= SPLIT_ANGLE and tilt <= UPRIGHT and feet == len(WALKER_FEET)
         self._run = self._run + 1 if holding else 0
         self.longest = max(self.longest, self._run)
         upright = 1.0 - ramp(tilt, UPRIGHT, math.pi / 2)
-        return min(separation, SPLIT_ANGLE) * upright * (sum(feet) / len(feet))
+        return min(separation, SPLIT_ANGLE) * upright * (feet / len(WALKER_FEET))
 
     def total(self) -> float:
         return self.longest * self.dt

@@ -23,7 +23,7 @@ from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
 
 from groupwise.envs import TARGETS, make_env
 from groupwise.envs.body_state import BodyState
-from groupwise.envs.scorers import GROUNDED, SPLIT_ANGLE, UPRIGHT, WALKER_FEET, wrap_angle
+from groupwise.envs.scorers import SPLIT_ANGLE, UPRIGHT, WALKER_FEET, split_posture
 from groupwise.rl.policy_files import load_policy
 from groupwise.run.checkpoint import checkpoint_dir
 from groupwise.run.run import CONFIG_FILE
@@ -74,20 +74,18 @@ def replay_posture(run: Path, round_index: int | None = None) -> tuple[int, dict
     policy = load_policy(str(checkpoint_dir(run, chosen)), target.env, deterministic=True)
     factory = lambda: make_env(target.env)  # noqa: E731
     evaluation = evaluate_target(factory, policy, episodes, eval_rng(loop["seed"]))
-    separation, tilt, feet = [], [], []
+    steps: list[tuple[float, float, int]] = []
     for seed, actions in zip(evaluation.reset_seeds, evaluation.actions, strict=True):
-        env = factory()
+        env = factory()  # the episode again, its actions replayed, to read every state
         try:
             env.reset(seed=seed)
             for action in actions:
                 env.step(action)
-                state = BodyState.read(cast(MujocoEnv, env.unwrapped))
-                separation.append(abs(float(state.qpos[3] - state.qpos[6])))
-                tilt.append(abs(wrap_angle(state.pitch)))
-                feet.append(sum(state.bottoms[f] <= GROUNDED for f in WALKER_FEET))
+                steps.append(split_posture(BodyState.read(cast(MujocoEnv, env.unwrapped))))
         finally:
             env.close()
-    return chosen, posture_shares(np.array(separation), np.array(tilt), np.array(feet))
+    separation, tilt, feet = (np.array(column) for column in zip(*steps, strict=True))
+    return chosen, posture_shares(separation, tilt, feet)
 
 
 def markdown_row(run: Path, chosen: int, shares: dict[str, float]) -> str:

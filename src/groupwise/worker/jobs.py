@@ -33,6 +33,7 @@ from groupwise.oracles import STRATEGIES
 from groupwise.pool.behaviours import BehaviourPool
 from groupwise.pool.files import load_pool
 from groupwise.pool.publish import PublishConfig, publish_pool
+from groupwise.pool.sampling import windows_to_sample
 from groupwise.preferences.judgement import Judgement
 from groupwise.query.strategies import Query, QueryStrategy
 from groupwise.rl.batch_envs import free_cores
@@ -188,12 +189,14 @@ def published_round(
     if progress is not None:
         progress.on_phase("clips", 0, len(pool))
     run_config = settings.run_config(env)
+    loop = run_config.loop
+    windows = windows_to_sample(len(pool), loop.pool_oversample, loop.pool_windows_max)
     published = publish_pool(
         publish_config(run_config, settings.frame_size, render.workers),
         pool,
         data_dir / round_directory(session_id, pool.round),
-        oversample=run_config.loop.pool_oversample,
-        exploration_fraction=run_config.loop.exploration_fraction,
+        oversample=windows / len(pool),  # as sampled: 1,000 behaviours of 1,000 windows
+        exploration_fraction=loop.exploration_fraction,
         store=ClipStore(data_dir / "clips"),
         render_pool=render,
         metadata={"session": session_id, "round": pool.round, "ppo_steps": ppo_steps},

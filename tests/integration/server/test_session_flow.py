@@ -16,6 +16,8 @@ from tests.integration.server.conftest import (
     wait_until,
 )
 
+from groupwise.storage.sessions import round_directory
+
 
 @pytest.fixture(scope="module")
 def server(tmp_path_factory):
@@ -116,6 +118,8 @@ def test_a_full_round_with_its_events(server):
     events.stopped = True
     checkpoint = server.data / "sessions" / sid / "checkpoints" / "round-0000"
     assert (checkpoint / "policy.zip").is_file() and (checkpoint / "reward.pt").is_file()
+    manifest = json.loads((server.data / round_directory(sid, 0) / "pool.json").read_text())
+    assert manifest["config"]["oversample"] == 2.0  # 16 behaviours of 32 windows, as sampled
 
 
 def test_export_import_round_trip_over_http(server):
