@@ -204,6 +204,16 @@ class LoopConfig:
     keep the whole oversample (issue 22)."""
     pool_selection: Literal["uncertain", "random"] = "uncertain"
     """... those the ensemble is most uncertain about (SPEC §3.2), or a random N."""
+    pool_variants: Annotated[int, Field(ge=0)] = 0
+    """Biased variants of the current policy (`rl.policy.biased_variants`, drawn anew each
+    round) that a share `pool_variant_share` of the windows is sampled from, so that a pool
+    shows behaviours the policy itself rarely reaches (issue 20); 0: every window from the
+    current policy (SPEC §3.1)."""
+    pool_variant_share: Annotated[float, Field(ge=0, le=1)] = 0.5
+    """... the share of the windows they give ..."""
+    pool_variant_scale: Annotated[float, Field(ge=0, le=1)] = 0.5
+    """... and how far each pushes the actions: a fixed offset per action dimension of up
+    to this share of half its range."""
     candidate_pairs: PositiveInt = 10
     """Pairwise active learning: random candidate pairs scored per query."""
     eval_episodes: Annotated[int, Field(ge=0)] = 5

@@ -6,9 +6,9 @@ import pytest
 from groupwise.config import RewardConfig
 from groupwise.envs import make_env
 from groupwise.pool.fragments import stack_fragments, tile_fragments
-from groupwise.pool.sampling import sample_pool, windows_to_sample
+from groupwise.pool.sampling import sample_pool, split_windows, windows_to_sample
 from groupwise.reward import RewardEnsemble
-from groupwise.rl.policy import RandomPolicy
+from groupwise.rl.policy import RandomPolicy, biased_variants
 
 
 def _make():
@@ -65,3 +65,72 @@ def test_a_capped_oversample_samples_fewer_windows():
     )  # fmt: skip
     assert len(pool) == 20
     assert 25 <= sum(len(t) // 30 for t in pool.episodes) < 60
+
+
+class _Constant:
+    """A policy that always takes `action` (Pendulum: a torque)."""
+
+    def __init__(self, action: float) -> None:
+        self.action = action
+
+    def act(self, obs, rng):
+        return np.full((obs.shape[0], 1), self.action, dtype=np.float32)
+
+
+def test_split_windows_deals_the_share_evenly_over_the_variants():
+    assert split_windows(100, 0, 0.5) == [100]
+    assert split_windows(100, 8, 0.5) == [50, 7, 7, 6, 6, 6, 6, 6, 6]
+    assert split_windows(10, 3, 1.0) == [0, 4, 3, 3]
+    assert split_windows(10, 3, 0.0) == [10, 0, 0, 0]
+    for args in ((-1, 2, 0.5), (10, -1, 0.5), (10, 2, 1.5)):
+        with pytest.raises(ValueError, match="need n_windows"):
+            split_windows(*args)
+
+
+def test_biased_variants_push_the_actions_one_way_within_the_bounds():
+    space = make_env("Pendulum-v1").action_space  # Box(-2, 2, (1,))
+    obs = np.zeros((4, 3), dtype=np.float32)
+    rng = np.random.default_rng(0)
+    variants = biased_variants(_Constant(0.0), space, 50, 0.5, rng)
+    offsets = np.array([v.act(obs, rng)[0, 0] for v in variants])
+    assert np.all(np.abs(offsets) <= 1.0) and offsets.std() > 0.3  # up to half of half the range
+    for variant in variants:  # the same push at every step and for every observation
+        assert np.ptp(variant.act(obs, rng)) == 0
+    pushed = biased_variants(_Constant(1.9), space, 20, 1.0, rng)
+    assert max(v.act(obs, rng)[0, 0] for v in pushed) == 2.0  # clipped to the bound
+    grid = make_env("GridWorld").action_space
+    always = biased_variants(RandomPolicy(grid), grid, 3, 1.0, rng)
+    for variant in always:  # share 1: its own action at every step
+        assert len(set(variant.act(np.zeros((50, 2)), rng).tolist())) == 1
+    with pytest.raises(ValueError, match="scale in"):
+        biased_variants(_Constant(0.0), space, 2, 1.5, rng)
+
+
+def test_a_share_of_the_pool_comes_from_the_variants():
+    def pendulum():
+        return make_env("Pendulum-v1")
+
+    space = pendulum().action_space
+    policy = _Constant(0.0)
+    variants = biased_variants(policy, space, 3, 0.5, np.random.default_rng(5))
+
+    def sample(share: float, with_variants: bool = True):
+        return sample_pool(
+            pendulum, policy, 36, 30, np.random.default_rng(1), variant_share=share,
+            variants=variants if with_variants else (), processes=1,
+        )  # fmt: skip
+
+    pool = sample(0.5)
+    episodes = pool.episodes
+    assert [e.episode for e in episodes] == list(range(len(episodes)))
+    pushes = [float(e.actions[0, 0]) for e in episodes]
+    assert all(np.all(e.actions == e.actions[0]) for e in episodes)  # one push an episode
+    # 18 windows of the policy's own (three 200-step episodes of 6), then 6 of each variant
+    assert pushes[:3] == [0.0] * 3 and all(p != 0.0 for p in pushes[3:]) and len(pushes) == 6
+    assert len(pool) == 36
+    alone, unshared = sample(0.0, with_variants=False), sample(0.0)
+    assert [f.key for f in alone.fragments] == [f.key for f in unshared.fragments]
+    assert all(
+        np.array_equal(a.obs, b.obs)
+        for a, b in zip(alone.fragments, unshared.fragments, strict=True)
+    )

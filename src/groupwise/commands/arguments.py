@@ -79,6 +79,18 @@ def add_training_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def add_pool_arguments(parser: argparse.ArgumentParser) -> None:
+    """--pool-variants (`LoopConfig.pool_variants`)."""
+    parser.add_argument(
+        "--pool-variants",
+        type=int_at_least(0),
+        metavar="K",
+        help="sample half of each pool's windows from K variants of the current policy, each "
+        "pushing its actions one way (offsets drawn anew each round), so that the pools show "
+        "behaviours the policy rarely reaches (default 0: the policy alone)",
+    )
+
+
 def apply_teacher_options(
     cfg: "RunConfig", args: argparse.Namespace, target: str | None
 ) -> "RunConfig":

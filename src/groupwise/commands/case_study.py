@@ -7,6 +7,7 @@ from pathlib import Path
 
 from groupwise.commands.arguments import (
     UsageError,
+    add_pool_arguments,
     add_takeaway_arguments,
     add_training_arguments,
     apply_teacher_options,
@@ -101,6 +102,7 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
     case.add_argument("--out", type=Path, required=True, help="output directory")
     case.add_argument("--no-video", action="store_true", help="skip the video and the strip")
     add_training_arguments(case)
+    add_pool_arguments(case)
     case.add_argument(
         "--pretrain-steps",
         type=non_negative_int,
@@ -141,6 +143,7 @@ def run(args: argparse.Namespace) -> int:
                 "eval_episodes": 0,  # the case study scores the target itself
                 "pair_cap": pair_cap(args.pairs, target.name, args.preferences),
                 "seed": args.seed,
+                "pool_variants": args.pool_variants or 0,
             }
         )
         reward = dataclasses.replace(base.reward, use_actions=args.reward_inputs == "obs-act")

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from groupwise.commands.arguments import (
     UsageError,
+    add_pool_arguments,
     add_takeaway_arguments,
     add_training_arguments,
     apply_teacher_options,
@@ -26,6 +27,7 @@ FROM_SESSION_EXCLUDES = (
     "teacher_pace",
     "teacher_error",
     "pretrain_steps",
+    "pool_variants",
 )
 """Options --from-session takes from DIR itself (its config.json)."""
 
@@ -73,6 +75,7 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
         "place, from its latest checkpoint: --steps N or --rounds N --dm NAME",
     )
     add_training_arguments(train)
+    add_pool_arguments(train)
     train.add_argument(
         "--pretrain-steps",
         type=non_negative_int,
@@ -109,6 +112,7 @@ def run(args: argparse.Namespace) -> int:
         "steps": args.steps,
         "seed": args.seed,
         "final_steps": args.final_steps,
+        "pool_variants": args.pool_variants,
     }
     given = {key: value for key, value in overrides.items() if value is not None}
     try:

@@ -3,10 +3,12 @@
 Episodes of the policy (with random exploration mixed in) are cut into non-overlapping
 windows of L steps; of `oversample` × N windows (at most `max_windows`, never fewer than N:
 `windows_to_sample`) the N the reward ensemble is most uncertain about are kept (a uniformly
-random N without an ensemble). The headless loop, the app and `groupwise pool` all sample
-through `sample_pool`.
+random N without an ensemble). A share of the windows may come from variants of the policy
+instead (`variants`, e.g. `rl.policy.biased_variants`: `split_windows` deals them out). The
+headless loop, the app and `groupwise pool` all sample through `sample_pool`.
 """
 
+import dataclasses
 import math
 from collections.abc import Sequence
 from typing import Literal
@@ -15,7 +17,12 @@ import numpy as np
 
 from groupwise.clips.timing import clip_timing, step_seconds
 from groupwise.pool.behaviours import BehaviourPool
-from groupwise.pool.fragments import most_uncertain, stack_fragments, tile_fragments
+from groupwise.pool.fragments import (
+    Trajectory,
+    most_uncertain,
+    stack_fragments,
+    tile_fragments,
+)
 from groupwise.query.groups import step_variance
 from groupwise.reward import RewardEnsemble
 from groupwise.rl.policy import Policy
@@ -39,6 +46,8 @@ def sample_pool(
     progress: ProgressFn | None = None,
     snapshot_offsets: Sequence[int] | None = None,
     processes: int | None = None,
+    variants: Sequence[Policy] = (),
+    variant_share: float = 0.5,
 ) -> BehaviourPool:
     """A pool of (up to) `size` behaviours of `length` steps (module docstring).
 
@@ -51,11 +60,14 @@ def sample_pool(
     (`ClipTiming.snapshot_offsets`: two states of a few hundred bytes a window), so a clip can
     be rendered on demand without replaying its episode (`clips.recipe`). `processes` step
     the episodes' envs (None: the free cores for large batches; `rl.batch_envs`): the pool is
-    the same whatever it is.
+    the same whatever it is. `variants`: other policies a share `variant_share` of the
+    windows are sampled from, dealt evenly (`split_windows`); the episodes are numbered
+    `policy`'s first, then each variant's. Without variants the draws are exactly those of
+    sampling from `policy` alone.
 
     Raises:
-        ValueError: `size` < 1, `oversample` < 1 or `max_windows` < 1, or episodes too
-            short for a window.
+        ValueError: `size` < 1, `oversample` < 1 or `max_windows` < 1, `variant_share`
+            outside [0, 1], or episodes too short for a window.
     """
     n_windows = windows_to_sample(size, oversample, max_windows)
     if snapshot_offsets is None:
@@ -64,17 +76,26 @@ def sample_pool(
             snapshot_offsets = clip_timing(step_seconds(probe), steps=length).snapshot_offsets
         finally:
             probe.close()
-    episodes = sample_episodes_for_windows(
-        make_env,
-        policy,
-        n_windows,
-        length,
-        rng,
-        exploration_fraction,
-        progress=progress,
-        snapshot_offsets=snapshot_offsets,
-        processes=processes,
-    )
+    total = n_windows * length
+    episodes: list[Trajectory] = []
+    sampled = 0  # steps towards the windows of the policies before this one
+    counts = split_windows(n_windows, len(variants), variant_share)
+    for member, count in zip((policy, *variants), counts, strict=True):
+        if count == 0:
+            continue
+        own = sample_episodes_for_windows(
+            make_env,
+            member,
+            count,
+            length,
+            rng,
+            exploration_fraction,
+            progress=None if progress is None else _shifted(progress, sampled, total),
+            snapshot_offsets=snapshot_offsets,
+            processes=processes,
+        )
+        episodes += [dataclasses.replace(e, episode=len(episodes) + i) for i, e in enumerate(own)]
+        sampled += count * length
     windows = tile_fragments(episodes, length)
     if ensemble is None:
         keep = _random_subset(len(windows), size, rng)
@@ -110,6 +131,31 @@ def windows_to_sample(size: int, oversample: float, max_windows: int | None = No
         )
     wanted = math.ceil(size * oversample)
     return wanted if max_windows is None else max(size, min(wanted, max_windows))
+
+
+def split_windows(n_windows: int, variants: int, share: float) -> list[int]:
+    """How many of `n_windows` windows the policy and each of `variants` variants are sampled
+    for: round(`share` × n_windows) for the variants, dealt evenly (the first ones get one
+    more), the rest for the policy. Returns 1 + `variants` counts that sum to n_windows.
+
+    Raises:
+        ValueError: a negative count, or `share` outside [0, 1].
+    """
+    if n_windows < 0 or variants < 0 or not 0.0 <= share <= 1.0:
+        raise ValueError(
+            f"need n_windows >= 0, variants >= 0 and share in [0, 1], got {n_windows}, "
+            f"{variants} and {share}"
+        )
+    if variants == 0:
+        return [n_windows]
+    spread = round(share * n_windows)
+    each, extra = divmod(spread, variants)
+    return [n_windows - spread] + [each + (k < extra) for k in range(variants)]
+
+
+def _shifted(progress: ProgressFn, before: int, total: int) -> ProgressFn:
+    """`progress` hearing one policy's steps as steps of the whole pool's sampling."""
+    return lambda done, _: progress(before + done, total)
 
 
 def _random_subset(n: int, size: int, rng: np.random.Generator) -> IntArray:

@@ -33,3 +33,69 @@ class RandomPolicy:
 
     def act(self, obs: FloatArray, rng: np.random.Generator) -> np.ndarray:
         return random_actions(self.action_space, obs.shape[0], rng)
+
+
+class BiasedPolicy:
+    """A policy's actions pushed one way, the same way at every step: a Box action shifted by
+    a fixed `offset` and clipped to the bounds; a Discrete action replaced, with probability
+    `share`, by a fixed `action`. Exactly one of `offset` (Box) and `action` (Discrete) is given.
+
+    A pool sampled partly from such variants of the current policy shows behaviours the
+    policy itself rarely reaches (a walker that keeps one leg forward, a hopper that keeps
+    leaning back): `biased_variants`, `LoopConfig.pool_variants`.
+    """
+
+    def __init__(
+        self,
+        base: Policy,
+        space: gym.Space,
+        *,
+        offset: FloatArray | None = None,
+        action: int | None = None,
+        share: float = 0.5,
+    ) -> None:
+        if isinstance(space, gym.spaces.Box) and offset is None:
+            raise ValueError("a Box action space needs an offset")
+        if isinstance(space, gym.spaces.Discrete) and action is None:
+            raise ValueError("a Discrete action space needs an action")
+        self.base, self.space, self.offset, self.action, self.share = (
+            base,
+            space,
+            offset,
+            action,
+            share,
+        )
+
+    def act(self, obs: FloatArray, rng: np.random.Generator) -> np.ndarray:
+        actions = np.asarray(self.base.act(obs, rng))
+        if isinstance(self.space, gym.spaces.Discrete):
+            assert self.action is not None
+            return np.where(rng.random(actions.shape[0]) < self.share, self.action, actions)
+        assert isinstance(self.space, gym.spaces.Box) and self.offset is not None
+        shifted = np.clip(actions + self.offset, self.space.low, self.space.high)
+        return shifted.astype(self.space.dtype)
+
+
+def biased_variants(
+    base: Policy, space: gym.Space, count: int, scale: float, rng: np.random.Generator
+) -> list[Policy]:
+    """`count` `BiasedPolicy` variants of `base`, each with its own bias drawn from `rng`:
+    Box: an offset per dimension from U(−`scale`, `scale`) × half the action range;
+    Discrete: a uniformly drawn action, taken instead of the policy's on a share `scale` of
+    the steps.
+
+    Raises:
+        ValueError: `count` < 0 or `scale` outside [0, 1].
+        TypeError: another action space.
+    """
+    if count < 0 or not 0.0 <= scale <= 1.0:
+        raise ValueError(f"need count >= 0 and scale in [0, 1], got {count} and {scale}")
+    if isinstance(space, gym.spaces.Box):
+        half = (np.broadcast_to(space.high, space.shape) - space.low) / 2.0
+        offsets = rng.uniform(-scale, scale, size=(count, *space.shape)) * half
+        return [BiasedPolicy(base, space, offset=offset) for offset in offsets]
+    if isinstance(space, gym.spaces.Discrete):
+        start, n = int(space.start), int(space.n)
+        chosen = rng.integers(start, start + n, size=count)
+        return [BiasedPolicy(base, space, action=int(a), share=scale) for a in chosen]
+    raise TypeError(f"unsupported action space {space!r}")

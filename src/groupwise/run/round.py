@@ -34,6 +34,7 @@ from groupwise.preferences.judgement import Judgement
 from groupwise.preferences.pairs import Pair, cap_pairs, judgement_pairs
 from groupwise.query.strategies import Query, QueryStrategy
 from groupwise.reward import FitReport, fit
+from groupwise.rl.policy import Policy, biased_variants
 from groupwise.rl.rollout import Evaluation, evaluate_episodes
 from groupwise.run.progress import RunCallback, as_callback
 from groupwise.run.records import PhaseTimer, RoundRecord
@@ -83,7 +84,8 @@ def begin_round(
 ) -> Offer:
     """The first half of round `run.next_round` (or of `round_index`: the next round's
     offer, prepared while round `run.next_round` is still open, as continuous training
-    does): sample the pool from the current policy
+    does): sample the pool from the current policy, a share of it from biased variants of
+    the policy when `loop.pool_variants` asks for them (`pool_variants`)
     (the `pool_oversample` × N windows the ensemble is most uncertain about, or a random N,
     `loop.pool_selection`), build its tree, and let `strategy` propose `n_queries` (default
     `budget`) comparisons of it.
@@ -96,9 +98,10 @@ def begin_round(
     index = run.next_round if round_index is None else round_index
     streams = streams or round_streams(loop.seed, index)
     tick = time.perf_counter()
+    policy = run.agent.policy()
     pool = sample_pool(
         run.make_env,
-        run.agent.policy(),
+        policy,
         pool_size(loop, budget),
         loop.fragment_length,
         streams.sample,
@@ -109,6 +112,8 @@ def begin_round(
         ensemble=run.ensemble,
         select=loop.pool_selection,
         progress=lambda done, total: callback.on_phase("sample", done, total),
+        variants=pool_variants(run, policy, streams.sample),
+        variant_share=loop.pool_variant_share,
     )
     sample_s = time.perf_counter() - tick
     tree = None
@@ -128,6 +133,20 @@ def begin_round(
         candidates=float(len(offered(pool))) if callable(offered) else math.nan,
         sample_s=sample_s,
     )
+
+
+def pool_variants(run: Run, policy: Policy, rng: np.random.Generator) -> list[Policy]:
+    """The round's `loop.pool_variants` biased variants of `policy` (`rl.policy.biased_variants`,
+    drawn from `rng`, the round's sample stream; none drawn when there are none)."""
+    loop = run.cfg.loop
+    if loop.pool_variants == 0:
+        return []
+    probe = run.make_env()
+    try:
+        space = probe.action_space
+    finally:
+        probe.close()
+    return biased_variants(policy, space, loop.pool_variants, loop.pool_variant_scale, rng)
 
 
 def derive_pairs(

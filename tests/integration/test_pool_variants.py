@@ -1,0 +1,65 @@
+"""Pools sampled partly from biased variants of the policy (`LoopConfig.pool_variants`, issue
+20): begin_round draws them from the round's sample stream, the headless loop and the CLI
+run with them, and without them a round is sampled as before."""
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from groupwise.cli import main
+from groupwise.config import LoopConfig, PPOConfig, RewardConfig, RunConfig
+from groupwise.query.strategies import PairwiseQueries
+from groupwise.rl.policy import BiasedPolicy
+from groupwise.run.round import begin_round, pool_variants
+from groupwise.run.run import Run
+
+TINY = RunConfig(
+    loop=LoopConfig(
+        env="GridWorld", comparisons=12, rounds=2, steps=2 * 256, eval_episodes=2, seed=5
+    ),
+    reward=RewardConfig(epochs=2, initial_epoch_multiplier=2),
+    ppo=PPOConfig(n_envs=2, n_steps=128, batch_size=64, n_epochs=2, tensorboard=False),
+)
+VARIED = dataclasses.replace(TINY, loop=dataclasses.replace(TINY.loop, pool_variants=4))
+
+
+def _actions(cfg: RunConfig) -> list[np.ndarray]:
+    offer = begin_round(Run.create(cfg), PairwiseQueries(), 6)
+    return [episode.actions for episode in offer.pool.episodes]
+
+
+def test_a_round_draws_its_variants_and_samples_half_its_windows_from_them():
+    run = Run.create(VARIED)
+    policy = run.agent.policy()
+    variants = pool_variants(run, policy, np.random.default_rng(0))
+    assert len(variants) == 4 and all(isinstance(v, BiasedPolicy) for v in variants)
+    assert all(v.base is policy and v.share == 0.5 for v in variants)  # pool_variant_scale
+    assert pool_variants(Run.create(TINY), policy, np.random.default_rng(0)) == []
+    plain, varied = _actions(TINY), _actions(VARIED)
+    assert _same(_actions(VARIED), varied)  # the variants come from the round's stream
+    assert not _same(plain, varied)
+
+
+def _same(first: list[np.ndarray], second: list[np.ndarray]) -> bool:
+    return len(first) == len(second) and all(
+        np.array_equal(a, b) for a, b in zip(first, second, strict=True)
+    )
+
+
+def test_the_command_line_samples_from_variants(tmp_path):
+    out = tmp_path / "train"
+    args = ["--comparisons", "4", "--rounds", "1", "--steps", "0", "--seed", "1", "-q"]
+    assert (
+        main(["train", "--env", "GridWorld", "--pool-variants", "3", "--out", str(out), *args]) == 0
+    )
+    assert RunConfig.load(out / "config.json").loop.pool_variants == 3
+
+
+@pytest.mark.parametrize("command", ["train", "case-study"])
+def test_a_negative_number_of_variants_is_refused(tmp_path, capsys, command):
+    first = ["--env", "GridWorld"] if command == "train" else ["--target", "hopper-backflip"]
+    with pytest.raises(SystemExit) as exit_:
+        main([command, *first, "--pool-variants", "-1", "--out", str(tmp_path), "-q"])
+    assert exit_.value.code == 2
+    assert ">= 0" in capsys.readouterr().err
