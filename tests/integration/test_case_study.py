@@ -31,6 +31,8 @@ COLUMNS = [
     "label_error_rate_total",
     "tied_share_total",
     "label_error_untied_total",
+    "pool_score_sd",
+    "pool_score_max",
     "env_steps",
     "target_score_mean",
     "target_score_std",
@@ -101,6 +103,9 @@ def test_backflip_case_study_writes_rounds_video_and_strip(tmp_path, capsys):
         else:
             assert 0.0 <= tied <= 1.0 and (math.isnan(untied) or 0.0 <= untied <= 1.0)
         assert math.isfinite(float(row["target_score_mean"]))
+        # the round's pool, scored (`pool_scores`): sd and best of its behaviours' scores
+        spread, best = float(row["pool_score_sd"]), float(row["pool_score_max"])
+        assert 0.0 <= spread <= 1e3 and math.isfinite(best)
         assert all(float(row[f"{phase}_s"]) > 0 for phase in ("sample", "reward", "ppo", "eval"))
     assert float(rows[1]["wall_s"]) > float(rows[0]["wall_s"])
 

@@ -26,7 +26,9 @@ from groupwise.config import RunConfig
 from groupwise.envs import TARGET_TOTAL_KEY, Target
 from groupwise.envs.targets import TARGET_SCORE_KEY
 from groupwise.oracles import Feedback
+from groupwise.pool.behaviours import BehaviourPool
 from groupwise.preferences.dataset import PreferenceDataset
+from groupwise.query.strategies import Query, QueryStrategy
 from groupwise.rl.policy import Policy
 from groupwise.rl.rollout import EnvFactory
 from groupwise.run.headless import feedback_of, hand_over, round_plan, run_rounds
@@ -116,6 +118,32 @@ def evaluate_target(
     )
 
 
+def pool_scores(pool: BehaviourPool) -> np.ndarray:
+    """Each behaviour's mean per-step target score (N,): its true return over its length."""
+    lengths = np.array([f.length for f in pool.fragments], dtype=float)
+    return np.asarray(pool.true_returns, dtype=float) / lengths
+
+
+class PoolRecorder:
+    """A query strategy that keeps every pool it is asked about (a wrapper around the
+    run's own strategy, which answers)."""
+
+    def __init__(self, inner: QueryStrategy) -> None:
+        self.inner = inner
+        self.pools: list[BehaviourPool] = []
+
+    def propose(self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator) -> list[Query]:
+        self.pools.append(pool)
+        return self.inner.propose(pool, n_queries, rng)
+
+    def pool_of(self, round_index: int) -> BehaviourPool | None:
+        """The last pool asked about for round `round_index` (None: none was)."""
+        return next((p for p in reversed(self.pools) if p.round == round_index), None)
+
+    def __getattr__(self, name: str) -> object:  # the strategy's `candidates`, if it has them
+        return getattr(self.inner, name)
+
+
 @dataclass(frozen=True)
 class CaseRecord:
     """One row of ``case-study.csv``: a round and the target score after it."""
@@ -135,6 +163,11 @@ class CaseRecord:
     label_error_untied_total: float
     """Label error over the pairs so far whose target scores differ: how often the labels
     rank two different behaviours wrongly (a label on a tie is arbitrary, not wrong)."""
+    pool_score_sd: float
+    """The sd over the round's pool of its behaviours' mean per-step target scores
+    (`pool_scores`): how much there was to tell apart ..."""
+    pool_score_max: float
+    """... and the best behaviour's: whether the pool held the behaviour at all."""
     env_steps: int
     target_score_mean: float
     target_score_std: float
@@ -162,7 +195,9 @@ class CaseRecord:
         target: Target,
         eval_s: float,
         wall_s: float,
+        pool: BehaviourPool | None = None,
     ) -> "CaseRecord":
+        scores = pool_scores(pool) if pool is not None and len(pool) else np.full(1, np.nan)
         return cls(
             round=record.round,
             comparisons_total=record.comparisons + (previous.comparisons_total if previous else 0),
@@ -172,6 +207,8 @@ class CaseRecord:
             label_error_rate_total=record.label_error_rate_total,
             tied_share_total=float(dataset.tied().mean()) if len(dataset) else math.nan,
             label_error_untied_total=dataset.label_error_rate(untied=True),
+            pool_score_sd=float(scores.std()),
+            pool_score_max=float(scores.max()),
             env_steps=record.env_steps,
             **evaluation.summary(target),
             sample_s=record.sample_s,
@@ -220,7 +257,9 @@ def run_case_study(
         raise ValueError(f"the config's env {cfg.loop.env!r} is not {target.name}'s {target.env}")
     if eval_episodes < 1:
         raise ValueError(f"need at least one evaluation episode, got {eval_episodes}")
-    feedback = feedback or feedback_of(cfg)
+    own = feedback or feedback_of(cfg)
+    recorder = PoolRecorder(own.queries)
+    feedback = Feedback(recorder, own.teacher)
     started = time.perf_counter()
     rows: list[CaseRecord] = []
     evaluations: list[TargetEvaluation] = []
@@ -238,7 +277,14 @@ def run_case_study(
             previous = rows[-1] if rows else None
             rows.append(
                 CaseRecord.of(
-                    record, previous, run.dataset, evaluation, target, now - begin, now - started
+                    record,
+                    previous,
+                    run.dataset,
+                    evaluation,
+                    target,
+                    now - begin,
+                    now - started,
+                    recorder.pool_of(record.round),
                 )
             )
             evaluations.append(evaluation)

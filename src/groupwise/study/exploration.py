@@ -26,21 +26,17 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from groupwise.clips.timing import clip_timing, default_clip_seconds, env_step_seconds
 from groupwise.config import LoopConfig, RunConfig
 from groupwise.envs import TARGETS, Target
 from groupwise.oracles import Feedback
-from groupwise.pool.behaviours import BehaviourPool
-from groupwise.query.strategies import Query, QueryStrategy
 from groupwise.run.headless import feedback_of, run_rounds
 from groupwise.run.pretrain import pretrain
 from groupwise.run.progress import OnRoundEnd
 from groupwise.run.records import RoundRecord
 from groupwise.run.run import Run
 from groupwise.run.streams import eval_rng
-from groupwise.study.case_study import evaluate_target
+from groupwise.study.case_study import PoolRecorder, evaluate_target, pool_scores
 
 POOLS_FILE = "pools.csv"
 SETUP_FILE = "exploration.json"
@@ -66,28 +62,6 @@ class PoolSpread:
     """Share of those episodes at or above the target's threshold."""
     env_steps: int
     """PPO steps so far, pre-training included."""
-
-
-def pool_scores(pool: BehaviourPool) -> np.ndarray:
-    """Each behaviour's mean per-step target score (N,): its true return over its length."""
-    lengths = np.array([f.length for f in pool.fragments], dtype=float)
-    return np.asarray(pool.true_returns, dtype=float) / lengths
-
-
-class PoolRecorder:
-    """A query strategy that keeps every pool it is asked about (a wrapper around the
-    run's own strategy, which answers)."""
-
-    def __init__(self, inner: QueryStrategy) -> None:
-        self.inner = inner
-        self.pools: list[BehaviourPool] = []
-
-    def propose(self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator) -> list[Query]:
-        self.pools.append(pool)
-        return self.inner.propose(pool, n_queries, rng)
-
-    def __getattr__(self, name: str) -> object:  # the strategy's `candidates`, if it has them
-        return getattr(self.inner, name)
 
 
 def measure(cfg: RunConfig, target: Target, out: Path, eval_episodes: int = 5) -> list[PoolSpread]:

@@ -4,7 +4,7 @@ import numpy as np
 
 from groupwise.pool.behaviours import BehaviourPool
 from groupwise.pool.fragments import Fragment
-from groupwise.study.exploration import PoolRecorder, pool_scores
+from groupwise.study.case_study import PoolRecorder, pool_scores
 
 
 def _fragment(rewards: list[float], start: int) -> Fragment:
