@@ -128,6 +128,8 @@ def test_backflip_case_study_writes_rounds_video_and_strip(tmp_path, capsys):
     cells = summary_rows([out, out])[0].split(" | ")
     assert cells[:3] == ["| hopper-backflip", "groupwise", "2"]
     assert cells[3] == f"**{2 * succeeded}/2**" and cells[6] == "20"
+    spread = cells[8].split(" / ")  # the pools' sd in rounds 0–2: this run has two rounds
+    assert float(spread[0]) >= 0 and float(spread[1]) >= 0 and spread[2] == "–"
     row = markdown_row(out).split(" | ")
     assert row[:3] == ["| hopper-backflip", "groupwise", "0"] and row[3] == "20"
     assert row[-3] == f"{round(summary['final']['success_rate'] * 2)}/2"

@@ -5,13 +5,14 @@
 prints a Markdown table (target, DM, seed, comparisons, preference pairs, share of pairs
 between behaviours of equal target score, label error on the others, the greedy policy's
 target score after each round, success and stretch rates at the end, wall time), read
-from each run's ``case-study.csv`` and ``summary.json`` and, for the ties, its last
-checkpoint's preference dataset. Above it, the summary: per target and DM, the seeds whose
-greedy policy succeeds (at least `SEED_SUCCESS` of its final episodes reach the threshold)
-after the last round and as the take-away agent, and the pairs and comparisons used. With
-``--figure PNG`` it also draws each run's target score against its preference pairs, one
-panel per target, the success threshold dashed; with ``--strips PNG`` the five-frame strip
-of each target's and DM's best final episode. It is how
+from each run's ``case-study.csv`` and ``summary.json``. Above it, the summary: per target
+and DM, the seeds whose greedy policy succeeds (at least `SEED_SUCCESS` of its final
+episodes reach the threshold) after the last round and as the take-away agent, the pairs and
+comparisons used, and the spread and best of the pools' target scores in rounds 0–2
+(`case_study.pool_scores`, mean over the seeds). A run's DM is labelled with the exploration
+it ran with (`setup_label`). With ``--figure PNG`` it also draws each run's target score
+against its preference pairs, one panel per target, the success threshold dashed; with
+``--strips PNG`` the five-frame strip of each target's and DM's best final episode. It is how
 ``docs/results/case-studies/README.md`` and its figures were made.
 """
 
@@ -21,8 +22,6 @@ import json
 from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
-
-from groupwise.preferences.dataset import PreferenceDataset
 
 HEADER = (
     "| target | DM | seed | comparisons | preference pairs | tied pairs | label error "
@@ -36,19 +35,48 @@ SEED_SUCCESS = 0.6
 
 SUMMARY_HEADER = (
     "| target | DM | seeds | successful seeds, last round | as take-away agent | stretch "
-    "| comparisons | preference pairs |\n|---|---|---:|---:|---:|---:|---:|---:|"
+    "| comparisons | preference pairs | pool sd, rounds 0–2 | pool max, rounds 0–2 |\n"
+    "|---|---|---:|---:|---:|---:|---:|---:|---|---|"
 )
+
+
+def setup_label(run: Path) -> str:
+    """The run's decision-maker, with the exploration it ran with: "groupwise",
+    "groupwise · 8 pool variants", "groupwise · pre-training 100,000"."""
+    summary, _ = _read(run)
+    cfg = json.loads((run / "config.json").read_text())
+    parts = [summary["decision_maker"]]
+    if variants := cfg["loop"].get("pool_variants", 0):
+        parts.append(f"{variants} pool variants")
+    if pretrain := cfg.get("training", {}).get("pretrain_steps", 0):
+        parts.append(f"pre-training {pretrain:,}")
+    return " · ".join(parts)
+
+
+def _pool_means(rows_of_runs: Sequence[list[dict[str, str]]], column: str) -> str:
+    """Per round 0–2 the mean over the runs of `column` ("–" where no run has it: fewer
+    rounds, or a run that predates the column)."""
+    means = []
+    for r in range(3):
+        values = [
+            float(rows[r][column]) for rows in rows_of_runs if r < len(rows) and column in rows[r]
+        ]
+        means.append(f"{sum(values) / len(values):.2f}" if values else "–")
+    return " / ".join(means)
 
 
 def summary_rows(runs: Sequence[Path]) -> list[str]:
     """One Markdown row per target and DM of `runs` (module docstring), in order of first
     appearance."""
-    cells: dict[tuple[str, str], list[dict[str, Any]]] = {}
+    cells: dict[tuple[str, str], list[tuple[dict[str, Any], list[dict[str, str]]]]] = {}
     for run in runs:
-        summary, _ = _read(run)
-        cells.setdefault((summary["target"]["name"], summary["decision_maker"]), []).append(summary)
+        summary, rows_of_run = _read(run)
+        key = (summary["target"]["name"], setup_label(run))
+        cells.setdefault(key, []).append((summary, rows_of_run))
     rows = []
-    for (target, dm), summaries in cells.items():
+    for (target, dm), read in cells.items():
+        summaries = [summary for summary, _ in read]
+        early = [rows_of_run for _, rows_of_run in read]
         last = sum(s["final"]["success_rate"] >= SEED_SUCCESS for s in summaries)
         kept = sum(s.get("takeaway", s["final"])["success_rate"] >= SEED_SUCCESS for s in summaries)
         stretch = sum(s["final"]["stretch_rate"] >= SEED_SUCCESS for s in summaries)
@@ -56,7 +84,8 @@ def summary_rows(runs: Sequence[Path]) -> list[str]:
         rows.append(
             f"| {target} | {dm} | {n} | **{last}/{n}** | {kept}/{n} | {stretch}/{n} "
             f"| {_span(s['comparisons'] for s in summaries)} "
-            f"| {_span(s['preference_pairs'] for s in summaries)} |"
+            f"| {_span(s['preference_pairs'] for s in summaries)} "
+            f"| {_pool_means(early, 'pool_score_sd')} | {_pool_means(early, 'pool_score_max')} |"
         )
     return rows
 
@@ -77,20 +106,18 @@ def markdown_row(run: Path) -> str:
     """The table row of one case-study run directory."""
     summary, rows = _read(run)
     last = rows[-1]
-    checkpoints = sorted((run / "checkpoints").glob("round-*"))
-    dataset = PreferenceDataset.load(checkpoints[-1] / "dataset.npz")
     seed = json.loads((run / "config.json").read_text())["loop"]["seed"]
     scores = ", ".join(f"{float(r['target_score_mean']):.2f}" for r in rows)
     final = summary["final"]
     episodes = len(final["scores"])
     ties, error = "–", "–"  # no pairs: nothing tied, nothing labelled
-    if len(dataset):
-        ties = f"{dataset.tied().mean():.2f}"
-        error = f"{dataset.label_error_rate(untied=True):.2f}"
+    if int(last["pairs_total"]):
+        ties = f"{float(last['tied_share_total']):.2f}"
+        error = f"{float(last['label_error_untied_total']):.2f}"
     success = round(final["success_rate"] * episodes)
     stretch = round(final["stretch_rate"] * episodes)
     return (
-        f"| {summary['target']['name']} | {summary['decision_maker']} | {seed} "
+        f"| {summary['target']['name']} | {setup_label(run)} | {seed} "
         f"| {int(last['comparisons_total'])} | {int(last['pairs_total']):,} "
         f"| {ties} | {error} "
         f"| {scores} | {success}/{episodes} | {stretch}/{episodes} "
