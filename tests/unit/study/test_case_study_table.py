@@ -1,0 +1,55 @@
+"""The case-study table's summary: runs grouped by target and by the exploration they ran
+with, and the pools' spread in rounds 0–2 averaged over the seeds."""
+
+import csv
+import json
+from pathlib import Path
+
+from groupwise.study.case_study_table import setup_label, summary_rows
+
+
+def _run(path: Path, variants: int, pretrain: int, pool_sd: list[float] | None) -> Path:
+    path.mkdir()
+    final = {"success_rate": 0.6, "stretch_rate": 0.0}
+    summary = {
+        "target": {"name": "walker-splits"},
+        "decision_maker": "groupwise",
+        "final": final,
+        "takeaway": final,
+        "comparisons": 240,
+        "preference_pairs": 600,
+    }
+    (path / "summary.json").write_text(json.dumps(summary))
+    config = {"loop": {"pool_variants": variants}, "training": {"pretrain_steps": pretrain}}
+    (path / "config.json").write_text(json.dumps(config))
+    columns = ["round", "pairs_total"] + (["pool_score_sd", "pool_score_max"] if pool_sd else [])
+    with (path / "case-study.csv").open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=columns)
+        writer.writeheader()
+        for r in range(len(pool_sd or [0.0, 0.0, 0.0])):
+            row = {"round": r, "pairs_total": 100 * (r + 1)}
+            if pool_sd:
+                row |= {"pool_score_sd": pool_sd[r], "pool_score_max": 2 * pool_sd[r]}
+            writer.writerow(row)
+    return path
+
+
+def test_runs_are_labelled_by_the_exploration_they_ran_with(tmp_path):
+    assert setup_label(_run(tmp_path / "a", 0, 0, None)) == "groupwise"
+    assert setup_label(_run(tmp_path / "b", 8, 0, None)) == "groupwise · 8 pool variants"
+    assert setup_label(_run(tmp_path / "c", 0, 100_000, None)) == (
+        "groupwise · pre-training 100,000"
+    )
+
+
+def test_the_summary_averages_the_pools_of_each_setup_over_its_seeds(tmp_path):
+    varied = [
+        _run(tmp_path / "v0", 8, 0, [0.1, 0.2, 0.3]),
+        _run(tmp_path / "v1", 8, 0, [0.3, 0.4]),  # a two-round run: round 2 from v0 alone
+    ]
+    plain = _run(tmp_path / "p0", 0, 0, None)  # predates the pool columns
+    first, second = summary_rows([*varied, plain])
+    cells = first.split(" | ")
+    assert cells[1] == "groupwise · 8 pool variants" and cells[2] == "2"
+    assert cells[8] == "0.20 / 0.30 / 0.30" and cells[9].rstrip(" |") == "0.40 / 0.60 / 0.60"
+    assert second.split(" | ")[1] == "groupwise" and "– / – / –" in second
