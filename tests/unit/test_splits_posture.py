@@ -19,6 +19,18 @@ def test_each_condition_and_all_three_are_shares_of_the_steps():
     assert shares["all"] == 0.25  # only the first step holds all three
     assert shares["separation"] == pytest.approx(math.radians(100.0))
     assert shares["tilt"] == pytest.approx(math.radians(30.0))
+    assert shares["breaks_tilt"] == 250.0  # held at step 0, broken at step 1: 1 in 4 steps
+    assert shares["breaks_split"] == shares["breaks_feet"] == 0.0
+
+
+def test_a_split_that_wobbles_about_a_condition_breaks_on_it():
+    upright, leaning = math.radians(55.0), math.radians(62.0)
+    tilt = np.array([upright, leaning, upright, upright, leaning, upright, upright, upright])
+    feet = np.array([2, 2, 2, 1, 2, 2, 2, 2])
+    shares = posture_shares(np.full(8, math.radians(120.0)), tilt, feet)
+    assert shares["all"] == 5 / 8
+    assert shares["breaks_tilt"] == shares["breaks_feet"] == 1000 / 8  # step 4: already broken
+    assert shares["breaks_split"] == 0.0
 
 
 def test_empty_or_uneven_steps_are_refused():

@@ -7,8 +7,10 @@ last round (or round R) replays the case study's evaluation episodes (the same r
 seeds, `run.streams.eval_rng`), and a Markdown row gives the share of steps at which each
 condition of a held split holds (`envs.scorers.SplitsScorer`): the thighs at least 90°
 apart, the torso within 60° of vertical, 0, 1 or 2 feet on the floor, and all three at
-once; then the median separation and tilt, degrees. A run that never holds a split shows
-which condition its policy settled without.
+once; how often a held split broke (per 1,000 steps, by the condition that failed at the
+break); then the median separation and tilt, degrees. A run that never holds a split shows
+which condition its policy settled without; one whose split breaks often, which condition
+it wobbles about.
 """
 
 import argparse
@@ -33,13 +35,16 @@ from groupwise.types import FloatArray
 
 HEADER = (
     "| run | round | steps | split ≥ 90° | upright (≤ 60°) | feet down 0 / 1 / 2 | all three "
-    "| median separation | median tilt |\n|---|---:|---:|---:|---:|---|---:|---:|---:|"
+    "| breaks per 1,000 steps: separation / tilt / feet | median separation | median tilt |\n"
+    "|---|---:|---:|---:|---:|---|---:|---|---:|---:|"
 )
 
 
 def posture_shares(separation: FloatArray, tilt: FloatArray, feet: np.ndarray) -> dict[str, float]:
-    """Shares of steps by each condition of a held split, and the medians (radians), from
-    per-step thigh separation and torso tilt (rad, ≥ 0) and feet on the floor (0–2).
+    """Shares of steps by each condition of a held split, the breaks of a held split per
+    1,000 steps by the condition that failed (a break can fail more than one), and the
+    medians (radians), from per-step thigh separation and torso tilt (rad, ≥ 0) and feet on
+    the floor (0–2).
 
     Raises:
         ValueError: no steps, or arrays of different lengths.
@@ -48,12 +53,19 @@ def posture_shares(separation: FloatArray, tilt: FloatArray, feet: np.ndarray) -
         raise ValueError(f"need equal, non-empty arrays, got {len(separation)}, {len(tilt)}, "
                          f"{len(feet)}")  # fmt: skip
     split, upright = separation >= SPLIT_ANGLE, tilt <= UPRIGHT
+    down = feet == len(WALKER_FEET)
+    held = split & upright & down
+    broke = np.flatnonzero(held[:-1] & ~held[1:]) + 1  # the steps at which a hold ended
+    per_1000 = 1000.0 / len(separation)
     return {
         "steps": float(len(separation)),
         "split": float(split.mean()),
         "upright": float(upright.mean()),
         **{f"feet_{k}": float((feet == k).mean()) for k in range(len(WALKER_FEET) + 1)},
-        "all": float((split & upright & (feet == len(WALKER_FEET))).mean()),
+        "all": float(held.mean()),
+        "breaks_split": float((~split[broke]).sum() * per_1000),
+        "breaks_tilt": float((~upright[broke]).sum() * per_1000),
+        "breaks_feet": float((~down[broke]).sum() * per_1000),
         "separation": float(np.median(separation)),
         "tilt": float(np.median(tilt)),
     }
@@ -90,9 +102,10 @@ def replay_posture(run: Path, round_index: int | None = None) -> tuple[int, dict
 
 def markdown_row(run: Path, chosen: int, shares: dict[str, float]) -> str:
     feet = " / ".join(f"{shares[f'feet_{k}']:.2f}" for k in range(len(WALKER_FEET) + 1))
+    breaks = " / ".join(f"{shares[f'breaks_{c}']:.1f}" for c in ("split", "tilt", "feet"))
     return (
         f"| {run.name} | {chosen} | {int(shares['steps'])} | {shares['split']:.2f} "
-        f"| {shares['upright']:.2f} | {feet} | **{shares['all']:.2f}** "
+        f"| {shares['upright']:.2f} | {feet} | **{shares['all']:.2f}** | {breaks} "
         f"| {math.degrees(shares['separation']):.0f}° | {math.degrees(shares['tilt']):.0f}° |"
     )
 
