@@ -6,6 +6,7 @@
 # Comparisons per target are chosen so that the Groupwise-DM's pairs reach the paper's
 # (--pairs paper caps them there): backflip 380 (1,032 pairs), stand-up 260 (601), splits 240 (616).
 # EXTRA: further case-study options for every run (e.g. "--pretrain-steps 100000").
+# SEEDS (environment): the seeds to run (default "0 1 2 3 4").
 # Usage: bash docs/results/case-studies/paper-pairs/run.sh OUT_DIR [PARALLEL] [DMS] [TARGETS] [STEPS] [EXTRA]
 set -euo pipefail
 out=${1:?out}; parallel=${2:-2}; dms=${3:-groupwise pairwise}
@@ -15,7 +16,7 @@ export OMP_NUM_THREADS=1 MUJOCO_GL=${MUJOCO_GL:-egl}
 declare -A comparisons=([walker-splits]=240 [halfcheetah-standup]=260 [hopper-backflip]=380)
 {
   for dm in $dms; do
-    for s in 0 1 2 3 4; do
+    for s in ${SEEDS:-0 1 2 3 4}; do
       for t in $targets; do echo "$dm $t ${comparisons[$t]} $s"; done
     done
   done
