@@ -125,20 +125,17 @@ def pool_scores(pool: BehaviourPool) -> np.ndarray:
 
 
 class PoolRecorder:
-    """A query strategy that keeps every pool it is asked about (a wrapper around the
-    run's own strategy, which answers)."""
+    """A query strategy that scores every pool it is asked about (`pool_scores`, kept per
+    round: a continuous run asks about round r + 1's pool before round r ends) and lets the
+    run's own strategy answer."""
 
     def __init__(self, inner: QueryStrategy) -> None:
         self.inner = inner
-        self.pools: list[BehaviourPool] = []
+        self.scores: dict[int, FloatArray] = {}
 
     def propose(self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator) -> list[Query]:
-        self.pools.append(pool)
+        self.scores[pool.round] = pool_scores(pool)
         return self.inner.propose(pool, n_queries, rng)
-
-    def pool_of(self, round_index: int) -> BehaviourPool | None:
-        """The last pool asked about for round `round_index` (None: none was)."""
-        return next((p for p in reversed(self.pools) if p.round == round_index), None)
 
     def __getattr__(self, name: str) -> object:  # the strategy's `candidates`, if it has them
         return getattr(self.inner, name)
@@ -195,9 +192,12 @@ class CaseRecord:
         target: Target,
         eval_s: float,
         wall_s: float,
-        pool: BehaviourPool | None = None,
+        behaviour_scores: FloatArray | None = None,
     ) -> "CaseRecord":
-        scores = pool_scores(pool) if pool is not None and len(pool) else np.full(1, np.nan)
+        """The row of `record`; `behaviour_scores`: its pool's (`pool_scores`; None: none)."""
+        scores = np.full(1, np.nan)  # no pool scored, or an empty one
+        if behaviour_scores is not None and len(behaviour_scores):
+            scores = behaviour_scores
         return cls(
             round=record.round,
             comparisons_total=record.comparisons + (previous.comparisons_total if previous else 0),
@@ -284,7 +284,7 @@ def run_case_study(
                     target,
                     now - begin,
                     now - started,
-                    recorder.pool_of(record.round),
+                    recorder.scores.get(record.round),
                 )
             )
             evaluations.append(evaluation)

@@ -36,7 +36,7 @@ from groupwise.run.progress import OnRoundEnd
 from groupwise.run.records import RoundRecord
 from groupwise.run.run import Run
 from groupwise.run.streams import eval_rng
-from groupwise.study.case_study import PoolRecorder, evaluate_target, pool_scores
+from groupwise.study.case_study import PoolRecorder, evaluate_target
 
 POOLS_FILE = "pools.csv"
 SETUP_FILE = "exploration.json"
@@ -94,7 +94,7 @@ def measure(cfg: RunConfig, target: Target, out: Path, eval_episodes: int = 5) -
         (out / START_FILE).write_text(json.dumps(start) + "\n")
 
         def scored(record: RoundRecord) -> None:
-            scores = pool_scores(recorder.pools[record.round])
+            scores = recorder.scores[record.round]
             evaluation = evaluate_target(
                 run.make_env,
                 run.agent.policy(deterministic=True),

@@ -35,9 +35,10 @@ class _Asks:
         return [("query", n_queries)]
 
 
-def test_the_recorder_keeps_each_pool_and_lets_the_strategy_answer():
+def test_the_recorder_scores_each_rounds_pool_and_lets_the_strategy_answer():
     recorder = PoolRecorder(_Asks())
     pool = _pool()
     assert recorder.propose(pool, 3, np.random.default_rng(0)) == [("query", 3)]
-    assert recorder.pools == [pool]
+    assert list(recorder.scores) == [0]
+    np.testing.assert_allclose(recorder.scores[0], [0.0, 2.0])
     assert recorder.candidates == "the inner strategy's"  # begin_round reads it
