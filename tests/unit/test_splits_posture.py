@@ -33,6 +33,16 @@ def test_a_split_that_wobbles_about_a_condition_breaks_on_it():
     assert shares["breaks_split"] == 0.0
 
 
+def test_a_new_episode_is_no_break():
+    held, standing = math.radians(120.0), math.radians(0.0)
+    separation = np.array([held, held, standing, held])  # two episodes of two steps
+    tilt, feet = np.zeros(4), np.full(4, 2)
+    assert posture_shares(separation, tilt, feet)["breaks_split"] == 250.0
+    assert posture_shares(separation, tilt, feet, [2, 2])["breaks_split"] == 0.0
+    with pytest.raises(ValueError, match="episodes of 3 steps"):
+        posture_shares(separation, tilt, feet, [2, 1])
+
+
 def test_empty_or_uneven_steps_are_refused():
     with pytest.raises(ValueError, match="non-empty"):
         posture_shares(np.zeros(0), np.zeros(0), np.zeros(0))

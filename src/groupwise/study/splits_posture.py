@@ -40,14 +40,21 @@ HEADER = (
 )
 
 
-def posture_shares(separation: FloatArray, tilt: FloatArray, feet: np.ndarray) -> dict[str, float]:
+def posture_shares(
+    separation: FloatArray,
+    tilt: FloatArray,
+    feet: np.ndarray,
+    lengths: Sequence[int] | None = None,
+) -> dict[str, float]:
     """Shares of steps by each condition of a held split, the breaks of a held split per
     1,000 steps by the condition that failed (a break can fail more than one), and the
     medians (radians), from per-step thigh separation and torso tilt (rad, ≥ 0) and feet on
-    the floor (0–2).
+    the floor (0–2). `lengths`: the episodes' lengths when the steps are several episodes'
+    end to end (default: one episode), so that no break is counted where one episode ends
+    and the next begins.
 
     Raises:
-        ValueError: no steps, or arrays of different lengths.
+        ValueError: no steps, arrays of different lengths, or `lengths` not summing to them.
     """
     if len(separation) == 0 or not len(separation) == len(tilt) == len(feet):
         raise ValueError(f"need equal, non-empty arrays, got {len(separation)}, {len(tilt)}, "
@@ -55,7 +62,12 @@ def posture_shares(separation: FloatArray, tilt: FloatArray, feet: np.ndarray) -
     split, upright = separation >= SPLIT_ANGLE, tilt <= UPRIGHT
     down = feet == len(WALKER_FEET)
     held = split & upright & down
-    broke = np.flatnonzero(held[:-1] & ~held[1:]) + 1  # the steps at which a hold ended
+    ended = held[:-1] & ~held[1:]
+    starts = np.cumsum(lengths if lengths is not None else [len(held)])
+    if starts[-1] != len(held):
+        raise ValueError(f"episodes of {starts[-1]} steps in all, for {len(held)} steps")
+    ended[starts[:-1] - 1] = False  # an episode's first step follows no step of its own
+    broke = np.flatnonzero(ended) + 1  # the steps at which a hold ended
     per_1000 = 1000.0 / len(separation)
     return {
         "steps": float(len(separation)),
@@ -87,6 +99,7 @@ def replay_posture(run: Path, round_index: int | None = None) -> tuple[int, dict
     factory = lambda: make_env(target.env)  # noqa: E731
     evaluation = evaluate_target(factory, policy, episodes, eval_rng(loop["seed"]))
     steps: list[tuple[float, float, int]] = []
+    lengths = [len(actions) for actions in evaluation.actions]
     for seed, actions in zip(evaluation.reset_seeds, evaluation.actions, strict=True):
         env = factory()  # the episode again, its actions replayed, to read every state
         try:
@@ -97,7 +110,7 @@ def replay_posture(run: Path, round_index: int | None = None) -> tuple[int, dict
         finally:
             env.close()
     separation, tilt, feet = (np.array(column) for column in zip(*steps, strict=True))
-    return chosen, posture_shares(separation, tilt, feet)
+    return chosen, posture_shares(separation, tilt, feet, lengths)
 
 
 def markdown_row(run: Path, chosen: int, shares: dict[str, float]) -> str:
