@@ -68,3 +68,13 @@ def test_train_runs_end_to_end_from_the_command_line(tmp_path):
     assert result.returncode == 0, result.stderr
     assert "rounds.csv" in result.stdout
     assert (tmp_path / "rounds.csv").is_file()
+
+
+@pytest.mark.parametrize("command", ["train", "case-study"])
+@pytest.mark.parametrize("option", ["--pretrain-steps", "--pool-variants"])
+def test_a_negative_count_is_refused(tmp_path, capsys, command, option):
+    first = ["--env", "GridWorld"] if command == "train" else ["--target", "hopper-backflip"]
+    with pytest.raises(SystemExit) as exit_:
+        main([command, *first, option, "-1", "--out", str(tmp_path), "-q"])
+    assert exit_.value.code == 2
+    assert ">= 0" in capsys.readouterr().err

@@ -5,7 +5,6 @@ run with them, and without them a round is sampled as before."""
 import dataclasses
 
 import numpy as np
-import pytest
 
 from groupwise.cli import main
 from groupwise.config import LoopConfig, PPOConfig, RewardConfig, RunConfig
@@ -54,12 +53,3 @@ def test_the_command_line_samples_from_variants(tmp_path):
         main(["train", "--env", "GridWorld", "--pool-variants", "3", "--out", str(out), *args]) == 0
     )
     assert RunConfig.load(out / "config.json").loop.pool_variants == 3
-
-
-@pytest.mark.parametrize("command", ["train", "case-study"])
-def test_a_negative_number_of_variants_is_refused(tmp_path, capsys, command):
-    first = ["--env", "GridWorld"] if command == "train" else ["--target", "hopper-backflip"]
-    with pytest.raises(SystemExit) as exit_:
-        main([command, *first, "--pool-variants", "-1", "--out", str(tmp_path), "-q"])
-    assert exit_.value.code == 2
-    assert ">= 0" in capsys.readouterr().err

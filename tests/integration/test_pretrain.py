@@ -135,12 +135,3 @@ def test_the_command_line_asks_for_pretraining(tmp_path):
     with (out / "rounds.csv").open() as handle:
         (row,) = csv.DictReader(handle)
     assert int(row["env_steps"]) >= 512  # one whole rollout of pre-training, no PPO after
-
-
-@pytest.mark.parametrize("command", ["train", "case-study"])
-def test_a_negative_pretraining_is_refused(tmp_path, capsys, command):
-    first = ["--env", "GridWorld"] if command == "train" else ["--target", "hopper-backflip"]
-    with pytest.raises(SystemExit) as exit_:
-        main([command, *first, "--pretrain-steps", "-1", "--out", str(tmp_path), "-q"])
-    assert exit_.value.code == 2
-    assert ">= 0" in capsys.readouterr().err
