@@ -113,7 +113,9 @@ def test_a_full_round_with_its_events(server):
         assert state["counts"]["pairs_total"] == 4
         assert wait_until(lambda: events.named("round"), timeout=30)[-1] == {"round": 1}
         phases = [s["phase"] for s in events.named("state")]
-        assert "training" in phases and phases[-1] == "ready"
+        # the stream sends the state as it is at each poll (~4 a second), so a training phase
+        # shorter than a poll may not appear in it; the end-round answer above showed it
+        assert phases[-1] == "ready"
         assert http.get(f"/api/sessions/{sid}/rounds/1/tree").status_code == 200
     events.stopped = True
     checkpoint = server.data / "sessions" / sid / "checkpoints" / "round-0000"
