@@ -15,7 +15,7 @@ from collections.abc import Callable
 
 from groupwise.config import RunConfig, TeacherConfig
 from groupwise.oracles.base import Feedback, Oracle, Teacher
-from groupwise.oracles.calibration import CalibratedTeacher
+from groupwise.oracles.calibration import CalibratedTeacher, calibrated_noise_sd
 from groupwise.oracles.group_decision import Perception, SimulatedTeacher
 from groupwise.oracles.imperfect import TEACHERS, Imperfection
 from groupwise.oracles.pairwise import PairwiseTeacher
@@ -25,6 +25,7 @@ from groupwise.query.strategies import (
     PairwiseQueries,
     QueryStrategy,
 )
+from groupwise.types import FloatArray
 
 
 def _imperfection(cfg: TeacherConfig) -> Imperfection:
@@ -34,6 +35,16 @@ def _imperfection(cfg: TeacherConfig) -> Imperfection:
         skip_quantile=cfg.skip_quantile,
         equal_fraction=cfg.equal_fraction,
     )
+
+
+def _perceived_noise(cfg: TeacherConfig) -> Callable[[FloatArray], float] | None:
+    """A calibrated teacher's per-behaviour noise sd for a pool's true returns (what it
+    sees as clear is relative to the noise it has on that pool), or None for SPEC §7's
+    fixed σ."""
+    error = cfg.label_error
+    if error is None:
+        return None
+    return lambda returns: calibrated_noise_sd(returns, error)
 
 
 STRATEGIES: dict[str, Callable[[RunConfig], QueryStrategy]] = {
@@ -59,9 +70,11 @@ STRATEGIES: dict[str, Callable[[RunConfig], QueryStrategy]] = {
         max_group=run.loop.max_group_size,
         clear=run.teacher.interactive_clear,
         noise_sd=run.loop.fragment_length * run.teacher.noise_sigma,
+        perceived_noise=_perceived_noise(run.teacher),
     ),
 }
 """How each DM chooses its queries (the interactive walks: `groupwise.query.interactive`)."""
+
 UNLIMITED = 2**31 - 1
 """A group-size limit that limits nothing (the reference code's Interactive-DM)."""
 

@@ -33,7 +33,11 @@ Three registered walks (`groupwise.oracles.ORACLES`) differ in what they rank an
 - "interactive-clear" — ours, a person who compares only what they can see: a partner must
   be clearly worse relative to both groups' spread and the perception noise (`clear_gaps`),
   and passes repeat (each allowing a behaviour one more use) until the round's queries are
-  used or no new comparison is left, so the budget is used.
+  used or no new comparison is left, so the budget is used. The perception noise is the
+  teacher's: L·σ, or a calibrated teacher's per-pool sd. Where no partner is clear at all
+  it walks as "interactive-mean" does (case-study pools, where most behaviours score 0,
+  otherwise asked nothing: 6 of 10 stand-up and splits runs derived no pair, when the
+  calibrated teacher's walk still judged clarity by SPEC §7's fixed σ).
 
 The higher-ranked group is always the left one. When the chain has more comparisons than
 the round's queries, an evenly spaced subset is asked, so the comparisons still span the

@@ -13,7 +13,7 @@ feedback. The three strategies of the paper's study:
   (the Interactive-DM; `groupwise.query.interactive`).
 """
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Literal, Protocol
 
@@ -26,6 +26,7 @@ from groupwise.preferences.judgement import MAX_GROUP
 from groupwise.query.groups import GroupCandidate, return_variance, suggest_groups
 from groupwise.query.interactive import chain_pairs, clear_gaps, evenly_spaced
 from groupwise.query.pairwise import select_pairs
+from groupwise.types import FloatArray
 
 
 @dataclass(frozen=True)
@@ -141,6 +142,10 @@ class InteractiveWalk(_TreeGroups):
     `clear` (a z, with `noise_sd` = L·σ) pairs it only with one clearly worse
     (`interactive.clear_gaps`) and repeats passes, each allowing one more use per behaviour,
     until `n_queries` comparisons are found or none is left; otherwise `passes` walks.
+    `perceived_noise`, when set, gives that noise sd per pool from its true returns instead
+    (a calibrated teacher's, `oracles.calibration.calibrated_noise_sd`). A pool in which no
+    partner is clear (every behaviour scores alike, as a case-study target's early pools
+    do) is walked as "interactive-mean" walks it, rather than asked nothing.
     """
 
     rank: Literal["mean", "sum"] = "mean"
@@ -148,6 +153,7 @@ class InteractiveWalk(_TreeGroups):
     passes: int = 1
     clear: float | None = None
     noise_sd: float = 0.0
+    perceived_noise: Callable[[FloatArray], float] | None = None
 
     def propose(self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator) -> list[Query]:
         del rng  # the walk is a function of the pool
@@ -163,12 +169,15 @@ class InteractiveWalk(_TreeGroups):
             pairs = chain_pairs(members, scores, self.max_uses, self.min_gap, self.passes)
         else:  # clear differences are differences of means: rank by the mean
             spreads = np.array([v.std() for v in values])
-            gaps = clear_gaps(means, spreads, self.noise_sd, self.clear)
+            noise_sd = self.noise_sd if self.perceived_noise is None else self.perceived_noise(true)
+            gaps = clear_gaps(means, spreads, noise_sd, self.clear)
             pairs, found = [], -1
             for uses in range(self.max_uses, self.max_uses + len(pool)):
                 pairs = chain_pairs(members, means, uses, gaps, passes=uses)
                 if len(pairs) >= n_queries or len(pairs) == found:
                     break
                 found = len(pairs)
+            if not pairs:  # nothing clear: the paper's text's walk
+                pairs = chain_pairs(members, means, self.max_uses)
         asked = [pairs[k] for k in evenly_spaced(len(pairs), n_queries)]
         return [Query(members[g], members[h]) for g, h in asked]

@@ -5,7 +5,9 @@ import numpy as np
 import pytest
 
 from groupwise.behaviour import TreeConfig
-from groupwise.oracles import Feedback
+from groupwise.config import RunConfig, TeacherConfig
+from groupwise.oracles import ORACLES, Feedback
+from groupwise.oracles.calibration import calibrated_noise_sd
 from groupwise.oracles.group_decision import Perception, SimulatedTeacher
 from groupwise.preferences.dataset import wrong_labels
 from groupwise.preferences.judgement import LEFT_BETTER
@@ -193,3 +195,36 @@ def test_clear_walk_uses_its_budget_and_never_pairs_groups_closer_than_its_thres
         assert left.mean() - right.mean() >= gap - 1e-9
     # the spec's walk leaves most of the same budget unasked on the same pool
     assert len(InteractiveWalk().propose(pool, budget, None)) < found
+
+
+def test_clear_walk_with_nothing_clear_walks_as_the_papers_text_does(make_pool):
+    # a case-study target's early pool: most behaviours score exactly 0
+    returns = np.zeros(60)
+    returns[:3] = [0.02, 0.01, 0.005]
+    pool = make_pool(returns.tolist(), seed=3)
+    clear = InteractiveWalk(clear=1.0, noise_sd=30 * 0.25)  # SPEC σ: nothing is clear
+    mean = InteractiveWalk()
+    queries = clear.propose(pool, 40, None)
+    assert queries and queries == mean.propose(pool, 40, None)
+
+
+def test_clear_walk_of_a_calibrated_teacher_sees_gaps_on_the_pools_scale(make_pool):
+    # returns of a hundredth of SPEC §7's noise: a calibrated teacher still tells them apart
+    pool = _random_pool(make_pool, n=120, seed=7)
+    small = make_pool((pool.true_returns / 100).tolist(), seed=7)
+    noise = calibrated_noise_sd(small.true_returns, 0.12)
+    walk = InteractiveWalk(
+        clear=1.0, noise_sd=30 * 0.25, perceived_noise=lambda r: calibrated_noise_sd(r, 0.12)
+    )
+    queries = walk.propose(small, 40, None)
+    assert len(queries) == 40
+    true = small.true_returns
+    for q in queries:
+        left, right = true[list(q.left)], true[list(q.right)]
+        assert (
+            left.mean() - right.mean()
+            >= np.sqrt((left.std() ** 2 + right.std() ** 2) / 2 + noise**2) - 1e-12
+        )
+    # the registered DM reads the noise from a calibrated teacher's config
+    cfg = RunConfig(teacher=TeacherConfig(label_error=0.12))
+    assert ORACLES["interactive-clear"](cfg).queries.propose(small, 40, None) == queries
