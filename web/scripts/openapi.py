@@ -10,8 +10,8 @@ import tempfile
 from pathlib import Path
 
 from groupwise.server.app import create_app
-from groupwise.server.schemas import limits
 from groupwise.server.config import AppConfig
+from groupwise.server.schemas import limits
 
 with tempfile.TemporaryDirectory() as tmp:
     app = create_app(AppConfig(data_dir=Path(tmp), start_worker=False))
