@@ -18,6 +18,7 @@ from pydantic import ConfigDict, Field, TypeAdapter, model_validator
 from pydantic.dataclasses import dataclass
 
 from groupwise.preferences.judgement import MAX_GROUP
+from groupwise.query.groups import SuggestionRank
 
 _STRICT = ConfigDict(extra="forbid", use_attribute_docstrings=True)
 """Unknown fields fail; each field's docstring is its description (OpenAPI, the page's help)."""
@@ -216,6 +217,10 @@ class LoopConfig:
     to this share of half its range."""
     candidate_pairs: PositiveInt = 10
     """Pairwise active learning: random candidate pairs scored per query."""
+    suggestion_rank: SuggestionRank = "variance"
+    """The order of the group suggestions (the Groupwise-DM's queries, the app's list):
+    by SPEC §5's group-variance score, or the most promising groups first, each against its
+    most disputed partners (`query.groups`; ours, issue 20)."""
     eval_episodes: Annotated[int, Field(ge=0)] = 5
     """Episodes of the true reward used to measure the policy after each round."""
     pair_derivation: PairDerivation = "cover"

@@ -80,7 +80,7 @@ def add_training_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def add_pool_arguments(parser: argparse.ArgumentParser) -> None:
-    """--pool-variants (`LoopConfig.pool_variants`)."""
+    """--pool-variants and --suggestions (`LoopConfig.pool_variants`, `.suggestion_rank`)."""
     parser.add_argument(
         "--pool-variants",
         type=int_at_least(0),
@@ -88,6 +88,13 @@ def add_pool_arguments(parser: argparse.ArgumentParser) -> None:
         help="sample half of each pool's windows from K variants of the current policy, each "
         "pushing its actions one way (offsets drawn anew each round), so that the pools show "
         "behaviours the policy rarely reaches (default 0: the policy alone)",
+    )
+    parser.add_argument(
+        "--suggestions",
+        choices=("variance", "optimistic"),
+        help="the order of the group suggestions (the Groupwise-DM's queries): SPEC's "
+        "group-variance score (default), or the most promising groups first, each against "
+        "the partners the reward ensemble disputes most",
     )
 
 

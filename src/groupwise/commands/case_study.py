@@ -144,6 +144,7 @@ def run(args: argparse.Namespace) -> int:
                 "pair_cap": pair_cap(args.pairs, target.name, args.preferences),
                 "seed": args.seed,
                 "pool_variants": args.pool_variants or 0,
+                "suggestion_rank": args.suggestions or "variance",
             }
         )
         reward = dataclasses.replace(base.reward, use_actions=args.reward_inputs == "obs-act")

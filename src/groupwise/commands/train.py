@@ -28,6 +28,7 @@ FROM_SESSION_EXCLUDES = (
     "teacher_error",
     "pretrain_steps",
     "pool_variants",
+    "suggestions",
 )
 """Options --from-session takes from DIR itself (its config.json)."""
 
@@ -113,6 +114,7 @@ def run(args: argparse.Namespace) -> int:
         "seed": args.seed,
         "final_steps": args.final_steps,
         "pool_variants": args.pool_variants,
+        "suggestion_rank": args.suggestions,
     }
     given = {key: value for key, value in overrides.items() if value is not None}
     try:

@@ -23,7 +23,12 @@ from groupwise.behaviour import group_candidates
 from groupwise.config import TreeConfig
 from groupwise.pool.behaviours import BehaviourPool
 from groupwise.preferences.judgement import MAX_GROUP
-from groupwise.query.groups import GroupCandidate, return_variance, suggest_groups
+from groupwise.query.groups import (
+    GroupCandidate,
+    SuggestionRank,
+    return_variance,
+    suggest_groups,
+)
 from groupwise.query.interactive import chain_pairs, clear_gaps, evenly_spaced
 from groupwise.query.pairwise import select_pairs
 from groupwise.types import FloatArray
@@ -113,10 +118,12 @@ class GroupSuggestions(_TreeGroups):
     With `refill` a list that is used up is followed by the next one over the pairs not yet
     asked (a pool of 2 × queries behaviours has far fewer candidate nodes than queries, so
     one list rarely covers the round). The intra term uses `pool.step_variance`; a pool
-    without it falls back to Var_k[R_k(f)] / L (`query.groups.return_variance`).
+    without it falls back to Var_k[R_k(f)] / L (`query.groups.return_variance`). `rank`
+    "optimistic" takes the most promising groups first (`query.groups`).
     """
 
     refill: bool = True
+    rank: SuggestionRank = "variance"
 
     def propose(self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator) -> list[Query]:
         del rng  # the list is a function of the pool
@@ -127,7 +134,13 @@ class GroupSuggestions(_TreeGroups):
         if intra is None:
             intra = return_variance(pool.predicted_returns, pool.fragments[0].length)
         suggestions = suggest_groups(
-            pool.predicted_returns, intra, candidates, n_queries, self.max_uses, self.refill
+            pool.predicted_returns,
+            intra,
+            candidates,
+            n_queries,
+            self.max_uses,
+            self.refill,
+            self.rank,
         )
         return [Query(s.left.members, s.right.members) for s in suggestions]
 

@@ -41,8 +41,9 @@ SUMMARY_HEADER = (
 
 
 def setup_label(run: Path) -> str:
-    """The run's decision-maker, with the exploration it ran with: "groupwise",
-    "groupwise · 8 pool variants", "groupwise · pre-training 100,000"."""
+    """The run's decision-maker, with the exploration and suggestion order it ran with:
+    "groupwise", "groupwise · 8 pool variants", "groupwise · pre-training 100,000",
+    "groupwise · optimistic suggestions"."""
     summary, _ = _read(run)
     cfg = json.loads((run / "config.json").read_text())
     parts = [summary["decision_maker"]]
@@ -50,6 +51,8 @@ def setup_label(run: Path) -> str:
         parts.append(f"{variants} pool variants")
     if pretrain := cfg.get("training", {}).get("pretrain_steps", 0):
         parts.append(f"pre-training {pretrain:,}")
+    if cfg["loop"].get("suggestion_rank", "variance") != "variance":
+        parts.append(f"{cfg['loop']['suggestion_rank']} suggestions")
     return " · ".join(parts)
 
 

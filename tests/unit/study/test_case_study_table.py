@@ -8,7 +8,9 @@ from pathlib import Path
 from groupwise.study.case_study_table import setup_label, summary_rows
 
 
-def _run(path: Path, variants: int, pretrain: int, pool_sd: list[float] | None) -> Path:
+def _run(
+    path: Path, variants: int, pretrain: int, pool_sd: list[float] | None, rank: str = "variance"
+) -> Path:
     path.mkdir()
     final = {"success_rate": 0.6, "stretch_rate": 0.0}
     summary = {
@@ -20,7 +22,10 @@ def _run(path: Path, variants: int, pretrain: int, pool_sd: list[float] | None) 
         "preference_pairs": 600,
     }
     (path / "summary.json").write_text(json.dumps(summary))
-    config = {"loop": {"pool_variants": variants}, "training": {"pretrain_steps": pretrain}}
+    config = {
+        "loop": {"pool_variants": variants, "suggestion_rank": rank},
+        "training": {"pretrain_steps": pretrain},
+    }
     (path / "config.json").write_text(json.dumps(config))
     columns = ["round", "pairs_total"] + (["pool_score_sd", "pool_score_max"] if pool_sd else [])
     with (path / "case-study.csv").open("w", newline="") as handle:
@@ -39,6 +44,9 @@ def test_runs_are_labelled_by_the_exploration_they_ran_with(tmp_path):
     assert setup_label(_run(tmp_path / "b", 8, 0, None)) == "groupwise · 8 pool variants"
     assert setup_label(_run(tmp_path / "c", 0, 100_000, None)) == (
         "groupwise · pre-training 100,000"
+    )
+    assert setup_label(_run(tmp_path / "d", 8, 0, None, "optimistic")) == (
+        "groupwise · 8 pool variants · optimistic suggestions"
     )
 
 
