@@ -157,40 +157,6 @@ TARGETS: dict[str, Target] = {
 """The case studies' targets by name (`groupwise case-study --target`)."""
 
 
-PITCH_INDEX = 1
-"""Where the root's pitch sits in the observation of Hopper, Walker2d and HalfCheetah v5:
-qpos without x (height, pitch, the joints), then qvel."""
-
-
-class PitchOnCircle(gym.ObservationWrapper[Any, Any, Any]):
-    """The root's pitch observed as (cos, sin), not as the angle MuJoCo integrates.
-
-    The stock observation carries the pitch unbounded: after one backflip it reads −2π,
-    after two −4π. A reward model trained on windows that end flipped can pay (or charge)
-    the angle itself, far outside the range it saw, where only the rotation counted
-    (measured on the backflip, docs/case-studies.md, "The pitch on the circle"). On the
-    circle a pose observes the same whichever turn it is reached on; the pitch's rate stays
-    in qvel. The observation grows by one.
-    """
-
-    def __init__(self, env: gym.Env[Any, Any], index: int = PITCH_INDEX) -> None:
-        super().__init__(env)
-        space = env.observation_space
-        if not isinstance(space, gym.spaces.Box) or len(space.shape) != 1:
-            raise TypeError(f"need a flat Box observation, got {space}")
-        self.index = index
-        low = np.insert(space.low, index + 1, -1.0)
-        high = np.insert(space.high, index + 1, 1.0)
-        low[index : index + 2], high[index : index + 2] = -1.0, 1.0
-        self.observation_space = gym.spaces.Box(low, high, dtype=space.dtype)
-
-    def observation(self, observation: Any) -> Any:
-        pitch = observation[self.index]
-        circle = np.insert(observation, self.index + 1, np.sin(pitch))
-        circle[self.index] = np.cos(pitch)
-        return circle.astype(self.observation_space.dtype, copy=False)
-
-
 class TargetScoreInfo(gym.Wrapper[Any, Any, Any, Any]):
     """Zero reward; the target's step score in `info` as the true reward (module docstring)."""
 
@@ -225,18 +191,14 @@ def _make(
     render_mode: str | None,
     width: int,
     height: int,
-    pitch_on_circle: bool = True,
     **kwargs: Any,
 ) -> gym.Env[Any, Any]:
     """`env_class` is "module:Class", imported only here: importing `groupwise.envs` must
-    not need Gymnasium's v5 MuJoCo envs (the peer benchmark's imitation venv has v4 only).
-    `pitch_on_circle`: observe the root's pitch as (cos, sin) (`PitchOnCircle`); False
-    gives the stock observation, as runs before 2026-12-03 had it."""
+    not need Gymnasium's v5 MuJoCo envs (the peer benchmark's imitation venv has v4 only)."""
     module, _, name = env_class.partition(":")
     base_class: type[MujocoEnv] = getattr(importlib.import_module(module), name)
     env = base_class(render_mode=render_mode, width=width, height=height, **kwargs)
-    scored = TargetScoreInfo(FastMujocoRendering(env, tracked_body="torso"), TARGETS[target])
-    return PitchOnCircle(scored) if pitch_on_circle else scored
+    return TargetScoreInfo(FastMujocoRendering(env, tracked_body="torso"), TARGETS[target])
 
 
 def make_hopper_backflip(

@@ -23,7 +23,6 @@ from groupwise.envs import (
     resolve_id,
 )
 from groupwise.envs.scorers import upness, wrap_angle
-from groupwise.envs.targets import PITCH_INDEX, PitchOnCircle
 from groupwise.oracles import Feedback, PairwiseTeacher, Perception, SimulatedTeacher
 from groupwise.pool.behaviours import BehaviourPool
 from groupwise.pool.fragments import Trajectory, tile_fragments
@@ -125,38 +124,6 @@ def test_target_env_renders(name: str) -> None:
     frame = env.render()
     assert frame.shape == (48, 64, 3) and frame.std() > 5.0
     env.close()
-
-
-@pytest.mark.parametrize("name", sorted(TARGET_ENVS))
-def test_target_env_observes_the_pitch_on_the_circle(name: str) -> None:
-    env, stock = make_env(name), make_env(name, pitch_on_circle=False)
-    obs, _ = env.reset(seed=0)
-    raw, _ = stock.reset(seed=0)
-    pitch = raw[PITCH_INDEX]
-    assert pitch != 0.0  # the reset's noise tilts it
-    assert env.observation_space.shape == (len(raw) + 1,)
-    assert env.observation_space.contains(obs)
-    circle = [PITCH_INDEX, PITCH_INDEX + 1]
-    np.testing.assert_allclose(obs[circle], [math.cos(pitch), math.sin(pitch)])
-    np.testing.assert_allclose(np.delete(obs, circle), np.delete(raw, PITCH_INDEX))
-    env.close()
-    stock.close()
-
-
-def test_a_pose_one_turn_on_observes_the_same(hopper: gym.Env) -> None:
-    circle = hopper
-    while not isinstance(circle, PitchOnCircle):
-        circle = circle.env
-    base = hopper.unwrapped
-    qpos, qvel = base.data.qpos.copy(), base.data.qvel.copy()
-    qpos[2] = 0.3
-    base.set_state(qpos, qvel)
-    before, raw_before = circle.observation(base._get_obs()), base._get_obs()
-    qpos[2] -= 2 * math.pi  # one backward turn later, the same pose
-    base.set_state(qpos, qvel)
-    after, raw_after = circle.observation(base._get_obs()), base._get_obs()
-    assert raw_after[PITCH_INDEX] == pytest.approx(raw_before[PITCH_INDEX] - 2 * math.pi)
-    np.testing.assert_allclose(after, before, atol=1e-12)
 
 
 # ---------------------------------------------------------------- the hopper's backflip
