@@ -49,6 +49,8 @@ VARIANTS: dict[str, dict[str, dict[str, Any]]] = {
     "joint": {"reward": {"action_term": "joint"}},  # SPEC §3's one MLP, the old default
     "additive": {"reward": {"action_term": "additive"}},
     "cost": {"reward": {"action_term": "cost"}},
+    # RUNE's exploration: PPO's reward adds the members' sd, halved each round
+    "bonus": {"reward": {"exploration_bonus": 1.0}},
 }
 """Variant name → {"loop" | "reward" | "ppo": field overrides} on top of the spec."""
 

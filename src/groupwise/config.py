@@ -85,6 +85,15 @@ class RewardConfig:
     standardise_output: bool = False
     """After each fit, centre and scale every member's reward to mean 0, sd 1 over the
     dataset's steps in the reward PPO sees (`RewardEnsemble.standardise_output`)."""
+    exploration_bonus: Annotated[float, Field(ge=0)] = 0.0
+    """β: PPO's reward adds β_r times the members' sd, their disagreement, to their mean
+    (RUNE, Liang et al. 2022: the policy seeks out states the reward model is unsure of, so
+    the next pools hold behaviour the teacher has not yet judged). The members are then
+    standardised after each fit (as with `standardise_output`) so that their sd compares
+    rewards, not offsets. 0 (default) trains on the mean alone."""
+    exploration_decay: Annotated[float, Field(gt=0, le=1)] = 0.5
+    """β_r = β · decay^r after a fit whose newest pairs are round r's: the bonus fades as
+    the reward model learns."""
     use_actions: bool = True
     """The members see [obs ; act] (SPEC §3); off, the observation alone. Neither wins on
     every env (ARCHITECTURE.md, "Reward inputs"): observation-only members stopped Pendulum-v1

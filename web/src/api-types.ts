@@ -1381,6 +1381,23 @@ export interface components {
              */
             epochs: number;
             /**
+             * Exploration Bonus
+             * @description β: PPO's reward adds β_r times the members' sd, their disagreement, to their mean
+             *     (RUNE, Liang et al. 2022: the policy seeks out states the reward model is unsure of, so
+             *     the next pools hold behaviour the teacher has not yet judged). The members are then
+             *     standardised after each fit (as with `standardise_output`) so that their sd compares
+             *     rewards, not offsets. 0 (default) trains on the mean alone.
+             * @default 0
+             */
+            exploration_bonus: number;
+            /**
+             * Exploration Decay
+             * @description β_r = β · decay^r after a fit whose newest pairs are round r's: the bonus fades as
+             *     the reward model learns.
+             * @default 0.5
+             */
+            exploration_decay: number;
+            /**
              * Hidden Sizes
              * @description Hidden layer widths of each member's MLP.
              * @default [
@@ -1560,6 +1577,8 @@ export interface components {
              *         "bootstrap": true,
              *         "ensemble_size": 3,
              *         "epochs": 3,
+             *         "exploration_bonus": 0,
+             *         "exploration_decay": 0.5,
              *         "hidden_sizes": [
              *           64,
              *           64

@@ -34,14 +34,26 @@ positive_int = int_at_least(1)
 non_negative_int = int_at_least(0)
 
 
-def positive_float(text: str) -> float:
-    """An argparse type: a number > 0, with a one-line message otherwise."""
+def _number(text: str) -> float:
     try:
-        value = float(text)
+        return float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not value > 0 or value == float("inf"):
+
+
+def positive_float(text: str) -> float:
+    """An argparse type: a number > 0, with a one-line message otherwise."""
+    value = _number(text)
+    if not 0 < value < float("inf"):
         raise argparse.ArgumentTypeError(f"expected a finite number > 0, got {text}")
+    return value
+
+
+def non_negative_float(text: str) -> float:
+    """An argparse type: a finite number >= 0, with a one-line message otherwise."""
+    value = _number(text)
+    if not 0 <= value < float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a finite number >= 0, got {text}")
     return value
 
 
@@ -80,7 +92,8 @@ def add_training_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def add_pool_arguments(parser: argparse.ArgumentParser) -> None:
-    """--pool-variants and --suggestions (`LoopConfig.pool_variants`, `.suggestion_rank`)."""
+    """--pool-variants, --suggestions and --reward-bonus (`LoopConfig.pool_variants`,
+    `.suggestion_rank`, `RewardConfig.exploration_bonus`)."""
     parser.add_argument(
         "--pool-variants",
         type=int_at_least(0),
@@ -95,6 +108,13 @@ def add_pool_arguments(parser: argparse.ArgumentParser) -> None:
         help="the order of the group suggestions (the Groupwise-DM's queries): SPEC's "
         "group-variance score (default), or the most promising groups first, each against "
         "the partners the reward ensemble disputes most",
+    )
+    parser.add_argument(
+        "--reward-bonus",
+        type=non_negative_float,
+        metavar="B",
+        help="PPO's reward adds B times the reward members' disagreement (their sd), halved "
+        "every round, so the policy seeks what the teacher has not judged yet (default 0)",
     )
 
 

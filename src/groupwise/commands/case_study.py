@@ -147,7 +147,11 @@ def run(args: argparse.Namespace) -> int:
                 "suggestion_rank": args.suggestions or "variance",
             }
         )
-        reward = dataclasses.replace(base.reward, use_actions=args.reward_inputs == "obs-act")
+        reward = dataclasses.replace(
+            base.reward,
+            use_actions=args.reward_inputs == "obs-act",
+            exploration_bonus=args.reward_bonus or 0.0,
+        )
         training = dataclasses.replace(base.training, pretrain_steps=args.pretrain_steps)
         cfg = apply_teacher_options(
             dataclasses.replace(

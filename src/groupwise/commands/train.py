@@ -29,6 +29,7 @@ FROM_SESSION_EXCLUDES = (
     "pretrain_steps",
     "pool_variants",
     "suggestions",
+    "reward_bonus",
 )
 """Options --from-session takes from DIR itself (its config.json)."""
 
@@ -130,6 +131,9 @@ def run(args: argparse.Namespace) -> int:
         if args.pretrain_steps is not None:
             training = dataclasses.replace(cfg.training, pretrain_steps=args.pretrain_steps)
             cfg = dataclasses.replace(cfg, training=training)
+        if args.reward_bonus is not None:
+            reward = dataclasses.replace(cfg.reward, exploration_bonus=args.reward_bonus)
+            cfg = dataclasses.replace(cfg, reward=reward)
     except (ValueError, OSError) as error:
         raise UsageError(str(error)) from None
     out = writable_dir(args.out)

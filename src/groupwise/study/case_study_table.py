@@ -43,7 +43,7 @@ SUMMARY_HEADER = (
 def setup_label(run: Path) -> str:
     """The run's decision-maker, with the exploration and suggestion order it ran with:
     "groupwise", "groupwise · 8 pool variants", "groupwise · pre-training 100,000",
-    "groupwise · optimistic suggestions"."""
+    "groupwise · optimistic suggestions", "groupwise · reward bonus 1"."""
     summary, _ = _read(run)
     cfg = json.loads((run / "config.json").read_text())
     parts = [summary["decision_maker"]]
@@ -53,6 +53,8 @@ def setup_label(run: Path) -> str:
         parts.append(f"pre-training {pretrain:,}")
     if cfg["loop"].get("suggestion_rank", "variance") != "variance":
         parts.append(f"{cfg['loop']['suggestion_rank']} suggestions")
+    if bonus := cfg.get("reward", {}).get("exploration_bonus", 0):
+        parts.append(f"reward bonus {bonus:g}")
     return " · ".join(parts)
 
 

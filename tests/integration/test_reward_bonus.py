@@ -1,0 +1,26 @@
+"""`--reward-bonus`: a real run's reward checkpoints carry the fading exploration bonus."""
+
+import pytest
+
+from groupwise.cli import main
+from groupwise.config import RunConfig
+from groupwise.reward import RewardEnsemble
+from groupwise.run.checkpoint import REWARD_FILE, checkpoint_dir
+
+
+def test_the_command_line_sets_a_bonus_that_halves_each_round(tmp_path):
+    out = tmp_path / "train"
+    args = ["--comparisons", "20", "--rounds", "2", "--steps", "512", "--seed", "1", "-q"]
+    command = ["train", "--env", "GridWorld", "--dm", "pairwise", "--reward-bonus", "2"]
+    assert main([*command, "--out", str(out), *args]) == 0
+    assert RunConfig.load(out / "config.json").reward.exploration_bonus == 2.0
+    bonuses = [RewardEnsemble.load(checkpoint_dir(out, r) / REWARD_FILE).bonus for r in (0, 1)]
+    assert bonuses == [2.0, 1.0]
+
+
+@pytest.mark.parametrize("value", ["-1", "nan", "inf", "x"])
+def test_a_bad_bonus_is_refused_with_a_message(tmp_path, capsys, value):
+    with pytest.raises(SystemExit) as exit_info:
+        main(["train", "--env", "GridWorld", "--reward-bonus", value, "--out", str(tmp_path)])
+    assert exit_info.value.code == 2
+    assert "--reward-bonus" in capsys.readouterr().err
