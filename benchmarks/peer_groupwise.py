@@ -51,8 +51,11 @@ VARIANTS: dict[str, dict[str, dict[str, Any]]] = {
     "cost": {"reward": {"action_term": "cost"}},
     # RUNE's exploration: PPO's reward adds the members' sd, halved each round
     "bonus": {"reward": {"exploration_bonus": 1.0}},
+    # the ceiling: the same loop and labels, but PPO on the env's own reward
+    "true-reward": {},
 }
 """Variant name → {"loop" | "reward" | "ppo": field overrides} on top of the spec."""
+TRUE_REWARD_VARIANT = "true-reward"
 
 
 def evaluate(agent: PPOAgent, make, seeds: list[int]) -> list[float]:
@@ -125,7 +128,10 @@ def main(spec: dict) -> dict:
         **changes.get("ppo", {}),
     )
     ensemble = RewardEnsemble.for_env(make, reward, np.random.default_rng([seed, 2**20]))
-    agent = PPOAgent(make, ppo, seed=seed, reward_fn=ensemble.mean_reward)
+    on_true_reward = variant == TRUE_REWARD_VARIANT
+    agent = PPOAgent(
+        make, ppo, seed=seed, reward_fn=None if on_true_reward else ensemble.mean_reward
+    )
     ppo_seconds = [0.0]
     learn = agent.learn
 
