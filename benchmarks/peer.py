@@ -3,7 +3,7 @@
     python -m benchmarks peer                          # every env, 5 seeds, both sides
     python benchmarks/peer.py --envs Pendulum-v1 --seeds 3 --variants default,epochs10
     python benchmarks/peer.py --no-imitation --variants ...   # ablations of groupwise only
-    python benchmarks/peer.py --no-imitation --variants true-reward   # the ceiling: PPO on the true reward
+    python benchmarks/peer.py --no-imitation --variants true-reward  # PPO on the true reward
     python benchmarks/peer.py --envs Pendulum-v1 --noise spec  # SPEC §7's noise on both sides
 
 Same budget on both sides: 200 pairwise comparisons in 5 rounds (20 in round 0, then 45 a
