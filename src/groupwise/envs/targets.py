@@ -21,7 +21,7 @@ from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
 
 from groupwise.envs.body_state import BodyState, StateReader
 from groupwise.envs.rendering import DEFAULT_FRAME_SIZE, FastMujocoRendering
-from groupwise.envs.scorers import WALKER_FEET, BackflipScorer, SplitsScorer, StandSitScorer
+from groupwise.envs.scorers import BackflipScorer, SplitsScorer, StandSitScorer
 from groupwise.envs.true_reward import TRUE_REWARD_KEY
 from groupwise.types import FloatArray
 
@@ -76,10 +76,6 @@ class Target:
     """The definition in one paragraph."""
     start: Callable[[BodyState, float], EpisodeScorer]
     """A fresh scorer from an episode's first state and the env's step duration, s."""
-    observed_geoms: tuple[str, ...] = ()
-    """Capsules whose lowest point above the floor, m, the env appends to the base env's
-    observation (`GeomHeights`): what the score reads and a person sees in the clip, but the
-    stock observation carries only through the joint angles' kinematics."""
 
     def step_scores(self, states: Sequence[BodyState], dt: float) -> FloatArray:
         """Per-step scores (T,) of an episode given as its T + 1 states, first state first."""
@@ -155,43 +151,10 @@ TARGETS: dict[str, Target] = {
                 "uprightness × share of feet down (its most, π/2, is a split held)"
             ),
             start=SplitsScorer,
-            observed_geoms=WALKER_FEET,
         ),
     )
 }
 """The case studies' targets by name (`groupwise case-study --target`)."""
-
-
-class GeomHeights(gym.ObservationWrapper[Any, Any, Any]):
-    """The base observation with the lowest point above the floor, m, of named capsules
-    appended, in the order named (e.g. the walker's feet: on the floor at about 0)."""
-
-    def __init__(self, env: gym.Env[Any, Any], geoms: Sequence[str]) -> None:
-        super().__init__(env)
-        base = env.unwrapped
-        space = env.observation_space
-        if not isinstance(base, MujocoEnv):
-            raise TypeError(f"geom heights need a MuJoCo env, got {type(base).__name__}")
-        if not isinstance(space, gym.spaces.Box) or len(space.shape) != 1:
-            raise TypeError(f"need a flat Box observation, got {space}")
-        self._read = StateReader(base)
-        self.geoms = tuple(geoms)
-        unknown = set(self.geoms) - set(self._read().bottoms)
-        if unknown:
-            raise ValueError(f"no capsule geoms named {sorted(unknown)}")
-        extra = np.full(len(self.geoms), np.inf, dtype=space.dtype)
-        self.observation_space = gym.spaces.Box(
-            np.concatenate([space.low, -extra]),
-            np.concatenate([space.high, extra]),
-            dtype=space.dtype,
-        )
-
-    def observation(self, observation: Any) -> Any:
-        bottoms = self._read().bottoms
-        heights = np.array([bottoms[geom] for geom in self.geoms])
-        return np.concatenate([observation, heights]).astype(
-            self.observation_space.dtype, copy=False
-        )
 
 
 class TargetScoreInfo(gym.Wrapper[Any, Any, Any, Any]):
@@ -235,9 +198,7 @@ def _make(
     module, _, name = env_class.partition(":")
     base_class: type[MujocoEnv] = getattr(importlib.import_module(module), name)
     env = base_class(render_mode=render_mode, width=width, height=height, **kwargs)
-    scored = TargetScoreInfo(FastMujocoRendering(env, tracked_body="torso"), TARGETS[target])
-    geoms = TARGETS[target].observed_geoms
-    return GeomHeights(scored, geoms) if geoms else scored
+    return TargetScoreInfo(FastMujocoRendering(env, tracked_body="torso"), TARGETS[target])
 
 
 def make_hopper_backflip(

@@ -23,7 +23,6 @@ from groupwise.envs import (
     resolve_id,
 )
 from groupwise.envs.scorers import upness, wrap_angle
-from groupwise.envs.targets import GeomHeights
 from groupwise.oracles import Feedback, PairwiseTeacher, Perception, SimulatedTeacher
 from groupwise.pool.behaviours import BehaviourPool
 from groupwise.pool.fragments import Trajectory, tile_fragments
@@ -288,31 +287,6 @@ def test_fallen_or_one_footed_splits_score_below_the_threshold(walker: gym.Env) 
     assert target.episode_score([start] + [one_foot] * 500, dt) == 0.0
     narrow = _walker(walker, -20, 0, -40)
     assert target.episode_score([start] + [narrow] * 500, dt) == 0.0
-
-
-def test_walker_observes_its_feet_heights() -> None:
-    env = make_env("Walker2d-splits")
-    stock = make_standard_env("Walker2d").observation_space.shape[0]
-    obs, _ = env.reset(seed=0)
-    assert obs.shape == env.observation_space.shape == (stock + 2,)
-    base = env.unwrapped
-    qpos = base.init_qpos.copy()
-    qpos[6], qpos[8] = math.radians(-90), 0.0  # the left leg lifted straight behind
-    base.set_state(qpos, np.zeros(base.model.nv))
-    heights = env
-    while not isinstance(heights, GeomHeights):
-        heights = heights.env  # type: ignore[attr-defined]
-    right, left = heights.observation(np.zeros(stock))[-2:]
-    state = BodyState.read(base)
-    assert (right, left) == pytest.approx(
-        (state.bottoms["foot_geom"], state.bottoms["foot_left_geom"]), abs=1e-6
-    )
-    assert left > right + 0.3
-
-
-def test_geom_heights_refuse_an_unknown_geom() -> None:
-    with pytest.raises(ValueError, match="no capsule geoms named"):
-        GeomHeights(make_env("Walker2d-splits"), ["hand_geom"])
 
 
 # ---------------------------------------------------------------- simulated teachers
