@@ -5,6 +5,7 @@ run with them, and without them a round is sampled as before."""
 import dataclasses
 
 import numpy as np
+import pytest
 
 from groupwise.cli import main
 from groupwise.config import LoopConfig, PPOConfig, RewardConfig, RunConfig
@@ -53,3 +54,15 @@ def test_the_command_line_samples_from_variants(tmp_path):
         main(["train", "--env", "GridWorld", "--pool-variants", "3", "--out", str(out), *args]) == 0
     )
     assert RunConfig.load(out / "config.json").loop.pool_variants == 3
+
+
+def test_the_command_line_sets_the_pool_size(tmp_path):
+    out = tmp_path / "train"
+    args = ["--comparisons", "4", "--rounds", "1", "--steps", "0", "--seed", "1", "-q"]
+    assert main(["train", "--env", "GridWorld", "--pool-size", "30", "--out", str(out), *args]) == 0
+    cfg = RunConfig.load(out / "config.json")
+    assert cfg.loop.pool_size == 30
+    offer = begin_round(Run.create(cfg), PairwiseQueries(), 4)
+    assert len(offer.pool.fragments) == 30  # not twice the round's 4 comparisons
+    with pytest.raises(SystemExit):
+        main(["train", "--env", "GridWorld", "--pool-size", "1", "--out", str(out), *args])

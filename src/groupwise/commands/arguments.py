@@ -92,8 +92,15 @@ def add_training_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def add_pool_arguments(parser: argparse.ArgumentParser) -> None:
-    """--pool-variants, --suggestions and --reward-bonus (`LoopConfig.pool_variants`,
-    `.suggestion_rank`, `RewardConfig.exploration_bonus`)."""
+    """--pool-size, --pool-variants, --suggestions and --reward-bonus (`LoopConfig.pool_size`,
+    `.pool_variants`, `.suggestion_rank`, `RewardConfig.exploration_bonus`)."""
+    parser.add_argument(
+        "--pool-size",
+        type=int_at_least(2),
+        metavar="N",
+        help="behaviours in every round's pool, as the app's pool size (default: twice the "
+        "round's comparisons, at most 200)",
+    )
     parser.add_argument(
         "--pool-variants",
         type=int_at_least(0),

@@ -143,6 +143,7 @@ def run(args: argparse.Namespace) -> int:
                 "eval_episodes": 0,  # the case study scores the target itself
                 "pair_cap": pair_cap(args.pairs, target.name, args.preferences),
                 "seed": args.seed,
+                "pool_size": args.pool_size,
                 "pool_variants": args.pool_variants or 0,
                 "suggestion_rank": args.suggestions or "variance",
             }

@@ -27,6 +27,7 @@ FROM_SESSION_EXCLUDES = (
     "teacher_pace",
     "teacher_error",
     "pretrain_steps",
+    "pool_size",
     "pool_variants",
     "suggestions",
     "reward_bonus",
@@ -114,6 +115,7 @@ def run(args: argparse.Namespace) -> int:
         "steps": args.steps,
         "seed": args.seed,
         "final_steps": args.final_steps,
+        "pool_size": args.pool_size,
         "pool_variants": args.pool_variants,
         "suggestion_rank": args.suggestions,
     }
