@@ -43,10 +43,13 @@ SUMMARY_HEADER = (
 def setup_label(run: Path) -> str:
     """The run's decision-maker, with the exploration and suggestion order it ran with:
     "groupwise", "groupwise · 8 pool variants", "groupwise · pre-training 100,000",
-    "groupwise · optimistic suggestions", "groupwise · reward bonus 1"."""
+    "groupwise · optimistic suggestions", "groupwise · reward bonus 1", "groupwise · pools
+    of 500"."""
     summary, _ = _read(run)
     cfg = json.loads((run / "config.json").read_text())
     parts = [summary["decision_maker"]]
+    if size := cfg["loop"].get("pool_size"):
+        parts.append(f"pools of {size:,}")
     if variants := cfg["loop"].get("pool_variants", 0):
         parts.append(f"{variants} pool variants")
     if pretrain := cfg.get("training", {}).get("pretrain_steps", 0):

@@ -9,7 +9,12 @@ from groupwise.study.case_study_table import setup_label, summary_rows
 
 
 def _run(
-    path: Path, variants: int, pretrain: int, pool_sd: list[float] | None, rank: str = "variance"
+    path: Path,
+    variants: int,
+    pretrain: int,
+    pool_sd: list[float] | None,
+    rank: str = "variance",
+    pool_size: int | None = None,
 ) -> Path:
     path.mkdir()
     final = {"success_rate": 0.6, "stretch_rate": 0.0}
@@ -23,7 +28,7 @@ def _run(
     }
     (path / "summary.json").write_text(json.dumps(summary))
     config = {
-        "loop": {"pool_variants": variants, "suggestion_rank": rank},
+        "loop": {"pool_variants": variants, "suggestion_rank": rank, "pool_size": pool_size},
         "training": {"pretrain_steps": pretrain},
     }
     (path / "config.json").write_text(json.dumps(config))
@@ -47,6 +52,9 @@ def test_runs_are_labelled_by_the_exploration_they_ran_with(tmp_path):
     )
     assert setup_label(_run(tmp_path / "d", 8, 0, None, "optimistic")) == (
         "groupwise · 8 pool variants · optimistic suggestions"
+    )
+    assert setup_label(_run(tmp_path / "e", 0, 0, None, pool_size=500)) == (
+        "groupwise · pools of 500"
     )
 
 
