@@ -304,6 +304,15 @@ class TrainingConfig:
     """PPO steps of unsupervised pre-training before round 0, paid a state-entropy bonus
     instead of the learned reward (`groupwise.run.pretrain`, PEBBLE), so that the first
     pools show more different behaviours; 0: none (issue 20)."""
+    continue_from: Literal["last", "preferred"] = "last"
+    """Which policy each round's PPO trains on from: "last", the previous round's (SPEC §3);
+    "preferred", the one the run's simulated teacher prefers so far: before round r >= 2 it
+    compares round r − 1's greedy episodes with those of the policy round r − 1 began from,
+    and the winner trains on (`groupwise.run.keep`; issue 20: runs that had learned their
+    target lost it a round later). Headless runs only; in the app the person picks among
+    the rounds' agents on the results page."""
+    continue_episodes: PositiveInt = 3
+    """Greedy episodes of each of the two policies the teacher compares ("preferred")."""
     pretrain_k: Annotated[int, Field(ge=1, le=100)] = 5
     """k of the pre-training's k-nearest-neighbour entropy estimate (PEBBLE's 5)."""
     pretrain_states: Annotated[int, Field(ge=10, le=1_000_000)] = 10_000

@@ -68,12 +68,20 @@ def writable_dir(path: Path) -> Path:
 
 
 def add_training_arguments(parser: argparse.ArgumentParser) -> None:
-    """--training and --teacher-pace (`groupwise.run.continuous`)."""
+    """--training, --continue-from, --teacher-error and --teacher-pace
+    (`groupwise.run.continuous`, `groupwise.run.keep`)."""
     parser.add_argument(
         "--training",
         choices=("rounds", "continuous"),
         help="rounds: PPO trains after each round's feedback (default); continuous: PPO "
         "trains while a timed teacher answers, on a virtual clock",
+    )
+    parser.add_argument(
+        "--continue-from",
+        choices=("last", "preferred"),
+        help="which policy each round trains on from: the last round's (default), or the one "
+        "the simulated teacher prefers so far (it compares the last round's greedy episodes "
+        "with those of the policy that round began from)",
     )
     parser.add_argument(
         "--teacher-error",
@@ -128,8 +136,8 @@ def add_pool_arguments(parser: argparse.ArgumentParser) -> None:
 def apply_teacher_options(
     cfg: "RunConfig", args: argparse.Namespace, target: str | None
 ) -> "RunConfig":
-    """`cfg` with --training, --teacher-error and --teacher-pace applied; continuous
-    training without a pace gets the paper's (`run.continuous.paper_pace`).
+    """`cfg` with --training, --continue-from, --teacher-error and --teacher-pace applied;
+    continuous training without a pace gets the paper's (`run.continuous.paper_pace`).
 
     Raises:
         ValueError: a teacher error outside (0, 0.5).
@@ -141,9 +149,10 @@ def apply_teacher_options(
     if mode == "continuous" and pace is None:  # the pairwise DMs: "pairwise", "pairwise-…"
         pace = paper_pace(target, pairwise=cfg.loop.oracle.startswith("pairwise"))
     error = args.teacher_error or cfg.teacher.label_error
+    keep = args.continue_from or cfg.training.continue_from
     return dataclasses.replace(
         cfg,
-        training=dataclasses.replace(cfg.training, mode=mode),
+        training=dataclasses.replace(cfg.training, mode=mode, continue_from=keep),
         teacher=dataclasses.replace(cfg.teacher, pace_s=pace, label_error=error),
     )
 

@@ -24,6 +24,7 @@ FROM_SESSION_EXCLUDES = (
     "final_steps",
     "seed",
     "training",
+    "continue_from",
     "teacher_pace",
     "teacher_error",
     "pretrain_steps",

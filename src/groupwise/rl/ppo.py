@@ -5,6 +5,7 @@ inside this adapter, and every round reseeds it from the loop's generator, so a 
 repeats an uninterrupted one.
 """
 
+import copy
 import logging
 from dataclasses import dataclass
 from functools import partial
@@ -198,6 +199,17 @@ class PPOAgent:
                 stats = self.step_norm.stats
                 stats.mean, stats.var = data["step_mean"], data["step_var"]
                 stats.count = float(data["step_count"])
+
+    def revert(self, directory: Path) -> None:
+        """Go back to the policy, its optimiser and the observation and return statistics
+        saved by `save` in `directory`, keeping this agent's step count and the learned
+        reward's running statistics (they belong to the reward model, which stays)."""
+        steps = self.model.num_timesteps
+        reward_stats = None if self.step_norm is None else copy.deepcopy(self.step_norm.stats)
+        self.load(directory)
+        self.model.num_timesteps = steps
+        if self.step_norm is not None and reward_stats is not None:
+            self.step_norm.stats = reward_stats
 
     def close(self) -> None:
         self.venv.close()

@@ -145,14 +145,15 @@ def round_episodes(
     n_episodes: int,
     seed: np.random.SeedSequence,
     callback: RunCallback | None = None,
+    phase: str = "takeaway",
 ) -> dict[int, list[Trajectory]]:
     """`n_episodes` greedy episodes of each round's checkpointed policy, every round's from
-    the same reset seeds (a generator from `seed` each). `callback` hears "takeaway"."""
+    the same reset seeds (a generator from `seed` each). `callback` hears `phase`."""
     callback = as_callback(callback)
     episodes = {}
     with _scratch(run) as scratch:
         for done, r in enumerate(rounds):
-            callback.on_phase("takeaway", done, len(rounds))
+            callback.on_phase(phase, done, len(rounds))
             scratch.load(checkpoint_dir(run.directory, r))
             episodes[r] = sample_trajectories(
                 run.make_env,
@@ -160,7 +161,7 @@ def round_episodes(
                 n_episodes,
                 np.random.default_rng(seed),
             )
-        callback.on_phase("takeaway", len(rounds), len(rounds))
+        callback.on_phase(phase, len(rounds), len(rounds))
     return episodes
 
 

@@ -60,6 +60,10 @@ class RoundRecord:
     evaluation episodes; `true_return_mean` is the sum of its per-step scores. nan for other
     envs and without evaluation."""
     target_score_std: float = math.nan
+    continued_from: int = -1
+    """The round whose policy this round's PPO trained on from: the previous round's, or
+    with `TrainingConfig.continue_from` "preferred" the teacher's choice (`run.keep`); -1
+    for round 0 (the fresh or pre-trained policy)."""
 
     def stats(self) -> dict[str, object]:
         """The record as JSON-ready values (nan and inf as None): the app's round stats."""

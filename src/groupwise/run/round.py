@@ -367,12 +367,14 @@ def _record(run: Run, evaluation: Evaluation, timer: PhaseTimer, **fields: Any) 
         true_return_std=float(evaluation.returns.std()),
         target_score_mean=float(evaluation.scores.mean()),
         target_score_std=float(evaluation.scores.std()),
+        continued_from=run.next_round - 1 if run.continued_from is None else run.continued_from,
         **values,
     )
 
 
 def _append(run: Run, record: RoundRecord, callback: RunCallback) -> RoundRecord:
     run.records.append(record)
+    run.continued_from = None
     if run.out is not None:
         callback.on_phase("checkpoint", 0, 1)
         run.commit()

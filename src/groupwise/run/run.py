@@ -66,6 +66,9 @@ class Run:
     dataset: PreferenceDataset
     records: list[RoundRecord]
     out: Path | None = None
+    continued_from: int | None = None
+    """The round whose policy the agent went back to for the round being run
+    (`groupwise.run.keep`); None: the previous round's, as usual."""
 
     @classmethod
     def create(cls, cfg: RunConfig, out: Path | None = None, *, check: bool = False) -> "Run":
