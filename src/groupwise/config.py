@@ -224,6 +224,10 @@ class LoopConfig:
     pool_variant_scale: Annotated[float, Field(ge=0, le=1)] = 0.5
     """... and how far each pushes the actions: a fixed offset per action dimension of up
     to this share of half its range."""
+    adopt_variants: bool = False
+    """After a round's feedback, when the teacher preferred one variant's behaviours to the
+    policy's own, the policy takes that variant's push before PPO trains on (its action
+    mean shifts by the variant's offset; `groupwise.run.adopt`, issue 20). Box actions."""
     candidate_pairs: PositiveInt = 10
     """Pairwise active learning: random candidate pairs scored per query."""
     suggestion_rank: SuggestionRank = "variance"
@@ -249,6 +253,12 @@ class LoopConfig:
     """Largest group the group DMs compare (paper §6: 8 keeps comparisons humanly possible)."""
     seed: Seed = 0
     """Every random generator of the run derives from it (`run.streams.round_streams`)."""
+
+    @model_validator(mode="after")
+    def _variants_to_adopt(self) -> "LoopConfig":
+        if self.adopt_variants and self.pool_variants == 0:
+            raise ValueError("adopt_variants needs pool variants to adopt (pool_variants >= 1)")
+        return self
 
 
 @dataclass(frozen=True, config=_STRICT)

@@ -9,8 +9,11 @@ import pytest
 
 from groupwise.cli import main
 from groupwise.config import LoopConfig, PPOConfig, RewardConfig, RunConfig
+from groupwise.oracles import ORACLES, Feedback
+from groupwise.preferences.judgement import Judgement
 from groupwise.query.strategies import PairwiseQueries
 from groupwise.rl.policy import BiasedPolicy
+from groupwise.run.headless import run_session
 from groupwise.run.round import begin_round, pool_variants
 from groupwise.run.run import Run
 
@@ -66,3 +69,44 @@ def test_the_command_line_sets_the_pool_size(tmp_path):
     assert len(offer.pool.fragments) == 30  # not twice the round's 4 comparisons
     with pytest.raises(SystemExit):
         main(["train", "--env", "GridWorld", "--pool-size", "1", "--out", str(out), *args])
+
+
+class PrefersVariants:
+    """Prefers the group of later episodes: a pool lists the policy's episodes first."""
+
+    def answer(self, pool, queries, rng):
+        def lateness(group):
+            return np.mean([pool.fragments[i].episode for i in group])
+
+        return [
+            Judgement(q.left, q.right, float(lateness(q.left) > lateness(q.right))) for q in queries
+        ]
+
+
+def test_the_policy_takes_the_push_of_the_variant_the_teacher_preferred(tmp_path):
+    cfg = RunConfig(
+        loop=LoopConfig(
+            env="Pendulum-v1", comparisons=40, rounds=2, steps=2 * 256, eval_episodes=1,
+            pool_variants=2, adopt_variants=True, initial_fraction=0.5, seed=2,
+        ),
+        reward=RewardConfig(epochs=1, initial_epoch_multiplier=1),
+        ppo=PPOConfig(n_envs=2, n_steps=128, batch_size=64, n_epochs=1, tensorboard=False),
+    )  # fmt: skip
+    feedback = Feedback(ORACLES["pairwise"](cfg).queries, PrefersVariants())
+    records = run_session(cfg, tmp_path, show_progress=False, feedback=feedback)
+    assert all(r.adopted_variant in (1, 2) for r in records)
+    unadopted = dataclasses.replace(cfg, loop=dataclasses.replace(cfg.loop, adopt_variants=False))
+    plain = run_session(unadopted, tmp_path / "plain", show_progress=False, feedback=feedback)
+    assert all(r.adopted_variant == 0 for r in plain)
+    assert plain[0].label_error_rate == records[0].label_error_rate  # the same round 0
+
+
+def test_the_command_line_adopts_only_with_variants(tmp_path, capsys):
+    out = tmp_path / "train"
+    args = ["--comparisons", "4", "--rounds", "1", "--steps", "0", "--seed", "1", "-q"]
+    assert main(["train", "--env", "Pendulum-v1", "--pool-variants", "2", "--adopt-variants",
+                 "--out", str(out), *args]) == 0  # fmt: skip
+    assert RunConfig.load(out / "config.json").loop.adopt_variants
+    assert main(["train", "--env", "Pendulum-v1", "--adopt-variants", "--out", str(out / "x"),
+                 *args]) == 2  # fmt: skip
+    assert "pool_variants >= 1" in capsys.readouterr().err

@@ -127,6 +127,7 @@ def test_a_share_of_the_pool_comes_from_the_variants():
     assert all(np.all(e.actions == e.actions[0]) for e in episodes)  # one push an episode
     # 18 windows of the policy's own (three 200-step episodes of 6), then 6 of each variant
     assert pushes[:3] == [0.0] * 3 and all(p != 0.0 for p in pushes[3:]) and len(pushes) == 6
+    assert [e.source for e in episodes] == [0, 0, 0, 1, 2, 3]  # who played each episode
     assert len(pool) == 36
     alone, unshared = sample(0.0, with_variants=False), sample(0.0)
     assert [f.key for f in alone.fragments] == [f.key for f in unshared.fragments]

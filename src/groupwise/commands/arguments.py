@@ -100,8 +100,9 @@ def add_training_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def add_pool_arguments(parser: argparse.ArgumentParser) -> None:
-    """--pool-size, --pool-variants, --suggestions and --reward-bonus (`LoopConfig.pool_size`,
-    `.pool_variants`, `.suggestion_rank`, `RewardConfig.exploration_bonus`)."""
+    """--pool-size, --pool-variants, --adopt-variants, --suggestions and --reward-bonus
+    (`LoopConfig.pool_size`, `.pool_variants`, `.adopt_variants`, `.suggestion_rank`,
+    `RewardConfig.exploration_bonus`)."""
     parser.add_argument(
         "--pool-size",
         type=int_at_least(2),
@@ -116,6 +117,14 @@ def add_pool_arguments(parser: argparse.ArgumentParser) -> None:
         help="sample half of each pool's windows from K variants of the current policy, each "
         "pushing its actions one way (offsets drawn anew each round), so that the pools show "
         "behaviours the policy rarely reaches (default 0: the policy alone)",
+    )
+    parser.add_argument(
+        "--adopt-variants",
+        action="store_true",
+        default=None,
+        help="with --pool-variants: when the teacher preferred one variant's behaviours to the "
+        "policy's own in a round's comparisons, the policy takes that variant's push before "
+        "PPO trains on (run.adopt)",
     )
     parser.add_argument(
         "--suggestions",

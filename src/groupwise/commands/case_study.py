@@ -145,6 +145,7 @@ def run(args: argparse.Namespace) -> int:
                 "seed": args.seed,
                 "pool_size": args.pool_size,
                 "pool_variants": args.pool_variants or 0,
+                "adopt_variants": bool(args.adopt_variants),
                 "suggestion_rank": args.suggestions or "variance",
             }
         )

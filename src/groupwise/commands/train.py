@@ -30,6 +30,7 @@ FROM_SESSION_EXCLUDES = (
     "pretrain_steps",
     "pool_size",
     "pool_variants",
+    "adopt_variants",
     "suggestions",
     "reward_bonus",
 )
@@ -118,6 +119,7 @@ def run(args: argparse.Namespace) -> int:
         "final_steps": args.final_steps,
         "pool_size": args.pool_size,
         "pool_variants": args.pool_variants,
+        "adopt_variants": args.adopt_variants,
         "suggestion_rank": args.suggestions,
     }
     given = {key: value for key, value in overrides.items() if value is not None}

@@ -36,6 +36,9 @@ class Trajectory:
     """Step t → the physics state (S,) before step t, for the steps the sampler was asked to
     capture (MuJoCo envs only, `envs.physics_state`): a window's frames are rendered from
     there instead of replaying the episode from its reset (`clips.recipe`)."""
+    source: int = 0
+    """Which policy played it in a pool: 0 the round's policy, k its k-th variant
+    (`pool.sampling.sample_pool`)."""
 
     def __post_init__(self) -> None:
         t = self.obs.shape[0]

@@ -62,8 +62,8 @@ def sample_pool(
     the episodes' envs (None: the free cores for large batches; `rl.batch_envs`): the pool is
     the same whatever it is. `variants`: other policies a share `variant_share` of the
     windows are sampled from, dealt evenly (`split_windows`); the episodes are numbered
-    `policy`'s first, then each variant's. Without variants the draws are exactly those of
-    sampling from `policy` alone.
+    `policy`'s first, then each variant's, and each knows its `Trajectory.source`. Without
+    variants the draws are exactly those of sampling from `policy` alone.
 
     Raises:
         ValueError: `size` < 1, `oversample` < 1 or `max_windows` < 1, `variant_share`
@@ -80,7 +80,7 @@ def sample_pool(
     episodes: list[Trajectory] = []
     sampled = 0  # steps towards the windows of the policies before this one
     counts = split_windows(n_windows, len(variants), variant_share)
-    for member, count in zip((policy, *variants), counts, strict=True):
+    for source, (member, count) in enumerate(zip((policy, *variants), counts, strict=True)):
         if count == 0:
             continue
         own = sample_episodes_for_windows(
@@ -94,7 +94,10 @@ def sample_pool(
             snapshot_offsets=snapshot_offsets,
             processes=processes,
         )
-        episodes += [dataclasses.replace(e, episode=len(episodes) + i) for i, e in enumerate(own)]
+        episodes += [
+            dataclasses.replace(e, episode=len(episodes) + i, source=source)
+            for i, e in enumerate(own)
+        ]
         sampled += count * length
     windows = tile_fragments(episodes, length)
     if ensemble is None:

@@ -78,7 +78,7 @@ class BiasedPolicy:
 
 def biased_variants(
     base: Policy, space: gym.Space, count: int, scale: float, rng: np.random.Generator
-) -> list[Policy]:
+) -> list["BiasedPolicy"]:
     """`count` `BiasedPolicy` variants of `base`, each with its own bias drawn from `rng`:
     Box: an offset per dimension from U(−`scale`, `scale`) × half the action range;
     Discrete: a uniformly drawn action, taken instead of the policy's on a share `scale` of

@@ -200,6 +200,21 @@ class PPOAgent:
                 stats.mean, stats.var = data["step_mean"], data["step_var"]
                 stats.count = float(data["step_count"])
 
+    def shift_actions(self, offset: FloatArray) -> None:
+        """Move the policy's action mean by `offset` (act_dim,): its greedy actions, and the
+        centre of its stochastic ones, shift by it before they are clipped to the bounds,
+        as a `rl.policy.BiasedPolicy` of the same offset acts.
+
+        Raises:
+            TypeError: the policy's actions are not Box (no mean to move).
+        """
+        if not isinstance(self.model.action_space, gym.spaces.Box):
+            raise TypeError(f"only Box actions have a mean, not {self.model.action_space}")
+        action_net = self.model.policy.action_net
+        assert isinstance(action_net, torch.nn.Linear)  # a Gaussian policy's mean
+        with torch.no_grad():
+            action_net.bias.add_(torch.as_tensor(np.asarray(offset), dtype=action_net.bias.dtype))
+
     def revert(self, directory: Path) -> None:
         """Go back to the policy, its optimiser and the observation and return statistics
         saved by `save` in `directory`, keeping this agent's step count and the learned

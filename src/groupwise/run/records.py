@@ -64,6 +64,9 @@ class RoundRecord:
     """The round whose policy this round's PPO trained on from: the previous round's, or
     with `TrainingConfig.continue_from` "preferred" the teacher's choice (`run.keep`); -1
     for round 0 (the fresh or pre-trained policy)."""
+    adopted_variant: int = 0
+    """The pool variant (1 … K) whose push the policy took before this round's PPO
+    (`LoopConfig.adopt_variants`, `run.adopt`); 0: none."""
 
     def stats(self) -> dict[str, object]:
         """The record as JSON-ready values (nan and inf as None): the app's round stats."""

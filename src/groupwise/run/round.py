@@ -34,8 +34,9 @@ from groupwise.preferences.judgement import Judgement
 from groupwise.preferences.pairs import Pair, cap_pairs, judgement_pairs
 from groupwise.query.strategies import Query, QueryStrategy
 from groupwise.reward import FitReport, fit
-from groupwise.rl.policy import Policy, biased_variants
+from groupwise.rl.policy import BiasedPolicy, Policy, biased_variants
 from groupwise.rl.rollout import Evaluation, evaluate_episodes
+from groupwise.run.adopt import adopt_variant
 from groupwise.run.progress import RunCallback, as_callback
 from groupwise.run.records import PhaseTimer, RoundRecord
 from groupwise.run.run import Run
@@ -58,6 +59,9 @@ class Offer:
     budget: int
     candidates: float = math.nan
     sample_s: float = 0.0
+    variants: tuple[BiasedPolicy, ...] = ()
+    """The biased variants of the policy part of the pool came from (`pool_variants`; a
+    fragment's episode knows which, `Trajectory.source`)."""
 
     @property
     def round(self) -> int:
@@ -99,6 +103,7 @@ def begin_round(
     streams = streams or round_streams(loop.seed, index)
     tick = time.perf_counter()
     policy = run.agent.policy()
+    variants = pool_variants(run, policy, streams.sample)
     pool = sample_pool(
         run.make_env,
         policy,
@@ -112,7 +117,7 @@ def begin_round(
         ensemble=run.ensemble,
         select=loop.pool_selection,
         progress=lambda done, total: callback.on_phase("sample", done, total),
-        variants=pool_variants(run, policy, streams.sample),
+        variants=variants,
         variant_share=loop.pool_variant_share,
     )
     sample_s = time.perf_counter() - tick
@@ -132,10 +137,11 @@ def begin_round(
         budget=budget,
         candidates=float(len(offered(pool))) if callable(offered) else math.nan,
         sample_s=sample_s,
+        variants=tuple(variants),
     )
 
 
-def pool_variants(run: Run, policy: Policy, rng: np.random.Generator) -> list[Policy]:
+def pool_variants(run: Run, policy: Policy, rng: np.random.Generator) -> list[BiasedPolicy]:
     """The round's `loop.pool_variants` biased variants of `policy` (`rl.policy.biased_variants`,
     drawn from `rng`, the round's sample stream; none drawn when there are none)."""
     loop = run.cfg.loop
@@ -205,9 +211,10 @@ def end_round(
 ) -> RoundRecord:
     """The second half of the round: the judgements' pairs (`round_pairs`) into the
     cumulative dataset, the reward ensemble fitted on it (round 0 with
-    `initial_epoch_multiplier` × the epochs), `steps` PPO steps on the learned reward, the
-    greedy policy's true return; the record appended and, when the run has a directory,
-    committed (checkpoint and ``rounds.csv``).
+    `initial_epoch_multiplier` × the epochs), the push of the pool variant the teacher
+    preferred taken over when `loop.adopt_variants` asks (`run.adopt`), `steps` PPO steps
+    on the learned reward, the greedy policy's true return; the record appended and, when
+    the run has a directory, committed (checkpoint and ``rounds.csv``).
 
     `keys` are the judgements' places in the round (default: their places in the list; the
     app's, with undone ones counted); `asked` how many of the offer's queries the teacher
@@ -227,13 +234,22 @@ def end_round(
         multiplier = run.cfg.reward.initial_epoch_multiplier if index == 0 else 1.0
         epochs = max(1, round(run.cfg.reward.epochs * multiplier))
         report = fit(run.ensemble, run.dataset, run.cfg.reward, streams.fit, epochs)
+    adopted = adopt_variant(run, offer.pool, offer.variants, pairs) if loop.adopt_variants else 0
     _learn(run, steps, streams, timer, callback)
     clock_s = math.nan
     if run.cfg.teacher.pace_s is not None and asked is not None:
         pace, rate = run.cfg.teacher.pace_s, run.cfg.training.ppo_steps_per_s
         clock_s = clock_before(run) + asked * pace + steps / rate
     return finish_round(
-        run, offer, judgements, report, timer, callback, asked=asked, clock_s=clock_s
+        run,
+        offer,
+        judgements,
+        report,
+        timer,
+        callback,
+        asked=asked,
+        clock_s=clock_s,
+        adopted_variant=adopted,
     )
 
 
@@ -247,10 +263,12 @@ def finish_round(
     *,
     asked: int | None,
     clock_s: float = math.nan,
+    adopted_variant: int = 0,
 ) -> RoundRecord:
     """Every feedback round's end, once its pairs are in the dataset and the agent trained:
     the greedy policy's true return, the round's record (`report`: the round's last fit,
-    None when there was none), appended and committed."""
+    None when there was none; `adopted_variant`: the variant whose push the policy took,
+    `run.adopt`), appended and committed."""
     evaluation = _evaluate(run, timer, callback)
     this_round = run.dataset.rounds == run.next_round
     record = _record(
@@ -266,6 +284,7 @@ def finish_round(
         reward_accuracy=report.accuracy if report else math.nan,
         reward_val_accuracy=report.validation_accuracy if report else math.nan,
         clock_s=clock_s,
+        adopted_variant=adopted_variant,
         **_diagnostics(offer, asked, len(judgements), run.cfg),
     )
     return _append(run, record, callback)
