@@ -9,9 +9,9 @@ from groupwise.pool.sampling import sample_pool
 from groupwise.preferences.pairs import Pair
 from groupwise.rl.policy import biased_variants
 from groupwise.rl.ppo import PPOAgent
-from groupwise.run.adopt import MIN_PAIRS, fragment_sources, preferred_variant
+from groupwise.run.adopt import ALPHA, fragment_sources, preferred_variant
 
-# pool indices 0-3 the policy's, 4-7 variant 1's, 8-11 variant 2's
+# pool indices 0-3 the policy's, 4-7 variant 1's, 8-11 variant 2's: K = 2 variants
 SOURCES = [0] * 4 + [1] * 4 + [2] * 4
 
 
@@ -20,34 +20,39 @@ def _pairs(variant_index: int, labels: list[float]) -> list[Pair]:
     return [Pair(variant_index, k % 4, label) for k, label in enumerate(labels)]
 
 
-def test_the_variant_that_beats_the_policy_is_preferred():
-    assert preferred_variant(SOURCES, _pairs(5, [1.0] * 4)) == 1
-    assert preferred_variant(SOURCES, _pairs(9, [1.0, 1.0, 1.0, 0.0, 0.5])) == 2  # 3.5 of 5
+def test_a_variant_whose_wins_are_significant_is_preferred():
+    # one-sided binomial p < 0.05 / 2: 6 of 6 (p 0.016) pass, 5 of 5 (0.031) do not
+    assert preferred_variant(SOURCES, _pairs(5, [1.0] * 6)) == 1
+    assert preferred_variant(SOURCES, _pairs(5, [1.0] * 5)) is None
+    assert preferred_variant(SOURCES, _pairs(9, [1.0] * 8 + [0.0])) == 2  # 8 of 9: p 0.020
     # the same pairs with the policy's behaviour on the left
-    flipped = [Pair(p.b, p.a, 1.0 - p.label) for p in _pairs(9, [1.0] * 4)]
+    flipped = [Pair(p.b, p.a, 1.0 - p.label) for p in _pairs(9, [1.0] * 6)]
     assert preferred_variant(SOURCES, flipped) == 2
 
 
-def test_too_few_pairs_a_draw_or_a_loss_adopt_nothing():
-    assert MIN_PAIRS == 4
-    assert preferred_variant(SOURCES, _pairs(5, [1.0] * 3)) is None
-    assert preferred_variant(SOURCES, _pairs(5, [1.0, 1.0, 0.0, 0.0])) is None  # ½: a draw
-    assert preferred_variant(SOURCES, _pairs(5, [0.5] * 6)) is None
-    assert preferred_variant(SOURCES, _pairs(5, [0.0] * 6)) is None
+def test_equal_answers_count_half_a_win_rounded_down():
+    assert preferred_variant(SOURCES, _pairs(5, [1.0] * 6 + [0.5])) is None  # 6 of 7: p 0.06
+    assert preferred_variant(SOURCES, _pairs(5, [1.0] * 6 + [0.5] * 2)) is None  # 7 of 8
+    assert preferred_variant(SOURCES, _pairs(5, [0.5] * 20)) is None
+
+
+def test_a_draw_a_loss_or_nothing_adopts_nothing():
+    assert preferred_variant(SOURCES, _pairs(5, [1.0, 0.0] * 10)) is None
+    assert preferred_variant(SOURCES, _pairs(5, [0.0] * 10)) is None
     assert preferred_variant(SOURCES, []) is None
+    assert preferred_variant([0] * 4, [Pair(0, 1, 1.0)] * 10) is None  # no variants at all
 
 
-def test_only_pairs_against_the_policy_count_and_the_best_share_wins():
-    among_variants = [Pair(4 + k % 4, 8 + k % 4, 1.0) for k in range(8)]
-    among_policy = [Pair(k % 4, (k + 1) % 4, 1.0) for k in range(8)]
+def test_only_pairs_against_the_policy_count_and_the_smallest_p_wins():
+    among_variants = [Pair(4 + k % 4, 8 + k % 4, 1.0) for k in range(20)]
+    among_policy = [Pair(k % 4, (k + 1) % 4, 1.0) for k in range(20)]
     assert preferred_variant(SOURCES, among_variants + among_policy) is None
-    better = _pairs(5, [1.0] * 5)  # 5 of 5
-    good = _pairs(9, [1.0] * 5 + [0.0])  # 5 of 6
-    assert preferred_variant(SOURCES, good + better) == 1
-    assert (
-        preferred_variant(SOURCES, _pairs(5, [1.0] * 4) + _pairs(9, [1.0] * 6)) == 2
-    )  # more pairs
-    assert preferred_variant(SOURCES, _pairs(5, [1.0] * 4), min_pairs=5) is None
+    assert preferred_variant(SOURCES, _pairs(5, [1.0] * 7) + _pairs(9, [1.0] * 9)) == 2
+    assert preferred_variant(SOURCES, _pairs(5, [1.0] * 9) + _pairs(9, [1.0] * 9)) == 1  # tie
+    eight = [0] * 4 + [k for k in range(1, 9) for _ in range(4)]  # K = 8: p < 0.00625
+    assert preferred_variant(eight, _pairs(5, [1.0] * 7)) is None  # p 0.0078
+    assert preferred_variant(eight, _pairs(5, [1.0] * 8)) == 1  # p 0.0039
+    assert ALPHA == 0.05
 
 
 class _Still:
