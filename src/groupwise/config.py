@@ -224,6 +224,12 @@ class LoopConfig:
     pool_variant_scale: Annotated[float, Field(ge=0, le=1)] = 0.5
     """... and how far each pushes the actions: a fixed offset per action dimension of up
     to this share of half its range."""
+    pool_variants_greedy: bool = False
+    """The variants push the greedy policy (its mean action: what the evaluation scores and
+    the take-away agent does) instead of the stochastic one, and the first of them does not
+    push, so the pool shows the teacher what the agent actually does (issue 20: a walker's
+    greedy posture, never in its pools, was paid more by the learned reward than the splits
+    the teacher had preferred)."""
     adopt_variants: bool = False
     """After a round's feedback, when the teacher preferred one variant's behaviours to the
     policy's own, the policy takes that variant's push before PPO trains on (its action
@@ -258,6 +264,8 @@ class LoopConfig:
     def _variants_to_adopt(self) -> "LoopConfig":
         if self.adopt_variants and self.pool_variants == 0:
             raise ValueError("adopt_variants needs pool variants to adopt (pool_variants >= 1)")
+        if self.pool_variants_greedy and self.pool_variants == 0:
+            raise ValueError("pool_variants_greedy needs pool variants (pool_variants >= 1)")
         return self
 
 

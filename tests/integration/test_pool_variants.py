@@ -110,3 +110,30 @@ def test_the_command_line_adopts_only_with_variants(tmp_path, capsys):
     assert main(["train", "--env", "Pendulum-v1", "--adopt-variants", "--out", str(out / "x"),
                  *args]) == 2  # fmt: skip
     assert "pool_variants >= 1" in capsys.readouterr().err
+
+
+def test_greedy_variants_push_the_greedy_policy_and_the_first_does_not_push():
+    cfg = RunConfig(
+        loop=LoopConfig(env="Pendulum-v1", pool_variants=3, pool_variants_greedy=True, seed=1),
+        ppo=PPOConfig(n_envs=1, n_steps=64, batch_size=32, tensorboard=False),
+    )
+    run = Run.create(cfg)
+    variants = pool_variants(run, run.agent.policy(), np.random.default_rng(0))
+    obs = np.random.default_rng(2).normal(size=(8, 3)).astype(np.float32)
+    greedy = run.agent.act(obs, np.random.default_rng(0), deterministic=True)
+    rng = np.random.default_rng(9)
+    np.testing.assert_array_equal(variants[0].act(obs, rng), greedy)  # what the agent does
+    plain = pool_variants(
+        Run.create(
+            dataclasses.replace(cfg, loop=dataclasses.replace(cfg.loop, pool_variants_greedy=False))
+        ),
+        run.agent.policy(),
+        np.random.default_rng(0),
+    )
+    for variant, same_offset in zip(variants[1:], plain[1:], strict=True):  # the same draws
+        np.testing.assert_array_equal(variant.offset, same_offset.offset)
+        pushed = np.clip(greedy + variant.offset, -2.0, 2.0)
+        np.testing.assert_allclose(variant.act(obs, rng), pushed, rtol=1e-6)
+    with pytest.raises(ValueError, match="pool_variants_greedy needs"):
+        LoopConfig(pool_variants_greedy=True)
+    run.close()

@@ -100,9 +100,9 @@ def add_training_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def add_pool_arguments(parser: argparse.ArgumentParser) -> None:
-    """--pool-size, --pool-variants, --adopt-variants, --suggestions and --reward-bonus
-    (`LoopConfig.pool_size`, `.pool_variants`, `.adopt_variants`, `.suggestion_rank`,
-    `RewardConfig.exploration_bonus`)."""
+    """--pool-size, --pool-variants, --pool-variants-greedy, --adopt-variants, --suggestions
+    and --reward-bonus (`LoopConfig.pool_size`, `.pool_variants`, `.pool_variants_greedy`,
+    `.adopt_variants`, `.suggestion_rank`, `RewardConfig.exploration_bonus`)."""
     parser.add_argument(
         "--pool-size",
         type=int_at_least(2),
@@ -117,6 +117,14 @@ def add_pool_arguments(parser: argparse.ArgumentParser) -> None:
         help="sample half of each pool's windows from K variants of the current policy, each "
         "pushing its actions one way (offsets drawn anew each round), so that the pools show "
         "behaviours the policy rarely reaches (default 0: the policy alone)",
+    )
+    parser.add_argument(
+        "--pool-variants-greedy",
+        action="store_true",
+        default=None,
+        help="with --pool-variants: the variants push the greedy policy (what the evaluation "
+        "scores and the take-away agent does) and the first does not push, so the teacher "
+        "sees what the agent actually does",
     )
     parser.add_argument(
         "--adopt-variants",

@@ -145,6 +145,7 @@ def run(args: argparse.Namespace) -> int:
                 "seed": args.seed,
                 "pool_size": args.pool_size,
                 "pool_variants": args.pool_variants or 0,
+                "pool_variants_greedy": bool(args.pool_variants_greedy),
                 "adopt_variants": bool(args.adopt_variants),
                 "suggestion_rank": args.suggestions or "variance",
             }

@@ -30,6 +30,7 @@ FROM_SESSION_EXCLUDES = (
     "pretrain_steps",
     "pool_size",
     "pool_variants",
+    "pool_variants_greedy",
     "adopt_variants",
     "suggestions",
     "reward_bonus",
@@ -119,6 +120,7 @@ def run(args: argparse.Namespace) -> int:
         "final_steps": args.final_steps,
         "pool_size": args.pool_size,
         "pool_variants": args.pool_variants,
+        "pool_variants_greedy": args.pool_variants_greedy,
         "adopt_variants": args.adopt_variants,
         "suggestion_rank": args.suggestions,
     }

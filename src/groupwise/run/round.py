@@ -22,6 +22,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
+import gymnasium as gym
 import numpy as np
 
 from groupwise.behaviour import BehaviourTree
@@ -143,7 +144,8 @@ def begin_round(
 
 def pool_variants(run: Run, policy: Policy, rng: np.random.Generator) -> list[BiasedPolicy]:
     """The round's `loop.pool_variants` biased variants of `policy` (`rl.policy.biased_variants`,
-    drawn from `rng`, the round's sample stream; none drawn when there are none)."""
+    drawn from `rng`, the round's sample stream; none drawn when there are none); with
+    `loop.pool_variants_greedy` of the run's greedy policy instead, the first unpushed."""
     loop = run.cfg.loop
     if loop.pool_variants == 0:
         return []
@@ -152,7 +154,16 @@ def pool_variants(run: Run, policy: Policy, rng: np.random.Generator) -> list[Bi
         space = probe.action_space
     finally:
         probe.close()
-    return biased_variants(policy, space, loop.pool_variants, loop.pool_variant_scale, rng)
+    if not loop.pool_variants_greedy:
+        return biased_variants(policy, space, loop.pool_variants, loop.pool_variant_scale, rng)
+    greedy = run.agent.policy(deterministic=True)
+    variants = biased_variants(greedy, space, loop.pool_variants, loop.pool_variant_scale, rng)
+    unpushed = (
+        BiasedPolicy(greedy, space, offset=np.zeros(space.shape, dtype=space.dtype))
+        if isinstance(space, gym.spaces.Box)
+        else BiasedPolicy(greedy, space, action=variants[0].action, share=0.0)
+    )
+    return [unpushed, *variants[1:]]
 
 
 def derive_pairs(
