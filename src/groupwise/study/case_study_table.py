@@ -44,20 +44,26 @@ def setup_label(run: Path) -> str:
     """The run's decision-maker, with the exploration and suggestion order it ran with:
     "groupwise", "groupwise · 8 pool variants", "groupwise · pre-training 100,000",
     "groupwise · optimistic suggestions", "groupwise · reward bonus 1", "groupwise · pools
-    of 500"."""
+    of 500", "groupwise · 8 pool variants of the greedy policy · adopted", "groupwise ·
+    training on from the preferred policy"."""
     summary, _ = _read(run)
     cfg = json.loads((run / "config.json").read_text())
     parts = [summary["decision_maker"]]
     if size := cfg["loop"].get("pool_size"):
         parts.append(f"pools of {size:,}")
     if variants := cfg["loop"].get("pool_variants", 0):
-        parts.append(f"{variants} pool variants")
+        greedy = " of the greedy policy" if cfg["loop"].get("pool_variants_greedy") else ""
+        parts.append(f"{variants} pool variants{greedy}")
+    if cfg["loop"].get("adopt_variants"):
+        parts.append("adopted")
     if pretrain := cfg.get("training", {}).get("pretrain_steps", 0):
         parts.append(f"pre-training {pretrain:,}")
     if cfg["loop"].get("suggestion_rank", "variance") != "variance":
         parts.append(f"{cfg['loop']['suggestion_rank']} suggestions")
     if bonus := cfg.get("reward", {}).get("exploration_bonus", 0):
         parts.append(f"reward bonus {bonus:g}")
+    if cfg.get("training", {}).get("continue_from", "last") != "last":
+        parts.append("training on from the preferred policy")
     return " · ".join(parts)
 
 

@@ -56,6 +56,15 @@ def test_runs_are_labelled_by_the_exploration_they_ran_with(tmp_path):
     assert setup_label(_run(tmp_path / "e", 0, 0, None, pool_size=500)) == (
         "groupwise · pools of 500"
     )
+    kept = _run(tmp_path / "f", 8, 0, None)
+    config = json.loads((kept / "config.json").read_text())
+    config["loop"] |= {"pool_variants_greedy": True, "adopt_variants": True}
+    config["training"]["continue_from"] = "preferred"
+    (kept / "config.json").write_text(json.dumps(config))
+    assert setup_label(kept) == (
+        "groupwise · 8 pool variants of the greedy policy · adopted · training on from the "
+        "preferred policy"
+    )
 
 
 def test_the_summary_averages_the_pools_of_each_setup_over_its_seeds(tmp_path):
