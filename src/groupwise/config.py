@@ -91,6 +91,12 @@ class RewardConfig:
     the next pools hold behaviour the teacher has not yet judged). The members are then
     standardised after each fit (as with `standardise_output`) so that their sd compares
     rewards, not offsets. 0 (default) trains on the mean alone."""
+    pessimism: Annotated[float, Field(ge=0)] = 0.0
+    """κ: PPO's reward subtracts κ times the members' sd from their mean, every round (a
+    conservative reward: PPO is paid less where the members disagree, off what the teacher
+    judged; issue 20: a walker's greedy stance, never judged, was paid more than the splits
+    the teacher preferred). The members are standardised as for the bonus, which it
+    offsets. 0 (default): none."""
     exploration_decay: Annotated[float, Field(gt=0, le=1)] = 0.5
     """β_r = β · decay^r after a fit whose newest pairs are round r's: the bonus fades as
     the reward model learns."""

@@ -1,4 +1,5 @@
-"""`--reward-bonus`: a real run's reward checkpoints carry the fading exploration bonus."""
+"""`--reward-bonus` and `--reward-pessimism`: a real run's reward checkpoints carry the fading
+exploration bonus, or the lasting penalty on the members' disagreement."""
 
 import pytest
 
@@ -24,3 +25,13 @@ def test_a_bad_bonus_is_refused_with_a_message(tmp_path, capsys, value):
         main(["train", "--env", "GridWorld", "--reward-bonus", value, "--out", str(tmp_path)])
     assert exit_info.value.code == 2
     assert "--reward-bonus" in capsys.readouterr().err
+
+
+def test_the_command_line_sets_a_pessimism_that_stays(tmp_path):
+    out = tmp_path / "train"
+    args = ["--comparisons", "20", "--rounds", "2", "--steps", "512", "--seed", "1", "-q"]
+    command = ["train", "--env", "GridWorld", "--dm", "pairwise", "--reward-pessimism", "0.5"]
+    assert main([*command, "--out", str(out), *args]) == 0
+    assert RunConfig.load(out / "config.json").reward.pessimism == 0.5
+    bonuses = [RewardEnsemble.load(checkpoint_dir(out, r) / REWARD_FILE).bonus for r in (0, 1)]
+    assert bonuses == [-0.5, -0.5]

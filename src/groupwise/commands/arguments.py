@@ -142,6 +142,13 @@ def add_pool_arguments(parser: argparse.ArgumentParser) -> None:
         "the partners the reward ensemble disputes most",
     )
     parser.add_argument(
+        "--reward-pessimism",
+        type=non_negative_float,
+        metavar="K",
+        help="PPO's reward subtracts K times the reward members' disagreement (their sd), "
+        "every round, so the policy is paid less where the teacher has not judged (default 0)",
+    )
+    parser.add_argument(
         "--reward-bonus",
         type=non_negative_float,
         metavar="B",

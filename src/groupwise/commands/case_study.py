@@ -154,6 +154,7 @@ def run(args: argparse.Namespace) -> int:
             base.reward,
             use_actions=args.reward_inputs == "obs-act",
             exploration_bonus=args.reward_bonus or 0.0,
+            pessimism=args.reward_pessimism or 0.0,
         )
         training = dataclasses.replace(base.training, pretrain_steps=args.pretrain_steps)
         cfg = apply_teacher_options(

@@ -34,6 +34,7 @@ FROM_SESSION_EXCLUDES = (
     "adopt_variants",
     "suggestions",
     "reward_bonus",
+    "reward_pessimism",
 )
 """Options --from-session takes from DIR itself (its config.json)."""
 
@@ -140,6 +141,9 @@ def run(args: argparse.Namespace) -> int:
             cfg = dataclasses.replace(cfg, training=training)
         if args.reward_bonus is not None:
             reward = dataclasses.replace(cfg.reward, exploration_bonus=args.reward_bonus)
+            cfg = dataclasses.replace(cfg, reward=reward)
+        if args.reward_pessimism is not None:
+            reward = dataclasses.replace(cfg.reward, pessimism=args.reward_pessimism)
             cfg = dataclasses.replace(cfg, reward=reward)
     except (ValueError, OSError) as error:
         raise UsageError(str(error)) from None

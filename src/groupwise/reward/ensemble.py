@@ -150,7 +150,8 @@ class RewardEnsemble:
 
     def mean_reward(self, obs: np.ndarray, acts: np.ndarray) -> FloatArray:
         """Ensemble-mean per-step reward: obs (B, obs_dim), acts (B, act_dim) -> (B,) float32,
-        plus `bonus` × the members' sd when exploring (`RewardConfig.exploration_bonus`).
+        plus `bonus` × the members' sd when exploring (`RewardConfig.exploration_bonus`;
+        negative with `RewardConfig.pessimism`).
 
         This is the reward PPO trains on, called every env step: one forward pass over all
         members, no per-member Python loop, and only the cheapest shape check.

@@ -62,6 +62,8 @@ def setup_label(run: Path) -> str:
         parts.append(f"{cfg['loop']['suggestion_rank']} suggestions")
     if bonus := cfg.get("reward", {}).get("exploration_bonus", 0):
         parts.append(f"reward bonus {bonus:g}")
+    if pessimism := cfg.get("reward", {}).get("pessimism", 0):
+        parts.append(f"reward pessimism {pessimism:g}")
     if cfg.get("training", {}).get("continue_from", "last") != "last":
         parts.append("training on from the preferred policy")
     return " · ".join(parts)
