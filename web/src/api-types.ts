@@ -1466,6 +1466,16 @@ export interface components {
              */
             min_pairs_for_validation: number;
             /**
+             * Pessimism
+             * @description κ: PPO's reward subtracts κ times the members' sd from their mean, every round (a
+             *     conservative reward: PPO is paid less where the members disagree, off what the teacher
+             *     judged; issue 20: a walker's greedy stance, never judged, was paid more than the splits
+             *     the teacher preferred). The members are standardised as for the bonus, which it
+             *     offsets. 0 (default): none.
+             * @default 0
+             */
+            pessimism: number;
+            /**
              * Standardise Output
              * @description After each fit, centre and scale every member's reward to mean 0, sd 1 over the
              *     dataset's steps in the reward PPO sees (`RewardEnsemble.standardise_output`).
@@ -1596,6 +1606,7 @@ export interface components {
              *         ],
              *         "lr": 0.001,
              *         "min_pairs_for_validation": 10,
+             *         "pessimism": 0,
              *         "standardise_output": false,
              *         "use_actions": true,
              *         "validation_fraction": 0.2,
