@@ -5,10 +5,10 @@ its actions shifted by a fixed offset each, `rl.policy.biased_variants`), so tha
 teacher sees behaviours the policy itself rarely reaches. The teacher may prefer one of
 them, and the reward model learn it, but PPO learns from the policy's own episodes and need
 not find its way there: in a walker run the greedy episodes of one variant held the split
-6.5 s (1,383 of the step score) while the policy's held 0.09 s (733), the teacher
-preferred every full split it was shown, and PPO never split in two more rounds
-(docs/results/case-studies/adopt). With `LoopConfig.adopt_variants`, after the round's
-feedback and before its PPO:
+6.5 s (1,383 of the step score) while the policy's held 0.09 s (733), after the teacher had
+preferred each of the 16 full splits it was shown (docs/results/case-studies/walker,
+`variant_episodes.py`). With `LoopConfig.adopt_variants`, after the round's feedback and
+before its PPO:
 
     k = preferred_variant(fragment_sources(pool), pairs)   # the round's pairs decide
     agent.shift_actions(variants[k - 1].offset)            # the policy moves there
@@ -16,11 +16,11 @@ feedback and before its PPO:
 `preferred_variant` counts each variant's preference pairs of the round against the
 policy's own behaviours (won 1, equal ½, lost 0) and adopts the one whose wins are
 significant: a one-sided binomial test against ½ at 5 % over all K variants together
-(Bonferroni: `ALPHA` / K each; with 8 variants and the calibrated teacher's 12 % errors, 8
-wins of 8 pass, 7 of 8 do not). A first rule, any variant above ½ over 4 or more pairs,
-adopted a variant in most rounds of most walker runs, a random walk of pushes that taught
-the splits in none of 5 seeds (docs/results/case-studies/adopt). The teacher is asked
-nothing more, and the reward model is not touched: PPO then trains the moved policy on it.
+(Bonferroni: `ALPHA` / K each; with 8 variants 8 wins of 8 pass, 7 of 8 do not). A first
+rule, any variant above ½ over 4 or more pairs, adopted a variant in most rounds of most
+walker runs, a random walk of pushes that taught the splits in none of 5 seeds
+(docs/results/case-studies/walker/adopt-any). The teacher is asked nothing more, and the
+reward model is not touched: PPO then trains the moved policy on it.
 """
 
 import math
@@ -78,16 +78,12 @@ def adopt_variant(
     run: Run, pool: BehaviourPool, variants: Sequence[BiasedPolicy], pairs: Sequence[Pair]
 ) -> int:
     """Shift the run's policy by the offset of the variant `pairs` prefer (`preferred_variant`
-    over `pool`'s sources); the variant's number, 0 when none is adopted (no variants, no
-    Box offsets, or none preferred).
+    over `pool`'s sources); the variant's number, 0 when none is adopted (none preferred, or
+    the preferred one pushes nothing: a Discrete variant, or `pool_variants_greedy`'s first).
     """
-    offsets = [v.offset for v in variants]
-    if not offsets or any(offset is None for offset in offsets):
+    k = preferred_variant(fragment_sources(pool), pairs) if variants else None
+    offset = None if k is None else variants[k - 1].offset
+    if k is None or offset is None or not offset.any():  # nothing to move by
         return 0
-    k = preferred_variant(fragment_sources(pool), pairs)
-    if k is None:
-        return 0
-    offset = offsets[k - 1]
-    assert offset is not None
     run.ppo.shift_actions(offset)
     return k
