@@ -236,6 +236,13 @@ class LoopConfig:
     push, so the pool shows the teacher what the agent actually does (issue 20: a walker's
     greedy posture, never in its pools, was paid more by the learned reward than the splits
     the teacher had preferred)."""
+    pool_lookahead: Annotated[int, Field(ge=0)] = 0
+    """PPO steps of a lookahead before the round's pool is sampled, once the reward has
+    learned from a round: a copy of the agent trains this many steps on the current learned
+    reward and the variants are of its policy instead (the first unpushed), so the teacher
+    judges where PPO is going before it gets there (issue 20: PPO climbed to a walker
+    posture no pool had shown, which the learned reward overpaid); the agent itself is
+    unchanged. 0: no lookahead."""
     adopt_variants: bool = False
     """After a round's feedback, when the teacher preferred one variant's behaviours to the
     policy's own, the policy takes that variant's push before PPO trains on (its action
@@ -272,6 +279,8 @@ class LoopConfig:
             raise ValueError("adopt_variants needs pool variants to adopt (pool_variants >= 1)")
         if self.pool_variants_greedy and self.pool_variants == 0:
             raise ValueError("pool_variants_greedy needs pool variants (pool_variants >= 1)")
+        if self.pool_lookahead and self.pool_variants == 0:
+            raise ValueError("pool_lookahead needs pool variants (pool_variants >= 1)")
         return self
 
 

@@ -14,7 +14,7 @@ from groupwise.preferences.judgement import Judgement
 from groupwise.query.strategies import PairwiseQueries
 from groupwise.rl.policy import BiasedPolicy
 from groupwise.run.headless import run_session
-from groupwise.run.round import begin_round, pool_variants
+from groupwise.run.round import begin_round, pool_variants, run_round
 from groupwise.run.run import Run
 
 TINY = RunConfig(
@@ -101,7 +101,7 @@ def test_the_policy_takes_the_push_of_the_variant_the_teacher_preferred(tmp_path
     assert plain[0].label_error_rate == records[0].label_error_rate  # the same round 0
 
 
-def test_the_command_line_adopts_only_with_variants(tmp_path, capsys):
+def test_the_command_line_adopts_and_looks_ahead_only_with_variants(tmp_path, capsys):
     out = tmp_path / "train"
     args = ["--comparisons", "4", "--rounds", "1", "--steps", "0", "--seed", "1", "-q"]
     assert main(["train", "--env", "Pendulum-v1", "--pool-variants", "2", "--adopt-variants",
@@ -110,6 +110,12 @@ def test_the_command_line_adopts_only_with_variants(tmp_path, capsys):
     assert main(["train", "--env", "Pendulum-v1", "--adopt-variants", "--out", str(out / "x"),
                  *args]) == 2  # fmt: skip
     assert "pool_variants >= 1" in capsys.readouterr().err
+    assert main(["train", "--env", "Pendulum-v1", "--pool-variants", "2", "--pool-lookahead",
+                 "64", "--out", str(out / "ahead"), *args]) == 0  # fmt: skip
+    assert RunConfig.load(out / "ahead" / "config.json").loop.pool_lookahead == 64
+    assert main(["train", "--env", "Pendulum-v1", "--pool-lookahead", "64", "--out",
+                 str(out / "y"), *args]) == 2  # fmt: skip
+    assert "pool_lookahead needs" in capsys.readouterr().err
 
 
 def test_greedy_variants_push_the_greedy_policy_and_the_first_does_not_push():
@@ -136,4 +142,32 @@ def test_greedy_variants_push_the_greedy_policy_and_the_first_does_not_push():
         np.testing.assert_allclose(variant.act(obs, rng), pushed, rtol=1e-6)
     with pytest.raises(ValueError, match="pool_variants_greedy needs"):
         LoopConfig(pool_variants_greedy=True)
+    run.close()
+
+
+def test_a_lookahead_varies_where_ppo_is_going_and_leaves_the_agent_as_it_was():
+    cfg = RunConfig(
+        loop=LoopConfig(env="Pendulum-v1", comparisons=4, pool_variants=3, pool_lookahead=128,
+                        seed=1),  # fmt: skip
+        reward=RewardConfig(epochs=2, initial_epoch_multiplier=1),
+        ppo=PPOConfig(n_envs=1, n_steps=64, batch_size=32, tensorboard=False),
+    )
+    run = Run.create(cfg)
+    obs = np.random.default_rng(2).normal(size=(8, 3)).astype(np.float32)
+    stochastic = run.agent.act(obs, np.random.default_rng(0), deterministic=False)
+    before = pool_variants(run, run.agent.policy(), np.random.default_rng(0))
+    assert before[0].base is not None and np.any(before[0].offset)  # no pairs: no lookahead
+    run_round(run, ORACLES["pairwise"](cfg), 4, 0)  # the reward learns, PPO does not train
+    variants = pool_variants(run, run.agent.policy(), np.random.default_rng(0))
+    assert run.agent.num_timesteps == 0
+    np.testing.assert_array_equal(  # the agent itself is as it was
+        run.agent.act(obs, np.random.default_rng(0), deterministic=False), stochastic
+    )
+    np.testing.assert_array_equal(variants[0].offset, 0.0)  # the first pushes nothing ...
+    ahead = variants[0].act(obs, np.random.default_rng(0))
+    assert not np.allclose(ahead, stochastic)  # ... of a policy PPO has trained on
+    again = pool_variants(run, run.agent.policy(), np.random.default_rng(0))
+    np.testing.assert_array_equal(again[0].act(obs, np.random.default_rng(0)), ahead)  # seeded
+    with pytest.raises(ValueError, match="pool_lookahead needs"):
+        LoopConfig(pool_lookahead=10)
     run.close()

@@ -100,9 +100,10 @@ def add_training_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def add_pool_arguments(parser: argparse.ArgumentParser) -> None:
-    """--pool-size, --pool-variants, --pool-variants-greedy, --adopt-variants, --suggestions
-    and --reward-bonus (`LoopConfig.pool_size`, `.pool_variants`, `.pool_variants_greedy`,
-    `.adopt_variants`, `.suggestion_rank`, `RewardConfig.exploration_bonus`)."""
+    """--pool-size, --pool-variants, --pool-variants-greedy, --pool-lookahead,
+    --adopt-variants, --suggestions, --reward-pessimism and --reward-bonus
+    (`LoopConfig.pool_size`, `.pool_variants`, `.pool_variants_greedy`, `.pool_lookahead`,
+    `.adopt_variants`, `.suggestion_rank`, `RewardConfig.pessimism`, `.exploration_bonus`)."""
     parser.add_argument(
         "--pool-size",
         type=int_at_least(2),
@@ -125,6 +126,14 @@ def add_pool_arguments(parser: argparse.ArgumentParser) -> None:
         help="with --pool-variants: the variants push the greedy policy (what the evaluation "
         "scores and the take-away agent does) and the first does not push, so the teacher "
         "sees what the agent actually does",
+    )
+    parser.add_argument(
+        "--pool-lookahead",
+        type=int_at_least(0),
+        metavar="N",
+        help="with --pool-variants: from the second round on, the variants are of the policy "
+        "a copy of the agent reaches after N more PPO steps on the current learned reward, "
+        "so the teacher judges where PPO is going (default 0: of the current policy)",
     )
     parser.add_argument(
         "--adopt-variants",

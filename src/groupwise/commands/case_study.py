@@ -146,6 +146,7 @@ def run(args: argparse.Namespace) -> int:
                 "pool_size": args.pool_size,
                 "pool_variants": args.pool_variants or 0,
                 "pool_variants_greedy": bool(args.pool_variants_greedy),
+                "pool_lookahead": args.pool_lookahead or 0,
                 "adopt_variants": bool(args.adopt_variants),
                 "suggestion_rank": args.suggestions or "variance",
             }

@@ -31,6 +31,7 @@ FROM_SESSION_EXCLUDES = (
     "pool_size",
     "pool_variants",
     "pool_variants_greedy",
+    "pool_lookahead",
     "adopt_variants",
     "suggestions",
     "reward_bonus",
@@ -122,6 +123,7 @@ def run(args: argparse.Namespace) -> int:
         "pool_size": args.pool_size,
         "pool_variants": args.pool_variants,
         "pool_variants_greedy": args.pool_variants_greedy,
+        "pool_lookahead": args.pool_lookahead,
         "adopt_variants": args.adopt_variants,
         "suggestion_rank": args.suggestions,
     }

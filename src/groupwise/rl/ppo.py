@@ -7,6 +7,7 @@ repeats an uninterrupted one.
 
 import copy
 import logging
+import tempfile
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -225,6 +226,19 @@ class PPOAgent:
         self.model.num_timesteps = steps
         if self.step_norm is not None and reward_stats is not None:
             self.step_norm.stats = reward_stats
+
+    def lookahead(self, steps: int, seed: int, deterministic: bool = False) -> "PolicySnapshot":
+        """The policy this agent would have after `steps` more PPO steps (seeded as `learn`)
+        on its reward as it is now, as a frozen snapshot; the agent itself comes back
+        exactly as it was (policy, optimiser, step count, normalisers: `save` and `load`
+        around the steps)."""
+        with tempfile.TemporaryDirectory(prefix="groupwise-lookahead-") as scratch:
+            self.save(Path(scratch))
+            try:
+                self.learn(steps, seed)
+                return self.snapshot(deterministic)
+            finally:
+                self.load(Path(scratch))
 
     def close(self) -> None:
         self.venv.close()

@@ -36,6 +36,7 @@ from groupwise.preferences.pairs import Pair, cap_pairs, judgement_pairs
 from groupwise.query.strategies import Query, QueryStrategy
 from groupwise.reward import FitReport, fit
 from groupwise.rl.policy import BiasedPolicy, Policy, biased_variants
+from groupwise.rl.ppo import PolicySnapshot
 from groupwise.rl.rollout import Evaluation, evaluate_episodes
 from groupwise.run.adopt import adopt_variant
 from groupwise.run.progress import RunCallback, as_callback
@@ -145,7 +146,10 @@ def begin_round(
 def pool_variants(run: Run, policy: Policy, rng: np.random.Generator) -> list[BiasedPolicy]:
     """The round's `loop.pool_variants` biased variants of `policy` (`rl.policy.biased_variants`,
     drawn from `rng`, the round's sample stream; none drawn when there are none); with
-    `loop.pool_variants_greedy` of the run's greedy policy instead, the first unpushed."""
+    `loop.pool_variants_greedy` of the run's greedy policy instead, and with
+    `loop.pool_lookahead`, once the dataset holds pairs, of the policy a lookahead reaches
+    (`lookahead_policy`; greedy or not as the variants are): in both cases the first
+    variant pushes nothing."""
     loop = run.cfg.loop
     if loop.pool_variants == 0:
         return []
@@ -154,16 +158,29 @@ def pool_variants(run: Run, policy: Policy, rng: np.random.Generator) -> list[Bi
         space = probe.action_space
     finally:
         probe.close()
-    if not loop.pool_variants_greedy:
+    base: Policy = policy
+    if loop.pool_lookahead and len(run.dataset):
+        base = lookahead_policy(run, loop.pool_lookahead, rng, loop.pool_variants_greedy)
+    elif loop.pool_variants_greedy:
+        base = run.agent.policy(deterministic=True)
+    else:
         return biased_variants(policy, space, loop.pool_variants, loop.pool_variant_scale, rng)
-    greedy = run.agent.policy(deterministic=True)
-    variants = biased_variants(greedy, space, loop.pool_variants, loop.pool_variant_scale, rng)
+    variants = biased_variants(base, space, loop.pool_variants, loop.pool_variant_scale, rng)
     unpushed = (
-        BiasedPolicy(greedy, space, offset=np.zeros(space.shape, dtype=space.dtype))
+        BiasedPolicy(base, space, offset=np.zeros(space.shape, dtype=space.dtype))
         if isinstance(space, gym.spaces.Box)
-        else BiasedPolicy(greedy, space, action=variants[0].action, share=0.0)
+        else BiasedPolicy(base, space, action=variants[0].action, share=0.0)
     )
     return [unpushed, *variants[1:]]
+
+
+def lookahead_policy(
+    run: Run, steps: int, rng: np.random.Generator, deterministic: bool
+) -> PolicySnapshot:
+    """Where PPO is going: the policy a copy of the run's agent reaches after `steps` PPO
+    steps on the current learned reward (`PPOAgent.lookahead`, seeded from `rng`); the
+    run's agent is left as it was."""
+    return run.ppo.lookahead(steps, int(rng.integers(2**31 - 1)), deterministic)
 
 
 def derive_pairs(

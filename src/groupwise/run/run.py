@@ -124,9 +124,9 @@ class Run:
 
     @property
     def ppo(self) -> PPOAgent:
-        """The agent as groupwise's own PPO (checkpoints need it)."""
+        """The agent as groupwise's own PPO (checkpoints and the pool lookahead need it)."""
         if not isinstance(self.agent, PPOAgent):
-            raise TypeError("checkpoints need groupwise's own PPOAgent")
+            raise TypeError("checkpoints and the pool lookahead need groupwise's own PPOAgent")
         return self.agent
 
     @property

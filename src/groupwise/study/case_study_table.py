@@ -44,8 +44,9 @@ def setup_label(run: Path) -> str:
     """The run's decision-maker, with the exploration and suggestion order it ran with:
     "groupwise", "groupwise · 8 pool variants", "groupwise · pre-training 100,000",
     "groupwise · optimistic suggestions", "groupwise · reward bonus 1", "groupwise · pools
-    of 500", "groupwise · 8 pool variants of the greedy policy · adopted", "groupwise ·
-    training on from the preferred policy"."""
+    of 500", "groupwise · 8 pool variants of the greedy policy · adopted", "groupwise · 8
+    pool variants after a 40,960-step lookahead", "groupwise · training on from the
+    preferred policy"."""
     summary, _ = _read(run)
     cfg = json.loads((run / "config.json").read_text())
     parts = [summary["decision_maker"]]
@@ -53,7 +54,9 @@ def setup_label(run: Path) -> str:
         parts.append(f"pools of {size:,}")
     if variants := cfg["loop"].get("pool_variants", 0):
         greedy = " of the greedy policy" if cfg["loop"].get("pool_variants_greedy") else ""
-        parts.append(f"{variants} pool variants{greedy}")
+        ahead = cfg["loop"].get("pool_lookahead", 0)
+        ahead = f" after a {ahead:,}-step lookahead" if ahead else ""
+        parts.append(f"{variants} pool variants{greedy}{ahead}")
     if cfg["loop"].get("adopt_variants"):
         parts.append("adopted")
     if pretrain := cfg.get("training", {}).get("pretrain_steps", 0):

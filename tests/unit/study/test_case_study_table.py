@@ -65,6 +65,11 @@ def test_runs_are_labelled_by_the_exploration_they_ran_with(tmp_path):
         "groupwise · 8 pool variants of the greedy policy · adopted · training on from the "
         "preferred policy"
     )
+    ahead = _run(tmp_path / "g", 8, 0, None)
+    config = json.loads((ahead / "config.json").read_text())
+    config["loop"]["pool_lookahead"] = 40_960
+    (ahead / "config.json").write_text(json.dumps(config))
+    assert setup_label(ahead) == "groupwise · 8 pool variants after a 40,960-step lookahead"
 
 
 def test_the_summary_averages_the_pools_of_each_setup_over_its_seeds(tmp_path):
