@@ -147,8 +147,9 @@ def test_greedy_variants_push_the_greedy_policy_and_the_first_does_not_push():
 
 def test_a_lookahead_varies_where_ppo_is_going_and_leaves_the_agent_as_it_was():
     cfg = RunConfig(
-        loop=LoopConfig(env="Pendulum-v1", comparisons=4, pool_variants=3, pool_lookahead=128,
-                        seed=1),  # fmt: skip
+        loop=LoopConfig(
+            env="Pendulum-v1", comparisons=4, pool_variants=3, pool_lookahead=128, seed=1
+        ),
         reward=RewardConfig(epochs=2, initial_epoch_multiplier=1),
         ppo=PPOConfig(n_envs=1, n_steps=64, batch_size=32, tensorboard=False),
     )
