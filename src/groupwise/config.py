@@ -242,7 +242,8 @@ class LoopConfig:
     reward and the variants are of its policy instead (the first unpushed), so the teacher
     judges where PPO is going before it gets there (issue 20: PPO climbed to a walker
     posture no pool had shown, which the learned reward overpaid); the agent itself is
-    unchanged. 0: no lookahead."""
+    unchanged. Measured on the walker's splits: no gain (0/5 seeds against 2/5,
+    docs/results/case-studies/walker). 0: no lookahead."""
     adopt_variants: bool = False
     """After a round's feedback, when the teacher preferred one variant's behaviours to the
     policy's own, the policy takes that variant's push before PPO trains on (its action
