@@ -54,8 +54,8 @@ def setup_label(run: Path) -> str:
         parts.append(f"pools of {size:,}")
     if variants := cfg["loop"].get("pool_variants", 0):
         greedy = " of the greedy policy" if cfg["loop"].get("pool_variants_greedy") else ""
-        ahead = cfg["loop"].get("pool_lookahead", 0)
-        ahead = f" after a {ahead:,}-step lookahead" if ahead else ""
+        steps = cfg["loop"].get("pool_lookahead", 0)
+        ahead = f" after a {steps:,}-step lookahead" if steps else ""
         parts.append(f"{variants} pool variants{greedy}{ahead}")
     if cfg["loop"].get("adopt_variants"):
         parts.append("adopted")
