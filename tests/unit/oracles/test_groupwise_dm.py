@@ -39,10 +39,12 @@ def test_asks_the_top_suggestions_in_order(make_pool):
     ]
     judgements = Feedback(GroupSuggestions(), NOISE_FREE).gather(pool, 5, np.random.default_rng(0))
     # every judgement is one of the top suggestions (outliers removed), in order
+    assert judgements
     k = 0
     for j in judgements:
-        while not (set(j.left) <= asked[k][0] and set(j.right) <= asked[k][1]):
+        while k < len(asked) and not (set(j.left) <= asked[k][0] and set(j.right) <= asked[k][1]):
             k += 1
+        assert k < len(asked), f"{j} is not a top suggestion after the previous one"
         k += 1
 
 
