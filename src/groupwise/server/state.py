@@ -206,9 +206,9 @@ def resume(context: AppContext, session_id: str) -> schemas.SessionState:
     return read_state(context.db, session_id, context.viewer())
 
 
-def end_round(context: AppContext, session_id: str) -> schemas.SessionState:
+def close_open_round(context: AppContext, session_id: str) -> schemas.SessionState:
     with context.db.write() as s:
-        lifecycle.end_round(s, session_id)
+        lifecycle.close_open_round(s, session_id)
     context.supervisor.ensure_worker_soon()
     return read_state(context.db, session_id, context.viewer())
 

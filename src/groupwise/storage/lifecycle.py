@@ -84,7 +84,7 @@ def close_round(
     return row
 
 
-def end_round(s: DbSession, session_id: str, now: datetime | None = None) -> SessionRow:
+def close_open_round(s: DbSession, session_id: str, now: datetime | None = None) -> SessionRow:
     """The user ends the open round. Raises NotFoundError, ConflictError."""
     session = get_session(s, session_id, lock=True)
     close_round(s, session, "user", now)

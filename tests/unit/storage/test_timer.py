@@ -5,7 +5,7 @@ from datetime import UTC, datetime, timedelta
 import pytest
 
 from groupwise.storage import ConflictError, SessionSettings
-from groupwise.storage.lifecycle import close_if_due, end_round
+from groupwise.storage.lifecycle import close_if_due, close_open_round
 from groupwise.storage.phases import TRAINING
 from groupwise.storage.sessions import create_session, get_round, get_session
 from groupwise.storage.timer import elapsed, pause, resume, round_due, show_round
@@ -89,7 +89,7 @@ def test_only_the_open_round_can_be_shown(db, open_session):
         with db.write() as s:
             show_round(s, sid, 1)
     with db.write() as s:
-        end_round(s, sid)
+        close_open_round(s, sid)
     with pytest.raises(ConflictError, match="training"), db.write() as s:
         show_round(s, sid, 0)
 

@@ -6,7 +6,7 @@ import math
 from tests.unit.storage.conftest import prepared
 
 from groupwise.storage import sessions as repo
-from groupwise.storage.lifecycle import end_round, finish_training
+from groupwise.storage.lifecycle import close_open_round, finish_training
 from groupwise.storage.rounds import store_prepared_round
 from groupwise.storage.training import add_point, list_points
 
@@ -40,7 +40,7 @@ def test_a_committed_round_adds_its_point_its_pool_sampled_after_the_round_befor
     sid = open_session(rounds=3)
     stats = {"env_steps": 2048, "true_return_mean": 1.5, "pairs_total": 9}
     with db.write() as s:
-        end_round(s, sid)
+        close_open_round(s, sid)
         assert finish_training(s, sid, 0, "x", {**stats, "reward_val_accuracy": None})
     with db.read() as s:
         (point,) = list_points(s, sid)
@@ -48,7 +48,7 @@ def test_a_committed_round_adds_its_point_its_pool_sampled_after_the_round_befor
     assert (point.reward_val_accuracy, point.pool_steps) == (None, 0)
     with db.write() as s:  # round 1's pool came from the policy after round 0's 2,048 steps
         assert store_prepared_round(s, sid, 1, prepared())
-        end_round(s, sid)
+        close_open_round(s, sid)
         assert finish_training(s, sid, 1, "y", {**stats, "env_steps": 4096})
     with db.read() as s:
         last = list_points(s, sid)[-1]

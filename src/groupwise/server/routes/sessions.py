@@ -43,7 +43,7 @@ def resume(session_id: SessionId, context: Context) -> SessionState:
 @router.post("/{session_id}/end-round", dependencies=[Depends(owner_only("end the round"))])
 def end_round(session_id: SessionId, context: Context) -> SessionState:
     """End the open round now; training starts (409 unless a round is open; the owner's)."""
-    return state.end_round(context, session_id)
+    return state.close_open_round(context, session_id)
 
 
 @router.post("/{session_id}/retry", dependencies=[Depends(owner_only("retry a failed step"))])
