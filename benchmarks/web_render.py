@@ -88,7 +88,9 @@ def _newest(path: Path) -> float:
 def ensure_build() -> None:
     """Builds web/dist-bench when it is missing or older than the sources."""
     page = BENCH_DIST / "bench.html"
-    sources = max(_newest(WEB / "src"), (WEB / "bench.html").stat().st_mtime)
+    sources = max(
+        _newest(WEB / "src"), _newest(WEB / "bench"), (WEB / "bench.html").stat().st_mtime
+    )
     if page.exists() and page.stat().st_mtime >= sources:
         return
     if not (WEB / "node_modules").is_dir():

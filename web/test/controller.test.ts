@@ -1,7 +1,7 @@
 import { describe, expect, it, vi } from "vitest";
 import { type Api, ApiError, type Settings } from "../src/api";
-import { fakeApi } from "../src/bench/fake-api";
-import { syntheticRound } from "../src/bench/synthetic";
+import { fakeApi } from "../bench/fake-api";
+import { syntheticRound } from "../bench/synthetic";
 import { createController } from "../src/controller";
 import { createStore } from "../src/state";
 

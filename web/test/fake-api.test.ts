@@ -1,5 +1,5 @@
 /**
- * The fake server (src/bench/fake-api.ts) against the server's schema, `openapi.json`: every
+ * The fake server (bench/fake-api.ts) against the server's schema, `openapi.json`: every
  * route it answers or stands in for is an operation there, and every reply it gives carries
  * what the server's response model for that route carries, all the way down. Its types come
  * from the same schema (api-types.ts); this also catches an openapi.json regenerated without
@@ -8,8 +8,8 @@
 import { describe, expect, it } from "vitest";
 import openapi from "../openapi.json";
 import type { Api } from "../src/api";
-import { FAKE_ROUTES, FAKE_URL_ROUTES, type FakeRoute, type Served, fakeApi } from "../src/bench/fake-api";
-import { syntheticRound } from "../src/bench/synthetic";
+import { FAKE_ROUTES, FAKE_URL_ROUTES, type FakeRoute, type Served, fakeApi } from "../bench/fake-api";
+import { syntheticRound } from "../bench/synthetic";
 
 /** The part of JSON Schema (as FastAPI writes it) the check reads. */
 interface Schema {

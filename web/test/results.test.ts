@@ -1,7 +1,7 @@
 import { describe, expect, it } from "vitest";
 import { ApiError, type Api } from "../src/api";
-import { fakeApi } from "../src/bench/fake-api";
-import { syntheticRound } from "../src/bench/synthetic";
+import { fakeApi } from "../bench/fake-api";
+import { syntheticRound } from "../bench/synthetic";
 import { createController } from "../src/controller";
 import { chartGeometry, chartSeries, formatValue, niceTicks, scoreLines, scoreText } from "../src/lib/results";
 import { createStore } from "../src/state";

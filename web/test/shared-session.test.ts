@@ -1,8 +1,8 @@
 /** The page in a shared session (issue 21): others' answers, undo refused, the counters. */
 import { describe, expect, it, vi } from "vitest";
 import { type Annotator, type Api, ApiError, type EventHandlers, type JudgementOut, type Me } from "../src/api";
-import { fakeApi } from "../src/bench/fake-api";
-import { syntheticRound } from "../src/bench/synthetic";
+import { fakeApi } from "../bench/fake-api";
+import { syntheticRound } from "../bench/synthetic";
 import { createController } from "../src/controller";
 import { createStore } from "../src/state";
 

@@ -1,7 +1,7 @@
 import { describe, expect, it } from "vitest";
 import { ApiError, type AgentOut, type Api, STALE, createApi } from "../src/api";
-import { fakeApi } from "../src/bench/fake-api";
-import { syntheticRound } from "../src/bench/synthetic";
+import { fakeApi } from "../bench/fake-api";
+import { syntheticRound } from "../bench/synthetic";
 import { createController } from "../src/controller";
 import { choiceText, takeawayRounds } from "../src/lib/takeaway";
 import { createStore } from "../src/state";

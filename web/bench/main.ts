@@ -7,16 +7,16 @@
  *   `&shared=owner` / `&shared=annotator`: a session shared by three people, seen by its
  *   owner or by one of them; `&owner=NAME` names the owner).
  */
-import "../styles.css";
-import type { SessionState } from "../api";
-import { startApp } from "../app";
-import { DEFAULT_BETA } from "../lib/edges";
-import { guideKey } from "../lib/guide";
-import { type Groups, EMPTY_GROUPS } from "../lib/selection";
-import { buildTree } from "../lib/tree";
-import { comparedLeaves } from "../state";
-import type { RoundData } from "../state";
-import { type ExplorationData, type ExplorationHandlers, renderExploration } from "../views/exploration";
+import "../src/styles.css";
+import type { SessionState } from "../src/api";
+import { startApp } from "../src/app";
+import { DEFAULT_BETA } from "../src/lib/edges";
+import { guideKey } from "../src/lib/guide";
+import { type Groups, EMPTY_GROUPS } from "../src/lib/selection";
+import { buildTree } from "../src/lib/tree";
+import { comparedLeaves } from "../src/state";
+import type { RoundData } from "../src/state";
+import { type ExplorationData, type ExplorationHandlers, renderExploration } from "../src/views/exploration";
 import { fakeApi } from "./fake-api";
 import { rng, syntheticRound } from "./synthetic";
 

@@ -3,7 +3,7 @@
  * server's (every leaf at depth `levels`, single-child padding where a cluster skips a
  * level), suggestion edges and judgements. Seeded, so runs are comparable.
  */
-import type { Edge, JudgementOut, TreeNodeJson } from "../api";
+import type { Edge, JudgementOut, TreeNodeJson } from "../src/api";
 
 /** mulberry32: a small seeded generator in [0, 1). */
 export function rng(seed: number): () => number {

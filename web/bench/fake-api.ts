@@ -8,9 +8,9 @@
  * so a changed schema fails the type check; and test/fake-api.test.ts checks every route in
  * `FAKE_ROUTES` against `openapi.json` itself, replies included.
  */
-import openapiDocument from "../../openapi.json";
-import type { Annotator, Api, EnvInfo, JudgementOut, OpenApiDocument, PairQuery, SessionState } from "../api";
-import type { paths } from "../api-types";
+import openapiDocument from "../openapi.json";
+import type { Annotator, Api, EnvInfo, JudgementOut, OpenApiDocument, PairQuery, SessionState } from "../src/api";
+import type { paths } from "../src/api-types";
 import type { SyntheticRound } from "./synthetic";
 
 type Method = "get" | "post" | "put" | "delete";
