@@ -126,12 +126,12 @@ def next_suggestion(
     """The best unused group suggestion of the round for `caller`, skipping `exclude`
     (consecutive [left], [right] lists) and what is leased to others; in a shared session
     leased to `caller` (`storage.rounds.next_suggestion`). Raises InvalidError for an odd
-    number of lists."""
+    number of lists, ConflictError unless round `index` is the open one."""
     lists = list(exclude or [])
     if len(lists) % 2:
         raise InvalidError("exclude must hold pairs of lists: [left ids], [right ids], …")
     queries = [(lists[i], lists[i + 1]) for i in range(0, len(lists), 2)]
-    row = _prepared_round(db, session_id, index)
+    row = _open_round(db, session_id, index)
     lease_s = _lease_s(db, session_id)
     with db.write() if lease_s > 0 else db.read() as s:
         found = repo.next_suggestion(s, row.id, queries, holder=caller.id, lease_s=lease_s)
@@ -149,11 +149,16 @@ def next_suggestion(
         )
 
 
-def _open_round(db: Database, session_id: str) -> RoundRow:
+def _open_round(db: Database, session_id: str, index: int | None = None) -> RoundRow:
+    """The session's open round; raises ConflictError when none is open or when `index` (if
+    given) names another round, as `…/shown` does (docs/app.md)."""
     with db.read() as s:
         session = get_session(s, session_id)
         if session.phase != READY:
             raise ConflictError(f"session {session_id} is {session.phase}; no round is open")
+        if index is not None and index != session.round:
+            state = "closed" if index < session.round else "not open yet"
+            raise ConflictError(f"round {index} is {state}; the open round is {session.round}")
         return get_round(s, session_id, session.round)
 
 

@@ -248,6 +248,25 @@ def test_end_round_then_training_then_the_next_round(client):
     )
 
 
+def test_next_suggestion_is_409_for_any_round_but_the_open_one(client):
+    sid = new_session(client)["id"]
+    url = f"/api/sessions/{sid}/rounds/{{}}/next-suggestion"
+    assert client.post(url.format(0)).status_code == 409  # round 0 is being prepared
+    run_worker_once(client)
+    assert client.post(url.format(0)).json()["suggestion"] is not None
+    early = client.post(url.format(1))
+    assert early.status_code == 409
+    assert early.json()["detail"] == "round 1 is not open yet; the open round is 0"
+    client.post(f"/api/sessions/{sid}/end-round")
+    assert client.post(url.format(0)).status_code == 409  # training: no round is open
+    run_worker_once(client)  # train
+    run_worker_once(client)  # prepare round 1
+    closed = client.post(url.format(0))
+    assert closed.status_code == 409
+    assert closed.json()["detail"] == "round 0 is closed; the open round is 1"
+    assert client.post(url.format(1)).json()["suggestion"] is not None
+
+
 def test_export_and_import_over_http(prepared):
     client, sid, _ = prepared
     judge(client, sid, ["b6"], ["b7", "b8"], label="equal")
