@@ -3,7 +3,7 @@ import dataclasses
 import numpy as np
 import pytest
 
-from groupwise.pool.fragments import Trajectory, most_uncertain, stack_fragments, tile_fragments
+from groupwise.episodes.fragments import Trajectory, most_uncertain, stack_fragments, tile_fragments
 
 
 def _trajectory(length: int, episode: int = 0) -> Trajectory:

@@ -5,7 +5,7 @@ import pytest
 
 from groupwise.config import RewardConfig
 from groupwise.envs import make_env
-from groupwise.pool.fragments import stack_fragments, tile_fragments
+from groupwise.episodes.fragments import stack_fragments, tile_fragments
 from groupwise.pool.sampling import sample_pool, split_windows, windows_to_sample
 from groupwise.reward import RewardEnsemble
 from groupwise.rl.policy import RandomPolicy, biased_variants

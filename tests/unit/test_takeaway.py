@@ -10,8 +10,8 @@ from groupwise.oracles.base import Teacher
 from groupwise.oracles.calibration import CalibratedTeacher
 from groupwise.oracles.group_decision import Perception, SimulatedTeacher
 from groupwise.oracles.pairwise import PairwiseTeacher
-from groupwise.pool.behaviours import BehaviourPool
-from groupwise.pool.fragments import Trajectory
+from groupwise.behaviour.pool import BehaviourPool
+from groupwise.episodes.fragments import Trajectory
 from groupwise.preferences.judgement import Judgement
 from groupwise.query.strategies import Query
 from groupwise.run.takeaway import (

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
-from groupwise.pool.fragments import Fragment
+from groupwise.episodes.fragments import Fragment
 from groupwise.types import FloatArray
 
 BehaviourLike = Fragment | npt.ArrayLike

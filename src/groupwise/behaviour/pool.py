@@ -1,17 +1,17 @@
-"""A round's behaviour pool: the fragments on offer and what the ensemble predicts of them
-(behaviour i is named ``b<i>``: `groupwise.pool.ids`)."""
+"""A round's behaviour pool: the fragments on offer, what the ensemble predicts of them, and
+their DTW distances and tree, each computed once (behaviour i is named ``b<i>``:
+`groupwise.episodes.ids`). Sampling one from a policy is `groupwise.pool.sampling`'s job."""
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING
 
 import numpy as np
 
-from groupwise.pool.fragments import Fragment, Trajectory
+from groupwise.behaviour.dtw import band_window, dtw_matrix
+from groupwise.behaviour.features import pool_features
+from groupwise.behaviour.tree import BehaviourTree, build_tree
+from groupwise.config import TreeConfig
+from groupwise.episodes.fragments import Fragment, Trajectory
 from groupwise.types import FloatArray, ProgressFn
-
-if TYPE_CHECKING:
-    from groupwise.behaviour import BehaviourTree
-    from groupwise.config import TreeConfig
 
 
 @dataclass(frozen=True)
@@ -32,7 +32,7 @@ class BehaviourPool:
     predicted_returns: FloatArray  # (N, K)
     step_variance: FloatArray | None = None  # (N,)
     episodes: tuple[Trajectory, ...] = field(default=(), repr=False)
-    _trees: dict["TreeConfig", "BehaviourTree"] = field(
+    _trees: dict[TreeConfig, BehaviourTree] = field(
         default_factory=dict, init=False, repr=False, compare=False
     )
     _measured: dict[str, FloatArray] = field(
@@ -66,15 +66,12 @@ class BehaviourPool:
         return self.measure_distances()
 
     def measure_distances(
-        self, progress: ProgressFn | None = None, cfg: "TreeConfig | None" = None
+        self, progress: ProgressFn | None = None, cfg: TreeConfig | None = None
     ) -> FloatArray:
         """The distances with `cfg`'s DTW band and time step (`TreeConfig.dtw_band`,
         `dtw_stride`; default config: `distances`), computed now unless they were before;
         `progress` hears (pairs done, pairs) while they are computed
         (`behaviour.dtw.dtw_matrix`)."""
-        from groupwise.behaviour import band_window, dtw_matrix, pool_features
-        from groupwise.config import TreeConfig
-
         cfg = cfg or TreeConfig()
         key = f"distances/{cfg.dtw_band}/{cfg.dtw_stride}"
         if key not in self._measured:
@@ -85,12 +82,9 @@ class BehaviourPool:
             )
         return self._measured[key]
 
-    def tree(self, cfg: "TreeConfig | None" = None) -> "BehaviourTree":
+    def tree(self, cfg: TreeConfig | None = None) -> BehaviourTree:
         """The pool's behaviour tree cut by `cfg` (SPEC §4), built once per config: the one
         tree the strategies' candidates, the published pool and the page share."""
-        from groupwise.behaviour import build_tree
-        from groupwise.config import TreeConfig
-
         cfg = cfg or TreeConfig()
         if cfg not in self._trees:
             self._trees[cfg] = build_tree(self.measure_distances(cfg=cfg), cfg)

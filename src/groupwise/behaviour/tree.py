@@ -87,7 +87,7 @@ from groupwise.behaviour.linkage import (
     pool_size,
 )
 from groupwise.config import TreeConfig
-from groupwise.pool.ids import behaviour_id
+from groupwise.episodes.ids import behaviour_id
 from groupwise.preferences.judgement import MAX_GROUP
 from groupwise.types import FloatArray, IntArray
 

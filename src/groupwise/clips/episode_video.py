@@ -14,7 +14,7 @@ from pathlib import Path
 from groupwise.clips.replay import FrameSettings, even_crop, make_render_env, replay_windows
 from groupwise.clips.timing import clip_timing, step_seconds
 from groupwise.clips.video import encode_mp4
-from groupwise.pool.fragments import Trajectory
+from groupwise.episodes.fragments import Trajectory
 
 MAX_VIDEO_SECONDS = 10.0
 """Most simulated seconds of an episode the video shows (its first ones)."""

@@ -44,7 +44,7 @@ from groupwise.clips.replay import (
 from groupwise.clips.timing import ClipTiming
 from groupwise.clips.video import VideoConfig, poster_bytes, poster_frame
 from groupwise.envs.physics_state import restore_physics_state
-from groupwise.pool.fragments import Fragment, Trajectory
+from groupwise.episodes.fragments import Fragment, Trajectory
 from groupwise.types import FloatArray
 
 FORMAT = "groupwise.clip-recipe/1"

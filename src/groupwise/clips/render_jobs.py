@@ -21,7 +21,7 @@ from groupwise.clips.replay import FrameSettings, even_crop, make_render_env, re
 from groupwise.clips.store import ClipStore
 from groupwise.clips.timing import ClipTiming
 from groupwise.clips.video import DEFAULT_FPS, ClipEncoder, poster_bytes, poster_frame
-from groupwise.pool.fragments import Fragment, Trajectory
+from groupwise.episodes.fragments import Fragment, Trajectory
 
 logger = logging.getLogger(__name__)
 

@@ -29,7 +29,7 @@ from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
 from groupwise.clips.video import VideoConfig
 from groupwise.envs import make_env
 from groupwise.envs.rendering import DEFAULT_FRAME_SIZE, FrameSize
-from groupwise.pool.fragments import Trajectory
+from groupwise.episodes.fragments import Trajectory
 
 PLANE_GRID_CELLS = 40
 """Most rendering-grid cells a side of a plane in clip frames (see `apply_clip_quality`)."""

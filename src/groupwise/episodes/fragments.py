@@ -38,7 +38,7 @@ class Trajectory:
     there instead of replaying the episode from its reset (`clips.recipe`)."""
     source: int = 0
     """Which policy played it in a pool: 0 the round's policy, k its k-th variant
-    (`pool.sampling.sample_pool`)."""
+    (`groupwise.pool.sampling.sample_pool`)."""
 
     def __post_init__(self) -> None:
         t = self.obs.shape[0]

@@ -7,7 +7,7 @@ from typing import Protocol
 
 import numpy as np
 
-from groupwise.pool.behaviours import BehaviourPool
+from groupwise.behaviour.pool import BehaviourPool
 from groupwise.preferences.judgement import Judgement
 from groupwise.query.strategies import Query, QueryStrategy
 

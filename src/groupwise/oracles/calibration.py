@@ -25,7 +25,7 @@ import numpy as np
 from scipy.special import ndtr
 
 from groupwise.oracles.base import Teacher
-from groupwise.pool.behaviours import BehaviourPool
+from groupwise.behaviour.pool import BehaviourPool
 from groupwise.preferences.judgement import Judgement
 from groupwise.query.strategies import Query
 from groupwise.types import FloatArray

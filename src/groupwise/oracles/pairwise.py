@@ -6,7 +6,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from groupwise.oracles.noise import perceived_returns, preference
-from groupwise.pool.behaviours import BehaviourPool
+from groupwise.behaviour.pool import BehaviourPool
 from groupwise.preferences.judgement import Judgement, Source
 from groupwise.query.strategies import Query
 

@@ -1,8 +1,8 @@
-"""A round's behaviours: episodes cut into windows (`fragments`), sampled from a policy
-(`sampling`), held with the ensemble's predictions (`behaviours.BehaviourPool`), named
-``b<i>`` (`ids`), and published for the page as clips, tree and candidates (`publish`, in
-the directory format of `files`).
+"""A round's pool made and shown: sampled from a policy (`sampling`, from its `sources`) and
+published for the page as clips, tree and candidates (`publish`, in the directory format of
+`files`).
 
-Import from the submodules; this package imports nothing, so `behaviour` may name
-behaviours (`ids`) without pulling in the pool.
+The data it is made of sit below it: episodes and their windows (`groupwise.episodes`), and
+the pool with its distances and tree (`groupwise.behaviour.pool.BehaviourPool`). Import from
+the submodules; this package imports nothing.
 """

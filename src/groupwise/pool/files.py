@@ -1,6 +1,6 @@
 """A published pool's directory: what `pool.publish.publish_pool` writes and the app reads.
 
-Directory layout (``format: groupwise.pool.behaviours/1``)::
+Directory layout (``format: groupwise.behaviour.pool/1``)::
 
     pool.json         manifest: config (sampling and `PublishConfig`), metadata (policy,
                       seed), env, counts, frame_size [width, height], file names,
@@ -37,12 +37,12 @@ from groupwise.behaviour import BehaviourTree, TreeNode, to_json
 from groupwise.clips.replay import episode_arrays
 from groupwise.clips.store import ClipStore
 from groupwise.clips.timing import ClipTiming
-from groupwise.pool.behaviours import BehaviourPool
-from groupwise.pool.fragments import Fragment
-from groupwise.pool.ids import behaviour_id
+from groupwise.behaviour.pool import BehaviourPool
+from groupwise.episodes.fragments import Fragment
+from groupwise.episodes.ids import behaviour_id
 from groupwise.types import FloatArray
 
-FORMAT = "groupwise.pool.behaviours/1"
+FORMAT = "groupwise.behaviour.pool/1"
 
 
 @dataclass(frozen=True)

@@ -42,7 +42,7 @@ from groupwise.clips.store import ClipStore
 from groupwise.clips.timing import clip_timing, step_seconds
 from groupwise.clips.video import VideoConfig
 from groupwise.envs import make_env
-from groupwise.pool.behaviours import BehaviourPool
+from groupwise.behaviour.pool import BehaviourPool
 from groupwise.pool.files import (
     FORMAT,
     PoolTimings,

@@ -16,8 +16,8 @@ from typing import Literal
 import numpy as np
 
 from groupwise.clips.timing import clip_timing, step_seconds
-from groupwise.pool.behaviours import BehaviourPool
-from groupwise.pool.fragments import (
+from groupwise.behaviour.pool import BehaviourPool
+from groupwise.episodes.fragments import (
     Trajectory,
     most_uncertain,
     stack_fragments,

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from groupwise.pool.fragments import Fragment
+from groupwise.episodes.fragments import Fragment
 from groupwise.preferences.pairs import Pair
 from groupwise.types import FloatArray, IntArray
 

@@ -21,7 +21,7 @@ import numpy as np
 
 from groupwise.behaviour import group_candidates
 from groupwise.config import TreeConfig
-from groupwise.pool.behaviours import BehaviourPool
+from groupwise.behaviour.pool import BehaviourPool
 from groupwise.preferences.judgement import MAX_GROUP
 from groupwise.query.groups import (
     GroupCandidate,

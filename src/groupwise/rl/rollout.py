@@ -24,7 +24,7 @@ import numpy as np
 
 from groupwise.envs.episodes import GIVE_UP_EPISODES, too_short_message
 from groupwise.envs.spaces import encode_actions
-from groupwise.pool.fragments import Trajectory
+from groupwise.episodes.fragments import Trajectory
 from groupwise.rl.batch_envs import BatchEnvs, processes_for
 from groupwise.rl.policy import Policy, random_actions
 from groupwise.types import FloatArray, IntArray, ProgressFn

@@ -30,7 +30,7 @@ from groupwise.config import RunConfig
 from groupwise.envs import DEFAULT_FRAME_SIZE
 from groupwise.oracles import ORACLES
 from groupwise.oracles.base import Teacher
-from groupwise.pool.fragments import Trajectory
+from groupwise.episodes.fragments import Trajectory
 from groupwise.rl.policy import Policy
 from groupwise.rl.ppo import POLICY_FILE, PPOAgent
 from groupwise.rl.rollout import sample_trajectories

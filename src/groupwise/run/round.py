@@ -29,7 +29,7 @@ from groupwise.behaviour import BehaviourTree
 from groupwise.config import LoopConfig, RunConfig
 from groupwise.oracles.base import Feedback
 from groupwise.oracles.calibration import calibrated_noise_sd
-from groupwise.pool.behaviours import BehaviourPool
+from groupwise.behaviour.pool import BehaviourPool
 from groupwise.pool.sampling import sample_pool
 from groupwise.preferences.judgement import Judgement
 from groupwise.preferences.pairs import Pair, cap_pairs, judgement_pairs

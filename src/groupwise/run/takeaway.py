@@ -30,8 +30,8 @@ from typing import Any, Literal
 import numpy as np
 
 from groupwise.oracles.base import Teacher
-from groupwise.pool.behaviours import BehaviourPool
-from groupwise.pool.fragments import Fragment, Trajectory
+from groupwise.behaviour.pool import BehaviourPool
+from groupwise.episodes.fragments import Fragment, Trajectory
 from groupwise.query.strategies import Query
 
 TAKEAWAY_FILE = "takeaway.json"

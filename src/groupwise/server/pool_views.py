@@ -11,7 +11,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from groupwise.pool.ids import behaviour_id
+from groupwise.episodes.ids import behaviour_id
 from groupwise.server import schemas
 from groupwise.server.context import AppContext
 from groupwise.storage import ConflictError, Database, InvalidError, NotFoundError

@@ -9,7 +9,7 @@ from typing import Annotated, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, model_validator
 
-from groupwise.pool.ids import BEHAVIOUR_PREFIX, behaviour_id
+from groupwise.episodes.ids import BEHAVIOUR_PREFIX, behaviour_id
 from groupwise.storage.settings import MAX_GROUP, MAX_PPO_STEPS, MAX_ROUNDS, SessionSettings
 
 Phase = Literal["preparing", "ready", "training", "finishing", "finished", "failed"]

@@ -25,7 +25,7 @@ from pathlib import Path
 from sqlalchemy import select
 from sqlalchemy.orm import Session as DbSession
 
-from groupwise.pool.ids import behaviour_index
+from groupwise.episodes.ids import behaviour_index
 from groupwise.preferences.judgement import LABELS as PAIR_LABELS
 from groupwise.storage.annotators import OWNER, display_names
 from groupwise.storage.errors import InvalidError

@@ -24,7 +24,7 @@ from sqlalchemy import func, select
 from sqlalchemy.orm import Session as DbSession
 from sqlalchemy.orm import selectinload
 
-from groupwise.pool.ids import behaviour_id, behaviour_index
+from groupwise.episodes.ids import behaviour_id, behaviour_index
 from groupwise.preferences.judgement import (
     EQUAL,
     LEFT_BETTER,

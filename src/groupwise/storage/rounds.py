@@ -19,7 +19,7 @@ import numpy as np
 from sqlalchemy import delete, or_, select, update
 from sqlalchemy.orm import Session as DbSession
 
-from groupwise.pool.ids import behaviour_id
+from groupwise.episodes.ids import behaviour_id
 from groupwise.storage.errors import NotFoundError
 from groupwise.storage.lifecycle import open_round
 from groupwise.storage.models import (

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 from sqlalchemy.orm import Session as DbSession
 
-from groupwise.pool.ids import behaviour_index
+from groupwise.episodes.ids import behaviour_index
 from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.storage.errors import InvalidError, NotFoundError
 from groupwise.storage.judgements import list_judgements

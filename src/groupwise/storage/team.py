@@ -28,7 +28,7 @@ import numpy as np
 from sqlalchemy import func, select
 from sqlalchemy.orm import Session as DbSession
 
-from groupwise.pool.ids import behaviour_id
+from groupwise.episodes.ids import behaviour_id
 from groupwise.preferences.agreement import (
     Agreement,
     ModelAgreement,

@@ -26,7 +26,7 @@ from groupwise.config import RunConfig
 from groupwise.envs import TARGET_TOTAL_KEY, Target
 from groupwise.envs.targets import TARGET_SCORE_KEY
 from groupwise.oracles import Feedback
-from groupwise.pool.behaviours import BehaviourPool
+from groupwise.behaviour.pool import BehaviourPool
 from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.query.strategies import Query, QueryStrategy
 from groupwise.rl.policy import Policy

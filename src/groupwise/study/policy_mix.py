@@ -24,7 +24,7 @@ import gymnasium as gym
 import numpy as np
 
 from groupwise.envs import make_env
-from groupwise.pool.fragments import Fragment, tile_fragments
+from groupwise.episodes.fragments import Fragment, tile_fragments
 from groupwise.rl.policy import Policy, RandomPolicy, random_actions
 from groupwise.rl.rollout import sample_trajectories
 from groupwise.types import FloatArray

@@ -30,7 +30,7 @@ from groupwise.clips.render import RenderPool
 from groupwise.clips.store import ClipStore
 from groupwise.config import RunConfig
 from groupwise.oracles import STRATEGIES
-from groupwise.pool.behaviours import BehaviourPool
+from groupwise.behaviour.pool import BehaviourPool
 from groupwise.pool.files import load_pool
 from groupwise.pool.publish import PublishConfig, publish_pool
 from groupwise.pool.sampling import windows_to_sample

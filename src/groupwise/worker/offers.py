@@ -10,8 +10,8 @@ from collections.abc import Sequence
 import numpy as np
 
 from groupwise.behaviour import BehaviourTree
-from groupwise.pool.behaviours import BehaviourPool
-from groupwise.pool.ids import behaviour_id
+from groupwise.behaviour.pool import BehaviourPool
+from groupwise.episodes.ids import behaviour_id
 from groupwise.pool.publish import PreparedPool
 from groupwise.query.pairwise import top_pairs
 from groupwise.query.strategies import Query

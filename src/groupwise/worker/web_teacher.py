@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from groupwise.clips.render import RenderPool
-from groupwise.pool.behaviours import BehaviourPool
+from groupwise.behaviour.pool import BehaviourPool
 from groupwise.preferences.judgement import Judgement
 from groupwise.query.strategies import Query
 from groupwise.storage import Database, SessionSettings, default_url

@@ -7,7 +7,7 @@ from groupwise.behaviour.features import (
     raw_sequences,
     step_features,
 )
-from groupwise.pool.fragments import Fragment
+from groupwise.episodes.fragments import Fragment
 
 
 def fragment(obs: np.ndarray, acts: np.ndarray, start: int = 0) -> Fragment:

@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from groupwise.behaviour import TreeConfig, band_window, build_tree, dtw_matrix, pool_features
-from groupwise.pool.behaviours import BehaviourPool
-from groupwise.pool.fragments import Fragment
+from groupwise.behaviour.pool import BehaviourPool
+from groupwise.episodes.fragments import Fragment
 
 
 def _pool(n: int = 12, length: int = 20) -> BehaviourPool:

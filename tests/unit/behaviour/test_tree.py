@@ -249,7 +249,7 @@ def test_tree_properties(n, seed, method, bands, levels, ties, balance):
 
 def test_pool_to_tree_end_to_end():
     from groupwise.behaviour import dtw_matrix, pool_features
-    from groupwise.pool.fragments import Fragment
+    from groupwise.episodes.fragments import Fragment
 
     rng = np.random.default_rng(5)
     fragments = [

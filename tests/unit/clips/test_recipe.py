@@ -14,7 +14,7 @@ from groupwise.clips.replay import FrameSettings, ReplayMismatchError, make_rend
 from groupwise.clips.store import ClipStore
 from groupwise.clips.timing import clip_timing, step_seconds
 from groupwise.envs import make_env
-from groupwise.pool.fragments import Fragment, Trajectory, tile_fragments
+from groupwise.episodes.fragments import Fragment, Trajectory, tile_fragments
 from groupwise.rl.policy import RandomPolicy
 from groupwise.rl.rollout import sample_episodes_for_windows
 

@@ -23,7 +23,7 @@ from groupwise.clips.store import ClipStore
 from groupwise.clips.video import probe, read_frames
 from groupwise.envs import make_env
 from groupwise.envs.gridworld import draw_grid
-from groupwise.pool.fragments import Trajectory, tile_fragments
+from groupwise.episodes.fragments import Trajectory, tile_fragments
 from groupwise.rl.policy import RandomPolicy
 from groupwise.rl.rollout import sample_trajectories
 

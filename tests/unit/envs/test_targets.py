@@ -24,8 +24,8 @@ from groupwise.envs import (
 )
 from groupwise.envs.scorers import upness, wrap_angle
 from groupwise.oracles import Feedback, PairwiseTeacher, Perception, SimulatedTeacher
-from groupwise.pool.behaviours import BehaviourPool
-from groupwise.pool.fragments import Trajectory, tile_fragments
+from groupwise.behaviour.pool import BehaviourPool
+from groupwise.episodes.fragments import Trajectory, tile_fragments
 from groupwise.query.strategies import GroupSuggestions, InteractiveWalk, PairwiseQueries, Query
 from groupwise.rl.policy import RandomPolicy
 from groupwise.rl.rollout import sample_trajectories

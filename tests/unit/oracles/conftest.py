@@ -5,8 +5,8 @@ from collections.abc import Sequence
 import numpy as np
 import pytest
 
-from groupwise.pool.behaviours import BehaviourPool
-from groupwise.pool.fragments import Fragment
+from groupwise.behaviour.pool import BehaviourPool
+from groupwise.episodes.fragments import Fragment
 
 LENGTH = 10
 

@@ -11,8 +11,8 @@ from groupwise.oracles.imperfect import (
     Mistake,
     SkipWhenBothBelow,
 )
-from groupwise.pool.behaviours import BehaviourPool
-from groupwise.pool.fragments import Fragment
+from groupwise.behaviour.pool import BehaviourPool
+from groupwise.episodes.fragments import Fragment
 from groupwise.preferences.dataset import wrong_labels
 from groupwise.preferences.judgement import EQUAL, LEFT_BETTER, RIGHT_BETTER, Judgement
 from groupwise.preferences.pairs import covering_pairs

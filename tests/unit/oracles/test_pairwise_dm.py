@@ -2,8 +2,8 @@ import numpy as np
 
 from groupwise.oracles import Feedback, PairwiseTeacher
 from groupwise.oracles.noise import perceived_returns, preference
-from groupwise.pool.behaviours import BehaviourPool
-from groupwise.pool.fragments import Fragment
+from groupwise.behaviour.pool import BehaviourPool
+from groupwise.episodes.fragments import Fragment
 from groupwise.query.strategies import PairwiseQueries
 
 

@@ -1,6 +1,6 @@
 import numpy as np
 
-from groupwise.pool.fragments import Fragment
+from groupwise.episodes.fragments import Fragment
 from groupwise.preferences.dataset import PreferenceDataset, wrong_labels
 from groupwise.preferences.pairs import Pair
 

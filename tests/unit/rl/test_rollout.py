@@ -3,7 +3,7 @@ import numpy as np
 import pytest
 
 from groupwise.envs import TARGET_TOTAL_KEY, make_env
-from groupwise.pool.fragments import tile_fragments
+from groupwise.episodes.fragments import tile_fragments
 from groupwise.rl.policy import RandomPolicy
 from groupwise.rl.rollout import (
     evaluate,

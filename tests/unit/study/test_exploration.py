@@ -2,8 +2,8 @@
 
 import numpy as np
 
-from groupwise.pool.behaviours import BehaviourPool
-from groupwise.pool.fragments import Fragment
+from groupwise.behaviour.pool import BehaviourPool
+from groupwise.episodes.fragments import Fragment
 from groupwise.study.case_study import PoolRecorder, pool_scores
 
 

@@ -17,7 +17,7 @@ from tests.unit.server.conftest import TINY, context_of, new_session, run_worker
 
 from groupwise.config import RunConfig
 from groupwise.pool.files import load_fragments
-from groupwise.pool.ids import behaviour_index
+from groupwise.episodes.ids import behaviour_index
 from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.preferences.judgement import LEFT_BETTER, RIGHT_BETTER, Judgement
 from groupwise.run.round import begin_round, end_round
