@@ -64,6 +64,12 @@ def _format_of(args: argparse.Namespace) -> str:
     return suffix if suffix in FORMATS else "jsonl"
 
 
+def _judgements_text(total: int, undone: int) -> str:
+    """ "40 judgements (6 undone)": every judgement a file or database holds, undone ones
+    included (issue 40: the import printed only the live ones)."""
+    return f"{total} judgements" + (f" ({undone} undone)" if undone else "")
+
+
 def run_export(args: argparse.Namespace) -> int:
     from groupwise.storage import Database, StorageError, default_url
     from groupwise.storage.export import StatesExport, export_session
@@ -93,7 +99,7 @@ def run_export(args: argparse.Namespace) -> int:
     output = args.output or Path(f"{session_id}.{fmt}")
     writable_dir(output.resolve().parent)
     output.write_bytes(body)
-    what = f"{len(export.judgements)} judgements"
+    what = _judgements_text(len(export.judgements), sum(j.undone for j in export.judgements))
     if args.states:
         what += f", {sum(len(b.names) for b in export.behaviours)} behaviours' states"
     print(f"groupwise: wrote {output} ({what})", file=sys.stderr)
@@ -105,6 +111,7 @@ def run_import(args: argparse.Namespace) -> int:
     from groupwise.storage.counts import counts
     from groupwise.storage.export import import_session
     from groupwise.storage.export_format import from_jsonl, from_parquet
+    from groupwise.storage.judgements import list_judgements
 
     try:
         body = args.file.read_bytes()
@@ -119,6 +126,7 @@ def run_import(args: argparse.Namespace) -> int:
         with db.write() as s:
             session = import_session(s, export, data_dir=data)
             counted = counts(s, session)
+            stored = list_judgements(s, session.id, include_undone=True)
             session_id = session.id
     except StorageError as error:
         raise UsageError(f"{args.file}: {error}") from None
@@ -126,8 +134,7 @@ def run_import(args: argparse.Namespace) -> int:
         db.dispose()
     print(
         f"groupwise: imported {args.file} as session {session_id} "
-        f"({counted.comparisons_total} judgements, {counted.pairs_total} pairs"
-        + (", with states" if export.behaviours else "")
-        + ")",
+        f"({_judgements_text(len(stored), sum(j.undone for j in stored))}, "
+        f"{counted.pairs_total} pairs" + (", with states" if export.behaviours else "") + ")",
     )
     return 0

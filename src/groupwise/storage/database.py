@@ -36,6 +36,7 @@ Reads are plain transactions and never wait for writers (MVCC).
 import threading
 from collections.abc import Iterator
 from contextlib import contextmanager, nullcontext
+from os import PathLike
 from pathlib import Path
 from typing import Any
 
@@ -55,14 +56,15 @@ WRITE_LOCK = 0x67726F7570  # "group"
 _TAKE_WRITE_LOCK = text("SELECT pg_advisory_xact_lock(:key)").bindparams(key=WRITE_LOCK)
 
 
-def sqlite_url(path: Path) -> str:
-    """The SQLAlchemy URL of a SQLite file."""
-    return f"sqlite:///{path.resolve()}"
+def sqlite_url(path: str | PathLike[str]) -> str:
+    """The SQLAlchemy URL of a SQLite file (a str or a Path)."""
+    return f"sqlite:///{Path(path).resolve()}"
 
 
-def default_url(data_dir: Path) -> str:
-    """``DIR/groupwise.db``, the database of a data directory unless `--db` names another."""
-    return sqlite_url(data_dir / DATABASE_FILE)
+def default_url(data_dir: str | PathLike[str]) -> str:
+    """``DIR/groupwise.db``, the database of a data directory (a str or a Path) unless
+    `--db` names another."""
+    return sqlite_url(Path(data_dir) / DATABASE_FILE)
 
 
 class Database:

@@ -12,6 +12,7 @@ session's stored pairs into the `PreferenceDataset` a reward model fits
 
 from collections.abc import Iterable
 from dataclasses import dataclass
+from os import PathLike
 from pathlib import Path
 
 import numpy as np
@@ -66,7 +67,7 @@ class BehaviourStates:
 
 
 def read_round_states(
-    data_dir: Path,
+    data_dir: str | PathLike[str],
     session_id: str,
     round_index: int,
     pool_dir: str | None,
@@ -80,7 +81,7 @@ def read_round_states(
     InvalidError when a name is not in it.
     """
     wanted = tuple(names)
-    root = data_dir.resolve()
+    root = Path(data_dir).resolve()
     imported = root / round_directory(session_id, round_index) / STATES_FILE
     # only ever inside the data directory: an imported export's pool_dir could name any path
     pool = (root / pool_dir / POOL_ARRAYS).resolve() if pool_dir else None
@@ -134,7 +135,9 @@ def write_round_states(directory: Path, states: BehaviourStates) -> None:
     tmp.replace(directory / STATES_FILE)
 
 
-def preference_dataset(s: DbSession, data_dir: Path, session_id: str) -> PreferenceDataset:
+def preference_dataset(
+    s: DbSession, data_dir: str | PathLike[str], session_id: str
+) -> PreferenceDataset:
     """The session's stored pairs (of judgements not undone) over their behaviours' states:
     each behaviour of a round stored once, pairs in judgement order, `rounds` their round.
 

@@ -7,11 +7,12 @@ import numpy as np
 import pytest
 from tests.unit.storage.conftest import N
 
-from groupwise.storage import InvalidError, NotFoundError
+from groupwise.cli import main as cli
+from groupwise.storage import Database, InvalidError, NotFoundError, default_url
 from groupwise.storage.export import StatesExport, export_session, import_session
 from groupwise.storage.export_format import from_jsonl, from_parquet, to_jsonl, to_parquet
 from groupwise.storage.judgements import JudgementInput, add_judgement, undo_judgement
-from groupwise.storage.sessions import get_round, round_directory
+from groupwise.storage.sessions import get_round, list_sessions, round_directory
 from groupwise.storage.states import preference_dataset
 
 L = 4
@@ -114,3 +115,32 @@ def test_states_are_read_only_inside_the_data_directory(db, judged, tmp_path):
         export_session(s, sid, StatesExport(data))
     with db.read() as s:  # without states the export does not look
         assert len(export_session(s, sid).judgements) == 3
+
+
+def docs_example(name: str, marker: str) -> str:
+    """The first ```python block of docs/`name` that contains `marker`."""
+    text = (Path(__file__).parents[3] / "docs" / name).read_text()
+    blocks = [b.split("```", 1)[0] for b in text.split("```python\n")[1:]]
+    return next(b for b in blocks if marker in b)
+
+
+def test_groupwise_import_counts_what_it_stores_and_the_docs_example_reads_it(
+    db, judged, tmp_path, capsys
+):
+    sid, data = judged
+    with db.read() as s:
+        exported = tmp_path / "feedback.jsonl"
+        exported.write_bytes(to_jsonl(export_session(s, sid, StatesExport(data))))
+    fresh = tmp_path / "fresh"
+    assert cli(["import", str(exported), "--data", str(fresh)]) == 0
+    # three stored, one of them undone; the two live ones give three pairs
+    assert "(3 judgements (1 undone), 3 pairs, with states)" in capsys.readouterr().out
+    fresh_db = Database(default_url(fresh))
+    with fresh_db.read() as s:
+        (imported,) = list_sessions(s)
+    fresh_db.dispose()
+    # docs/export.md's example as written, DIR a str (issue 40: TypeError before)
+    scope = {"DIR": str(fresh), "session_id": imported.id}
+    exec(docs_example("export.md", "default_url(DIR)"), scope)
+    assert len(scope["dataset"]) == 3 and scope["dataset"].n_fragments == 5
+    assert default_url(str(fresh)) == default_url(fresh) == f"sqlite:///{fresh}/groupwise.db"
