@@ -8,7 +8,9 @@ copied, not derived again) with `origin` naming the exported session.
 Who made each judgement is exported by name (``annotator``) and id (``annotator_id``), and
 the team's counters and agreement as annotator lines (`storage.team`, docs/teams.md). An
 import keeps the attribution: each annotator of the export becomes a removed annotator of
-the new session (a new id, no token).
+the new session (a new id, no token); each round line lists when each person first showed
+the round, so everyone's time shown is the same after an import (an export made before
+these views were exported keeps only the owner's).
 
 With states (`export_session(..., states=StatesExport(data_dir))`), the export also carries
 the arrays of every behaviour a judgement compared, read from the round's pool
@@ -38,6 +40,7 @@ from groupwise.storage.export_format import (
     RoundLine,
     SessionExport,
     SessionLine,
+    ViewLine,
 )
 from groupwise.storage.judgements import LABELS, SOURCES, JudgementRecord, list_judgements
 from groupwise.storage.models import (
@@ -45,6 +48,7 @@ from groupwise.storage.models import (
     JudgementRow,
     PairRow,
     RoundRow,
+    RoundViewRow,
     SessionRow,
     utcnow,
 )
@@ -90,6 +94,14 @@ def export_session(
         )
     )
     judgements = list_judgements(s, session_id, include_undone=True)
+    views: dict[int, list[ViewLine]] = {}
+    for view in s.scalars(
+        select(RoundViewRow)
+        .where(RoundViewRow.round_id.in_([r.id for r in rounds]))
+        .order_by(RoundViewRow.id)
+    ):
+        line = ViewLine(annotator_id=view.annotator, shown_at=view.shown_at)
+        views.setdefault(view.round_id, []).append(line)
     behaviours: tuple[BehaviourStates, ...] = ()
     if states is not None:
         behaviours = _judged_states(session_id, rounds, judgements, states)
@@ -112,6 +124,7 @@ def export_session(
                 shown_at=r.shown_at,
                 closed_at=r.closed_at,
                 close_reason=r.close_reason,
+                views=views.get(r.id, []),
             )
             for r in rounds
         ),
@@ -251,6 +264,13 @@ def import_session(
         s.add(row)
         s.flush()
         round_ids[index] = row.id
+        # each person's first showing, so everyone's time shown survives (issue 40)
+        first: dict[str, datetime] = {}
+        for view in line.views:
+            who = OWNER if view.annotator_id == OWNER else people.get(view.annotator_id)
+            if who is not None:  # else someone the export lists neither as annotator nor maker
+                first[who] = min(first.get(who, view.shown_at), view.shown_at)
+        s.add_all(RoundViewRow(round_id=row.id, annotator=w, shown_at=t) for w, t in first.items())
     for j in export.judgements:
         s.add(
             JudgementRow(

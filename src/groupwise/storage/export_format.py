@@ -8,7 +8,7 @@ JSONL (``format: groupwise.session-export/1``), one JSON object a line:
     {"type": "session", "format": …, "id", "env", "mode", "settings", "annotator",
      "phase", "round", "created_at"}
     {"type": "round", "round": r, "pool_dir", "opened_at", "shown_at", "closed_at",
-     "close_reason"}  …
+     "close_reason", "views": [{"annotator_id", "shown_at"}, …]}  …
     {"type": "annotator", "id": "owner" | "a-…", "name", "comparisons", "pairs", "shown_s",
      "agreement": {"kappa", "share", "n"}, "model_agreement": {"share", "n"},
      "removed"}  … the owner first (docs/teams.md)
@@ -80,6 +80,14 @@ class SessionLine(_Strict):
     created_at: datetime
 
 
+class ViewLine(_Strict):
+    """When one person first showed a round in a page; their time shown counts from then
+    to the round's close (`storage.team`)."""
+
+    annotator_id: str = Field(min_length=1, max_length=32)
+    shown_at: datetime
+
+
 class RoundLine(_Strict):
     type: Literal["round"] = "round"
     round: int = Field(ge=0, le=10_000)
@@ -88,6 +96,7 @@ class RoundLine(_Strict):
     shown_at: datetime | None = None
     closed_at: datetime | None = None
     close_reason: str | None = Field(default=None, max_length=32)
+    views: list[ViewLine] = Field(default_factory=list, max_length=10_000)
 
 
 class PairLine(_Strict):

@@ -232,6 +232,28 @@ def test_the_export_names_who_made_each_judgement_and_the_import_keeps_it(db, op
     assert names[copied[0].annotator_id] == "Ada" and copied[1].annotator_id == "owner"
 
 
+@pytest.mark.parametrize(("write", "read"), [(to_jsonl, from_jsonl), (to_parquet, from_parquet)])
+def test_an_import_keeps_everyones_time_shown(db, open_session, write, read):
+    sid = open_session()
+    t0 = utcnow()
+    with db.write() as s:
+        ada = team_repo.add_annotator(s, sid, "Ada")
+        team_repo.record_view(s, sid, 0, team_repo.Caller(ada.id, "Ada", sid), t0)
+        team_repo.record_view(s, sid, 0, team_repo.OWNER_CALLER, t0 + timedelta(seconds=10))
+        add_judgement(s, sid, judgement("1", ["b1"], ["b2"], who=ada.id))
+        get_round(s, sid, 0).closed_at = t0 + timedelta(seconds=48.8)
+    with db.read() as s:
+        export = export_session(s, sid)
+    with db.write() as s:
+        copy = import_session(s, read(write(export))).id
+    with db.read() as s:
+        before = {t.name: t.shown_s for t in team_stats(s, get_session(s, sid))}
+        imported = team_stats(s, get_session(s, copy), include_removed=True)
+        after = {t.name: t.shown_s for t in imported}
+    # issue 40: Ada's 48.8 s came back as 0.0 while the owner's stayed
+    assert before == after == {"owner": pytest.approx(38.8), "Ada": pytest.approx(48.8)}
+
+
 def test_an_older_database_keeps_working_and_its_judgements_are_the_owners(tmp_path):
     path = tmp_path / "old.db"
     first = Database(sqlite_url(path))
