@@ -21,3 +21,4 @@ printf '%s\n' "${cells[@]}" | xargs -P "$parallel" -L 1 bash -c '
   groupwise case-study --target "$target" --dm groupwise --preferences "$comparisons" \
     --rounds 5 --steps 40000 --teacher-error 0.12 --no-video --seed "$seed" --out "$dir" -q \
     > "$dir.log" 2>&1 && echo "done $dir $(date +%H:%M)" || echo "FAILED $dir"'
+python research/results_table.py collect "$out"

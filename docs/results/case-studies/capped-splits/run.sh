@@ -21,3 +21,4 @@ export OMP_NUM_THREADS=1 MUJOCO_GL=${MUJOCO_GL:-egl}
   groupwise case-study --target walker-splits --dm "$dm" --preferences 225 --rounds "$rounds" \
     --steps 40000 --teacher-error 0.12 --ppo "$ppo" --no-video --seed "$seed" --out "$dir" -q \
     > "$dir.log" 2>&1 && echo "done $dir $(date +%H:%M)" || echo "FAILED $dir"'
+python research/results_table.py collect "$out"

@@ -1,0 +1,10 @@
+#!/usr/bin/env bash
+# The runs of docs/results/case-studies/rounds-10/ (README.md there): 10 rounds of 20,000 PPO steps with 8 pool variants, Groupwise-DM, seeds 0-4.
+# Usage, from the repository root: bash docs/results/case-studies/rounds-10/run.sh OUT [PARALLEL]
+# Each run folder lands in OUT (config.json, rounds.csv, case-study.csv, summary.json,
+# takeaway.json); the last line rebuilds OUT/runs.csv, the tidy table kept here.
+set -euo pipefail
+out=${1:?usage: run.sh OUT [PARALLEL]}; parallel=${2:-2}
+engine=docs/results/case-studies/paper-pairs/run.sh   # the paper-pairs setup, seeds 0-4
+bash "$engine" "$out" "$parallel" groupwise "walker-splits hopper-backflip" 20000 "--rounds 10 --pool-variants 8"
+python research/results_table.py collect "$out"
