@@ -10,7 +10,11 @@ reward ensemble refits between rollouts as soon as
 whichever comes first. A rollout's rewards therefore all come from one fit: the policy's
 reward (`ensemble.mean_reward`, refitted in place) changes only between `learn` calls,
 which are whole rollouts. A round is the teacher's unit of *fresh behaviours*: its pool is
-sampled from the policy as it is when the round begins (`begin_round`).
+cut from PPO's own latest rollouts when the round begins (issue 39: `LiveRound` records
+every round's rollouts, `rl.recording`, and `begin_round` reads them through
+`pool.recent.fresh_sources`), so the teacher judges what the agent does now and the pool
+costs no sampling; round 0, or a round after too short a one, samples what the recorded
+rollouts lack from the policy.
 
 In a **rounds** round the teacher answers the whole offer first and PPO trains afterwards
 (`round.end_round`); with a timed teacher its record's `clock_s` adds the answers' time and
@@ -25,9 +29,13 @@ import dataclasses
 import time
 from collections.abc import Sequence
 
+from groupwise.clips.timing import clip_timing, step_seconds
 from groupwise.oracles.base import Feedback
+from groupwise.pool.recent import fresh_sources
+from groupwise.pool.sampling import windows_to_sample
 from groupwise.preferences.judgement import Judgement
 from groupwise.reward import FitReport, fit
+from groupwise.rl.recording import RolloutRecorder, record_rollouts
 from groupwise.run.progress import RunCallback, as_callback
 from groupwise.run.records import PhaseTimer, RoundRecord
 from groupwise.run.round import (
@@ -36,6 +44,7 @@ from groupwise.run.round import (
     clock_before,
     derive_pairs,
     finish_round,
+    pool_size,
 )
 from groupwise.run.run import Run
 from groupwise.run.streams import RoundStreams, round_streams
@@ -57,7 +66,9 @@ def continuous_round(
         raise ValueError("continuous training needs a timed teacher (TeacherConfig.pace_s)")
     rollout = run.ppo.rollout_steps
     streams = round_streams(cfg.loop.seed, run.next_round)
-    offer = begin_round(run, feedback.queries, budget, streams=streams)
+    offer = begin_round(
+        run, feedback.queries, budget, streams=streams, sources=fresh_sources(cfg.loop)
+    )
     clock = clock_before(run)
     live = LiveRound(run, offer, streams, clock, callback)
     timer = live.timer
@@ -117,6 +128,8 @@ class LiveRound:
         self.last_fit = clock
         self.report: FitReport | None = None
         self.started = False
+        self.recorder = recorder_for(run, offer.budget)
+        self.recorder.clear()  # the next pool is cut from this round's rollouts alone
 
     def learn(self, steps: int) -> None:
         """`steps` more PPO steps: the round's first call seeds PPO from the round's stream
@@ -172,6 +185,30 @@ class LiveRound:
         if len(dataset):
             self.report = fit(run.ensemble, dataset, run.cfg.reward, self.streams.fit, epochs)
         self.timer.seconds["reward_s"] += time.perf_counter() - tick
+
+
+def recorder_for(run: Run, budget: int) -> RolloutRecorder:
+    """The recorder of the run's PPO envs (`rl.recording`), set up the first time: it keeps
+    the windows a pool of a round of `budget` comparisons is chosen from, with the physics
+    states its clips and posters are rendered from."""
+    loop = run.cfg.loop
+    probe = run.make_env()
+    try:
+        offsets = clip_timing(step_seconds(probe), steps=loop.fragment_length).snapshot_offsets
+    finally:
+        probe.close()
+    windows = windows_to_sample(
+        pool_size(loop, budget), loop.pool_oversample, loop.pool_windows_max
+    )
+    agent = run.ppo
+    return record_rollouts(
+        agent.venv,
+        loop.fragment_length,
+        offsets,
+        windows,
+        lambda: agent.num_timesteps,
+        agent.rollout_steps,
+    )
 
 
 PAPER_CASES: dict[str, tuple[int, float]] = {

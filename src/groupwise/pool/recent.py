@@ -1,0 +1,97 @@
+"""A pool source that reads PPO's own latest rollouts (issue 39: fresh pools).
+
+In continuous training PPO plays thousands of episodes while a person compares; the next
+round's pool is cut from the latest of them (`rl.recording`) when the round ends, so the
+person judges what the agent does now and the pool costs no sampling. A round with fewer
+recorded windows than it needs (round 0, or the first round after a worker restarted) samples
+the rest from the policy as `CurrentPolicy` does.
+
+    pool = sample_pool(..., sources=fresh_sources(loop), agent=run.agent)
+    ages = pool_ages(pool, recorder_of_agent(run.agent), run.agent.num_timesteps)
+"""
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from groupwise.behaviour.pool import BehaviourPool
+from groupwise.config import LoopConfig
+from groupwise.episodes.fragments import Trajectory
+from groupwise.pool.sources import PoolSource, SourceContext, pool_sources
+from groupwise.rl.recording import RolloutRecorder, recorder_of_agent
+from groupwise.rl.rollout import sample_episodes_for_windows
+from groupwise.types import IntArray, ProgressFn
+
+
+@dataclass(frozen=True)
+class RecentRollouts:
+    """The learner's latest recorded episodes (`rl.recording.record_rollouts` on its envs),
+    the rest sampled from the policy with `exploration` random actions when they hold
+    fewer windows than asked. Recorded episodes have no random actions: PPO's own
+    stochastic policy played them."""
+
+    exploration: float = 0.0
+    share: float | None = None
+    tags: int = 1
+
+    def for_round(self, ctx: SourceContext, rng: np.random.Generator) -> "RecentRollouts":
+        return self
+
+    def sample(
+        self,
+        ctx: SourceContext,
+        windows: int,
+        rng: np.random.Generator,
+        progress: ProgressFn | None = None,
+    ) -> list[Trajectory]:
+        recorder = None if ctx.agent is None else recorder_of_agent(ctx.agent)
+        recent = [] if recorder is None else recorder.recent(windows)
+        episodes = [e.trajectory for e in recent]
+        held = sum(len(e) // ctx.length for e in episodes)
+        total = windows * ctx.length
+        if progress is not None:
+            progress(min(held, windows) * ctx.length, total)
+        if held < windows:
+            before = held * ctx.length
+            shifted = None if progress is None else _shifted(progress, before, total)
+            episodes += sample_episodes_for_windows(
+                ctx.make_env,
+                ctx.policy,
+                windows - held,
+                ctx.length,
+                rng,
+                self.exploration,
+                progress=None
+                if progress is None
+                else lambda done, _: progress(before + done, total),
+                snapshot_offsets=ctx.snapshot_offsets,
+                processes=ctx.processes,
+            )
+        return episodes
+
+
+def _shifted(progress: ProgressFn, before: int, total: int) -> ProgressFn:
+    return lambda done, _: progress(before + done, total)
+
+
+def fresh_sources(loop: LoopConfig) -> tuple[PoolSource, ...]:
+    """`pool_sources(loop)` with the policy's place taken by its latest rollouts: the
+    variants, when `loop` asks for them, still give their share."""
+    _policy, *others = pool_sources(loop)
+    return (RecentRollouts(loop.exploration_fraction), *others)
+
+
+def pool_ages(pool: BehaviourPool, recorder: RolloutRecorder | None, now: int) -> IntArray:
+    """Each behaviour's age (N,): the PPO steps from the policy that played its window's
+    first step to the agent's step count `now`; 0 for a window sampled from the policy as
+    it is now (not recorded). Call it as the pool is cut: the recorder drops old episodes."""
+    played: dict[int, np.ndarray] = {}
+    if recorder is not None:
+        for episode in recorder.recent(recorder.held_windows()):
+            played[episode.trajectory.reset_seed] = episode.policy_steps
+    ages = np.zeros(len(pool.fragments), dtype=np.int64)
+    for i, fragment in enumerate(pool.fragments):
+        steps = played.get(fragment.reset_seed)
+        if steps is not None and fragment.start < len(steps):
+            ages[i] = now - int(steps[fragment.start])
+    return ages
