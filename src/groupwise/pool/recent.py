@@ -61,9 +61,7 @@ class RecentRollouts:
                 ctx.length,
                 rng,
                 self.exploration,
-                progress=None
-                if progress is None
-                else lambda done, _: progress(before + done, total),
+                progress=shifted,
                 snapshot_offsets=ctx.snapshot_offsets,
                 processes=ctx.processes,
             )
