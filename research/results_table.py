@@ -508,7 +508,7 @@ def main(argv: list[str] | None = None) -> int:
     figure_verb.add_argument("csv", type=Path)
     figure_verb.add_argument("png", type=Path)
     figure_verb.add_argument("--colour", default="dm", help="the column that colours the lines")
-    figure_verb.add_argument("--where", nargs="*", default=[], help="column=value,value filters")
+    figure_verb.add_argument("--where", nargs="*", default=[], help="column=value|value filters")
     args = parser.parse_args(argv)
     try:
         if args.verb == "collect":
@@ -520,7 +520,7 @@ def main(argv: list[str] | None = None) -> int:
                 print(f"{folder / 'runs.csv'}: {runs} runs, {len(rows)} rows")
             return 0
         if args.verb == "figure":
-            filters = {k: v.split(",") for k, _, v in (w.partition("=") for w in args.where)}
+            filters = {k: v.split("|") for k, _, v in (w.partition("=") for w in args.where)}
             curves_figure(select(read_runs(args.csv), filters), args.png, args.colour)
             return 0
         stale = 0
