@@ -86,7 +86,7 @@ $(STAMPS)/python: $(STAMPS)/system $(STAMPS)/torch pyproject.toml
 	@touch $@
 
 $(STAMPS)/dev: $(STAMPS)/python $(STAMPS)/system-dev
-	$(BIN)/pip install -q -e '.[dev]'
+	$(BIN)/pip install -q -e '.[dev,dmc,minari]'
 	@touch $@
 
 clean:

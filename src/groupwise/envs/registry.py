@@ -10,9 +10,14 @@ are reward-free: their true reward is a case study's target score (`groupwise.en
 `make_standard_env` gives the unmodified Gymnasium env for
 evaluating a trained policy the way the rest of the field does. `make_env` also makes any
 other Gymnasium env, by id or as ``"module:Env-v0"``; such envs may terminate early and may
-have no time limit at all (`horizon` is then None).
+have no time limit at all (`horizon` is then None). The DeepMind Control suite's
+``dm_control/<domain>-<task>-v0`` ids (optional extra ``[dmc]``, `groupwise.envs.dmc`) get
+their suite's fixed horizon. Dict and Tuple observations of Boxes are flattened into one
+vector (`groupwise.envs.flatten`); any other non-Box observation space is refused by
+`make_env` with one line (`groupwise.envs.spaces.observation_refusal`).
 """
 
+import functools
 import importlib
 from dataclasses import dataclass
 from typing import Any
@@ -20,8 +25,11 @@ from typing import Any
 import gymnasium as gym
 from gymnasium.envs.mujoco.mujoco_env import MujocoEnv
 
+from groupwise.envs import dmc
+from groupwise.envs.flatten import FlatObservation
 from groupwise.envs.mujoco_log import log_mujoco_warnings
 from groupwise.envs.rendering import OFFSCREEN_MODES, FastMujocoRendering, use_headless_sdl
+from groupwise.envs.spaces import observation_refusal
 from groupwise.envs.targets import TARGETS
 
 NAMESPACE = "groupwise"
@@ -168,12 +176,14 @@ def resolve_id(name: str) -> str:
     register_envs()
     if name in gym.registry:
         return name
+    if dmc.is_dmc_id(name):  # Shimmy registers the suite when imported
+        _import_registering_module(name, dmc.MODULE)
+        if name in gym.registry:
+            return name
+        raise ValueError(f"unknown env {name!r}: {dmc.MODULE} registers no such dm_control id")
     module, colon, gym_id = name.partition(":")
     if colon and module and gym_id:
-        try:
-            importlib.import_module(module)
-        except ImportError as error:
-            raise ValueError(f"env {name!r}: cannot import module {module!r} ({error})") from None
+        _import_registering_module(name, module)
         if gym_id in gym.registry:
             return gym_id
         raise ValueError(f"env {name!r}: importing {module!r} registered no env {gym_id!r}")
@@ -183,24 +193,66 @@ def resolve_id(name: str) -> str:
     )
 
 
+def _import_registering_module(name: str, module: str) -> None:
+    """Import `module`, whose import registers env `name`. Raises ValueError when it cannot
+    be imported (for Shimmy: naming the extra that installs it)."""
+    if module == dmc.MODULE:
+        dmc.prepare_import()
+    try:
+        importlib.import_module(module)
+    except ImportError as error:
+        if module == dmc.MODULE:
+            raise ValueError(
+                f"env {name!r} needs the DeepMind Control suite: pip install "
+                f"'groupwise[{dmc.EXTRA}]' (shimmy[dm-control]); importing {module} failed "
+                f"({error})"
+            ) from None
+        raise ValueError(f"env {name!r}: cannot import module {module!r} ({error})") from None
+
+
 def make_env(name: str, render_mode: str | None = None, **kwargs: Any) -> gym.Env[Any, Any]:
     """Make an env by short name (see `ENVS`), registered Gymnasium id or ``"module:Env-v0"``
     (see `resolve_id`).
 
     Gymnasium MuJoCo envs that are not ours also get `FastMujocoRendering` (fixed camera)
     when rendered offscreen; for offscreen modes pygame is set up headless first
-    (`use_headless_sdl`). `kwargs` go to the env's constructor (for ours: width, height).
+    (`use_headless_sdl`). `kwargs` go to the env's constructor (for ours: width, height; for
+    the DeepMind Control suite they go to its renderer, `envs.dmc.make_kwargs`). A suite env
+    gets its time limit as a ``TimeLimit`` (`envs.dmc.adapt`); a Dict or Tuple observation
+    space is flattened into one Box (`envs.flatten.FlatObservation`).
 
     Raises:
-        ValueError: unknown name (the message lists the known short names), or a module that
-            cannot be imported or does not register the id.
+        ValueError: unknown name (the message lists the known short names), a module that
+            cannot be imported or does not register the id, or an observation space that
+            cannot be taught (images, Discrete, Text…: one line that says why).
     """
     gym_id = resolve_id(name)
     log_mujoco_warnings()
     if render_mode in OFFSCREEN_MODES:
         use_headless_sdl()  # pygame-drawn envs (classic control) draw offscreen, quietly
-    env = gym.make(gym_id, render_mode=render_mode, **kwargs)
-    return _with_fast_rendering(env)
+    if dmc.is_dmc_id(gym_id):
+        env = dmc.adapt(
+            gym.make(gym_id, render_mode=render_mode, **dmc.make_kwargs(render_mode, kwargs))
+        )
+    else:
+        env = gym.make(gym_id, render_mode=render_mode, **kwargs)
+    return _with_fast_rendering(_with_flat_observations(env, name))
+
+
+def _with_flat_observations(env: gym.Env[Any, Any], name: str) -> gym.Env[Any, Any]:
+    """`env` as is when it observes a Box, flattened when a Dict or Tuple of Boxes.
+
+    Raises:
+        ValueError: any other observation space (`observation_refusal`'s reason); `env` is
+            closed first.
+    """
+    space = env.observation_space
+    if (reason := observation_refusal(space)) is not None:
+        env.close()
+        raise ValueError(f"env {name} cannot be taught here: {reason}")
+    if isinstance(space, gym.spaces.Box):
+        return env
+    return FlatObservation(env)
 
 
 def make_standard_env(
@@ -228,16 +280,30 @@ def make_standard_env(
 def horizon(name: str) -> int | None:
     """Most steps an episode of an env lasts, by short name, Gymnasium id or "module:id".
 
-    Exact for the groupwise envs; for other ids it is the registered ``max_episode_steps``,
-    and those envs may end earlier (terminate). None when there is no time limit: such an
-    env can be sampled only for a given number of steps (`rl.rollout`'s `max_steps`).
+    Exact for the groupwise envs and the DeepMind Control suite's (its task's time limit in
+    steps, `envs.dmc.suite_step_limit`: the env is made once per process to read it); for
+    other ids it is the registered ``max_episode_steps``, and those envs may end earlier
+    (terminate). None when there is no time limit: such an env can be sampled only for a
+    given number of steps (`rl.rollout`'s `max_steps`).
 
     Raises:
         ValueError: unknown name.
     """
     if (entry := env_entry(name)) is not None:
         return entry.horizon
-    return gym.spec(resolve_id(name)).max_episode_steps
+    gym_id = resolve_id(name)
+    if dmc.is_dmc_id(gym_id):
+        return _suite_horizon(gym_id)
+    return gym.spec(gym_id).max_episode_steps
+
+
+@functools.cache
+def _suite_horizon(gym_id: str) -> int | None:
+    env = gym.make(gym_id)
+    try:
+        return dmc.suite_step_limit(env)
+    finally:
+        env.close()
 
 
 def _with_fast_rendering(env: gym.Env[Any, Any]) -> gym.Env[Any, Any]:
