@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from groupwise.run.agent_package import format_value
+from groupwise.agent_file.text import format_value
 
 expect = pytest.importorskip("playwright.sync_api").expect
 Page = Any  # playwright.sync_api.Page

@@ -9,16 +9,11 @@ import pytest
 import torch
 from stable_baselines3 import PPO
 
+from groupwise.agent_file.summary import AGENT_ZIP, read_summary
 from groupwise.config import LoopConfig, PPOConfig, RewardConfig, RunConfig
 from groupwise.oracles import ORACLES, Feedback
 from groupwise.preferences.judgement import Judgement
-from groupwise.run.agent_package import (
-    AGENT_ZIP,
-    NoCheckpointError,
-    UnknownRoundError,
-    pick_round,
-    read_summary,
-)
+from groupwise.run.agent_package import NoCheckpointError, UnknownRoundError, pick_round
 from groupwise.run.headless import hand_over, run_session
 from groupwise.run.run import Run
 from groupwise.run.takeaway import TakeawayConfig, read_choice

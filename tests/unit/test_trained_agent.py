@@ -12,18 +12,14 @@ import numpy as np
 import pytest
 
 import groupwise
+from groupwise.agent_file.readme import readme
+from groupwise.agent_file.summary import AgentSummary, ObsNormalisation, TargetSummary, measure_of
+from groupwise.agent_file.text import score_text
 from groupwise.config import LoopConfig, PPOConfig, RewardConfig, RunConfig
 from groupwise.envs import TARGET_TOTAL_KEY, TARGETS, TRUE_REWARD_KEY, make_env
 from groupwise.rl.rollout import evaluate_episodes
 from groupwise.rl.trained_agent import TrainedAgent
-from groupwise.run.agent_package import (
-    AgentSummary,
-    TargetSummary,
-    measure_of,
-    readme,
-    score_text,
-    summarise,
-)
+from groupwise.run import agent_package
 from groupwise.run.final import continue_run
 from groupwise.run.headless import run_session
 from groupwise.run.records import RoundRecord
@@ -110,6 +106,11 @@ def record(round_index, true_return, score):
     )  # fmt: skip
 
 
+def summarise(cfg, records, frozen, video):
+    normalised = ObsNormalisation(normalize_obs=True, clip_obs=5.0, epsilon=1e-6)
+    return agent_package.summarise(cfg, records, frozen, video, normalisation=normalised)
+
+
 def test_a_target_runs_summary_and_readme_lead_with_its_episode_score():
     cfg = RunConfig(loop=LoopConfig(env="Hopper-backflip"))
     summary = summarise(cfg, [record(0, 150.0, 0.19), record(1, 184.3, 0.2312)], {1}, None)
@@ -127,6 +128,7 @@ def test_a_target_runs_summary_and_readme_lead_with_its_episode_score():
     )
     assert "hopper-backflip counts backward turns per episode; an episode succeeds from 1" in text
     assert "target score" not in text
+    assert "+ 1e-06),\n                -5.0, 5.0)" in text  # the normalisation, as recorded
     again = AgentSummary.from_dict(json.loads(summary.to_json()))
     assert again == summary
 

@@ -120,7 +120,7 @@ def run(args: argparse.Namespace) -> int:
     from groupwise.clips.timing import clip_timing, default_clip_seconds, env_step_seconds
     from groupwise.config import LoopConfig, RunConfig
     from groupwise.oracles import ORACLES
-    from groupwise.run.agent_package import AGENT_ZIP
+    from groupwise.agent_file.summary import AGENT_ZIP
     from groupwise.run.takeaway import TakeawayConfig
     from groupwise.study.case_study import CASE_FILE, STRIP_FILE, VIDEO_FILE, run_case_study
 

@@ -99,10 +99,10 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
 def run(args: argparse.Namespace) -> int:
     if args.from_session is not None:
         return _from_session(args)
+    from groupwise.agent_file.summary import AGENT_ZIP
     from groupwise.config import LoopConfig, RunConfig
     from groupwise.envs import make_env
     from groupwise.oracles import ORACLES
-    from groupwise.run.agent_package import AGENT_ZIP
     from groupwise.run.headless import run_session
     from groupwise.run.run import RESULTS_FILE, ConfigMismatchError
     from groupwise.run.takeaway import TakeawayConfig, read_choice
@@ -171,7 +171,7 @@ def run(args: argparse.Namespace) -> int:
 
 def _from_session(args: argparse.Namespace) -> int:
     """More PPO steps on the frozen reward, or more rounds by a simulated DM (docs/app.md)."""
-    from groupwise.run.agent_package import AGENT_VIDEO, AGENT_ZIP
+    from groupwise.agent_file.summary import AGENT_VIDEO, AGENT_ZIP
     from groupwise.run.final import continue_run
     from groupwise.run.run import CONFIG_FILE, RESULTS_FILE
 

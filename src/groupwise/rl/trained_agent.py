@@ -1,4 +1,4 @@
-"""A trained agent loaded from its ``agent.zip`` (`groupwise.run.agent_package`), for use
+"""A trained agent loaded from its ``agent.zip`` (`groupwise.agent_file`), for use
 elsewhere (docs/library.md): `load_agent(path)` reads it back as a `TrainedAgent` with
 `predict(obs)` (the saved normaliser applied first) and `evaluate(env, episodes, seed)`
 (an `AgentEvaluation`: the true returns and, in a target env, the episode scores).
@@ -8,7 +8,6 @@ import io
 import json
 import math
 import os
-import zipfile
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -17,11 +16,8 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
-from groupwise.config import RunConfig
-from groupwise.envs import TARGET_TOTAL_KEY, TRUE_REWARD_KEY, Target, make_env
-from groupwise.envs.targets import TargetScoreInfo
-from groupwise.run.agent_package import (
-    SUMMARY_FILE,
+from groupwise.agent_file.archive import read_agent_zip
+from groupwise.agent_file.summary import (
     ZIP_CONFIG,
     ZIP_NORMALISER,
     ZIP_POLICY,
@@ -29,8 +25,11 @@ from groupwise.run.agent_package import (
     AgentSummary,
     TargetSummary,
     measure_of,
-    score_text,
 )
+from groupwise.agent_file.text import score_text
+from groupwise.config import RunConfig
+from groupwise.envs import TARGET_TOTAL_KEY, TRUE_REWARD_KEY, Target, make_env
+from groupwise.envs.targets import TargetScoreInfo
 from groupwise.types import FloatArray
 
 
@@ -45,7 +44,7 @@ class AgentEvaluation:
     """The target the env scores, where known (a target env made by name, or wrapped in
     `TargetScoreInfo`)."""
     measure: str = "true return"
-    """What `returns` measures (`agent_package.measure_of`)."""
+    """What `returns` measures (`agent_file.summary.measure_of`)."""
 
     def __str__(self) -> str:
         target = None if self.target is None else TargetSummary.of(self.target)
@@ -184,16 +183,9 @@ def load_agent(path: str | os.PathLike[str]) -> TrainedAgent:
     """
     from stable_baselines3 import PPO
 
-    try:
-        with zipfile.ZipFile(path) as archive:
-            files = {name: archive.read(name) for name in archive.namelist()}
-    except zipfile.BadZipFile as error:
-        raise ValueError(f"{path} is not a zip file: {error}") from None
-    missing = [n for n in (SUMMARY_FILE, ZIP_POLICY, ZIP_NORMALISER) if n not in files]
-    if missing:
-        raise ValueError(f"{path} is not a groupwise agent: it lacks {', '.join(missing)}")
-    summary = AgentSummary.from_dict(json.loads(files[SUMMARY_FILE]))
+    archive = read_agent_zip(path)
+    files = archive.files
     model = PPO.load(io.BytesIO(files[ZIP_POLICY]), device="cpu")
     with np.load(io.BytesIO(files[ZIP_NORMALISER])) as norm:
         mean, var = np.asarray(norm["obs_mean"]), np.asarray(norm["obs_var"])
-    return TrainedAgent(model, mean, var, summary, files)
+    return TrainedAgent(model, mean, var, archive.summary, files)

@@ -24,17 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from groupwise.clips.episode_video import write_episode_video
-from groupwise.clips.replay import FrameSettings
-from groupwise.config import RunConfig
-from groupwise.envs import DEFAULT_FRAME_SIZE
-from groupwise.oracles import ORACLES
-from groupwise.oracles.base import Teacher
-from groupwise.episodes.fragments import Trajectory
-from groupwise.rl.policy import Policy
-from groupwise.rl.ppo import POLICY_FILE, PPOAgent
-from groupwise.rl.rollout import sample_trajectories
-from groupwise.run.agent_package import (
+from groupwise.agent_file.archive import write_agent_zip
+from groupwise.agent_file.summary import (
     AGENT_VIDEO,
     AGENT_ZIP,
     SETTINGS_FILE,
@@ -42,10 +33,20 @@ from groupwise.run.agent_package import (
     VideoSummary,
     read_summary,
     round_video_path,
-    summarise,
-    write_agent_zip,
     write_summary,
 )
+from groupwise.clips.episode_video import write_episode_video
+from groupwise.clips.replay import FrameSettings
+from groupwise.config import RunConfig
+from groupwise.envs import DEFAULT_FRAME_SIZE
+from groupwise.episodes.fragments import Trajectory
+from groupwise.oracles import ORACLES
+from groupwise.oracles.base import Teacher
+from groupwise.rl.agent_file import normalisation
+from groupwise.rl.policy import Policy
+from groupwise.rl.ppo import POLICY_FILE, PPOAgent
+from groupwise.rl.rollout import sample_trajectories
+from groupwise.run.agent_package import summarise
 from groupwise.run.checkpoint import checkpoint_dir, latest_checkpoint
 from groupwise.run.progress import CallbackList, ProgressBars, RunCallback, as_callback
 from groupwise.run.records import RoundRecord
@@ -108,6 +109,7 @@ def publish_agent(
         round_index=choice.round,
         chosen_by=choice.by,
         round_videos=films,
+        normalisation=normalisation(run.ppo),
     )
     write_agent_zip(out / AGENT_ZIP, checkpoint_dir(out, choice.round), summary, out)
     write_summary(out, summary)

@@ -5,15 +5,8 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import cast
 
-from groupwise.run.agent_package import (
-    AGENT_VIDEO,
-    AGENT_ZIP,
-    AgentSummary,
-    NoCheckpointError,
-    UnknownRoundError,
-    pick_round,
-    read_summary,
-)
+from groupwise.agent_file.summary import AGENT_VIDEO, AGENT_ZIP, AgentSummary, read_summary
+from groupwise.run.agent_package import NoCheckpointError, UnknownRoundError, pick_round
 from groupwise.run.checkpoint import checkpoint_dir
 from groupwise.server import schemas
 from groupwise.server.context import AppContext

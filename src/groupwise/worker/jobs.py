@@ -25,19 +25,19 @@ from functools import partial
 from pathlib import Path
 from typing import TYPE_CHECKING
 
+from groupwise.agent_file.summary import SETTINGS_FILE
 from groupwise.behaviour import kernel_threads
+from groupwise.behaviour.pool import BehaviourPool
 from groupwise.clips.render import RenderPool
 from groupwise.clips.store import ClipStore
 from groupwise.config import RunConfig
 from groupwise.oracles import STRATEGIES
-from groupwise.behaviour.pool import BehaviourPool
 from groupwise.pool.files import load_pool
 from groupwise.pool.publish import PublishConfig, publish_pool
 from groupwise.pool.sampling import windows_to_sample
 from groupwise.preferences.judgement import Judgement
 from groupwise.query.strategies import Query, QueryStrategy
 from groupwise.rl.batch_envs import free_cores
-from groupwise.run.agent_package import SETTINGS_FILE
 from groupwise.run.checkpoint import STATE_FILE, checkpoint_dir
 from groupwise.run.progress import RunCallback, as_callback
 from groupwise.run.records import RoundRecord

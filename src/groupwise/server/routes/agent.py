@@ -3,7 +3,7 @@
 from fastapi import APIRouter, Depends
 from fastapi.responses import FileResponse
 
-from groupwise.run.agent_package import AGENT_VIDEO, AGENT_ZIP
+from groupwise.agent_file.summary import AGENT_VIDEO, AGENT_ZIP
 from groupwise.server import agent_views
 from groupwise.server.deps import Context, SessionId, owner_only
 from groupwise.server.routes import ERRORS
