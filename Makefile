@@ -39,9 +39,11 @@ bench: $(STAMPS)/dev $(STAMPS)/web
 	PATH="$(CURDIR)/$(BIN):$$PATH" $(BIN)/python -m benchmarks
 
 lint: $(STAMPS)/dev
-	$(BIN)/ruff check src tests benchmarks
-	$(BIN)/ruff format --check src tests benchmarks
+	$(BIN)/ruff check src tests benchmarks research
+	$(BIN)/ruff format --check src tests benchmarks research
 	$(BIN)/mypy
+	$(BIN)/mypy research
+	$(BIN)/python research/results_table.py check docs/results
 
 setup: $(STAMPS)/dev $(WEB_BUILD)
 

@@ -43,8 +43,6 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
-from groupwise.config import PPO_PRESETS
-
 SEED_SUCCESS = 0.6
 """A seed succeeds when this share of its final greedy episodes (3 of 5) reach the threshold
 (docs/case-studies.md)."""
@@ -125,7 +123,10 @@ def label(config: dict[str, Any], dm: str) -> str:
 
 
 def ppo_preset(config: dict[str, Any]) -> str:
-    """The name of the `PPO_PRESETS` entry the run's PPO settings equal, else "custom"."""
+    """The name of the `PPO_PRESETS` entry the run's PPO settings equal, else "custom".
+    Imported here: `render` and `check` read CSVs alone and need no groupwise."""
+    from groupwise.config import PPO_PRESETS
+
     ppo = config.get("ppo", {})
     for name, preset in PPO_PRESETS.items():
         fields = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(preset).items()}
