@@ -11,7 +11,7 @@ from typing import Any
 
 import pytest
 
-from groupwise.agent_file.text import format_value
+from groupwise.agent_file.text import format_value, mean_sd
 
 expect = pytest.importorskip("playwright.sync_api").expect
 Page = Any  # playwright.sync_api.Page
@@ -74,9 +74,9 @@ def test_a_target_sessions_results_show_its_episode_score_in_its_unit(
     assert summary["measure"] == "per-step score sum (rad/s)"
 
     expect(page.locator(".score-label")).to_have_text("Backward turns per episode")
-    expect(page.locator(".score-value")).to_have_text(f"{format_value(score)} ± {format_value(sd)}")
+    expect(page.locator(".score-value")).to_have_text(mean_sd(score, sd))
     expect(page.locator(".score-goal")).to_have_text("(threshold 1 · stretch 2)")
-    per_step = f"{format_value(summary['true_return_mean'])} ± "
+    per_step = mean_sd(summary["true_return_mean"], summary["true_return_std"])
     expect(page.locator(".score-detail")).to_contain_text(f"Per-step sum {per_step}")
     expect(page.locator(".score-detail")).to_contain_text("rad/s")
     expect(page.locator(".score-detail")).to_contain_text("2 evaluation episodes after round 1")

@@ -86,14 +86,16 @@ BACKFLIP = TargetSummary.of(TARGETS["hopper-backflip"])
 
 
 def test_a_target_score_reads_in_the_targets_unit_beside_the_per_step_sum():
-    # the issue's numbers: 0.23 backward turns per episode, per-step sum 184 ± 2.62
+    # the issue's numbers: 0.23 backward turns per episode, per-step sum 184 ± 2.62, the sd to
+    # the mean's last place (issue 40)
     text = score_text(BACKFLIP, "per-step score sum (rad/s)", (184.3, 2.62), (0.2312, 0.05))
     assert text == (
-        "backward turns per episode 0.231 ± 0.05 (threshold 1) · per-step sum 184 ± 2.62 rad/s"
+        "backward turns per episode 0.231 ± 0.050 (threshold 1) · per-step sum 184 ± 3 rad/s"
     )
-    assert score_text(BACKFLIP, "…", (184.3, 2.62)) == "per-step sum 184 ± 2.62 rad/s"
+    assert score_text(BACKFLIP, "…", (184.3, 2.62)) == "per-step sum 184 ± 3 rad/s"
     assert score_text(None, "true return", (41.5, 3.2)) == "true return 41.5 ± 3.2"
     assert score_text(None, "true return", (None, None)) == "not measured"
+    assert score_text(None, "true return", (0.14, 0.000621)) == "true return 0.140 ± 0.001"
 
 
 def record(round_index, true_return, score):
@@ -123,7 +125,7 @@ def test_a_target_runs_summary_and_readme_lead_with_its_episode_score():
     assert [r.target_score_mean for r in summary.rounds] == [0.19, 0.2312]
     text = readme(summary)
     assert (
-        "backward turns per episode 0.231 ± 0.05 (threshold 1) · per-step sum 184 ± 2.62 rad/s"
+        "backward turns per episode 0.231 ± 0.050 (threshold 1) · per-step sum 184 ± 3 rad/s"
         in text
     )
     assert "hopper-backflip counts backward turns per episode; an episode succeeds from 1" in text
@@ -136,7 +138,7 @@ def test_a_target_runs_summary_and_readme_lead_with_its_episode_score():
         replace(cfg, loop=LoopConfig(env="GridWorld")), [record(0, 41.5, math.nan)], set(), None
     )
     assert (plain.target, plain.target_score_mean, plain.rounds[0].target_score_mean) == (None,) * 3
-    assert "true return 41.5 ± 2.62" in readme(plain)
+    assert "true return 41.5 ± 2.6" in readme(plain)
 
 
 def test_an_older_summary_still_loads_and_names_its_number_rightly():
@@ -150,7 +152,7 @@ def test_an_older_summary_still_loads_and_names_its_number_rightly():
     old = AgentSummary.from_dict(data)
     assert old.measure == "per-step score sum (rad/s)" and old.true_return_mean == 184.3
     assert (old.target, old.target_score_mean, old.rounds[0].target_score_mean) == (None,) * 3
-    assert "per-step score sum (rad/s) 184 ± 2.62" in readme(old)
+    assert "per-step score sum (rad/s) 184 ± 3" in readme(old)
 
 
 class Still:

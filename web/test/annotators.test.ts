@@ -153,7 +153,8 @@ describe("agreement in words", () => {
   });
 
   it("says the reward model's agreement, or a dash before there is any", () => {
-    expect(modelAgreementText({ share: 0.75, n: 8 })).toBe("75 % of 8");
+    // its unit named: not the "Pairs" column's training pairs (issue 40)
+    expect(modelAgreementText({ share: 0.75, n: 8 })).toBe("75 % of 8 compared pairs");
     expect(modelAgreementText({ share: null, n: 0 })).toBe("–");
   });
 
@@ -161,7 +162,8 @@ describe("agreement in words", () => {
     const p = { ...person("a-1", "Ann"), agreement: { kappa: 0.5, share: 0.75, n: 4 }, model_agreement: { share: 0.5, n: 6 } };
     expect(agreementTitle(p)).toBe(
       "Ann agrees with the others on 75 % of 4 behaviour pairs both judged (Cohen's κ 0.50); " +
-        "the reward model prefers the same behaviour in 50 % of their 6 pairs.",
+        "the reward model prefers the same behaviour in 50 % of the 6 behaviour pairs they compared " +
+        "(each left behaviour with each right one).",
     );
     expect(agreementTitle(person("owner", "owner"))).toMatch(/judged no behaviour pair someone else judged too; the reward model has not/);
   });

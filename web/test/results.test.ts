@@ -3,7 +3,7 @@ import { ApiError, type Api } from "../src/api";
 import { fakeApi } from "../bench/fake-api";
 import { syntheticRound } from "../bench/synthetic";
 import { createController } from "../src/controller";
-import { chartGeometry, chartSeries, formatValue, niceTicks, scoreLines, scoreText } from "../src/lib/results";
+import { chartGeometry, chartSeries, formatValue, meanSd, niceTicks, scoreLines, scoreText } from "../src/lib/results";
 import { createStore } from "../src/state";
 import { canFinish, roundText } from "../src/views/status";
 
@@ -47,6 +47,20 @@ describe("the finished page's chart", () => {
     expect(formatValue(999.6)).toBe("1,000");
   });
 
+  it("writes mean ± sd to one decimal place, no finer than the mean's third figure", () => {
+    expect(meanSd(0.14, 0.000621)).toBe("0.140 ± 0.001"); // issue 40: "0.14 ± 0.000621"
+    expect(meanSd(0.14, 0.00004)).toBe("0.140 ± 0.001"); // never "± 0.000"
+    expect(meanSd(184.3, 2.62)).toBe("184 ± 3");
+    expect(meanSd(41.5, 3.2)).toBe("41.5 ± 3.2");
+    expect(meanSd(-127.4, 12.3)).toBe("-127 ± 12");
+    expect(meanSd(0.00912, 0.0004)).toBe("0.00912 ± 0.00040");
+    expect(meanSd(5.123, 300)).toBe("5 ± 300");
+    expect(meanSd(1234.56, 12.3)).toBe("1,235 ± 12");
+    expect(meanSd(0, 0.5)).toBe("0.00 ± 0.50");
+    expect(meanSd(3.5, 0)).toBe("3.5 ± 0");
+    expect(meanSd(3.5, null)).toBe("3.5");
+  });
+
   it("covers a reference value and says where it lies", () => {
     const small = rounds.slice(0, 2).map((r) => ({ ...r, value: r.value / 100 }));
     const g = chartGeometry(small, 200, 100, { top: 0, right: 0, bottom: 0, left: 0 }, 1);
@@ -77,13 +91,13 @@ const backflip = {
 describe("the finished page's evaluation", () => {
   it("leads with a target's episode score in its unit, the per-step sum beside it", () => {
     expect(scoreText(backflip)).toBe(
-      "backward turns per episode 0.231 ± 0.05 (threshold 1) · per-step sum 184 ± 2.62 rad/s",
+      "backward turns per episode 0.231 ± 0.050 (threshold 1) · per-step sum 184 ± 3 rad/s",
     );
     expect(scoreLines(backflip)).toEqual({
       label: "Backward turns per episode",
-      value: "0.231 ± 0.05",
+      value: "0.231 ± 0.050",
       goal: "threshold 1 · stretch 2",
-      detail: "per-step sum 184 ± 2.62 rad/s",
+      detail: "per-step sum 184 ± 3 rad/s",
     });
     const series = chartSeries(backflip);
     expect(series.rounds.map((r) => r.value)).toEqual([0.19, 0.2312]);
@@ -99,8 +113,8 @@ describe("the finished page's evaluation", () => {
       target_score_mean: null,
       target_score_std: null,
     };
-    expect(scoreText(plain)).toBe("true return 184 ± 2.62");
-    expect(scoreLines(plain)).toEqual({ label: "True return", value: "184 ± 2.62", goal: null, detail: null });
+    expect(scoreText(plain)).toBe("true return 184 ± 3");
+    expect(scoreLines(plain)).toEqual({ label: "True return", value: "184 ± 3", goal: null, detail: null });
     expect(chartSeries(plain).rounds.map((r) => r.value)).toEqual([150, 184.3]);
     // published before episode scores were recorded: the target is known, its score is not
     const old = {
@@ -109,7 +123,7 @@ describe("the finished page's evaluation", () => {
       target_score_std: null,
       rounds: backflip.rounds.map((r) => ({ ...r, target_score_mean: null, target_score_std: null })),
     };
-    expect(scoreText(old)).toBe("per-step sum 184 ± 2.62 rad/s");
+    expect(scoreText(old)).toBe("per-step sum 184 ± 3 rad/s");
     expect(chartSeries(old)).toMatchObject({ name: "per-step score sum (rad/s)", reference: null });
     expect(scoreLines({ ...plain, true_return_mean: null })).toBeNull();
   });

@@ -20,15 +20,17 @@ def _decimals_at(value: float, digits: int) -> int:
 
 
 def mean_sd(mean: float, sd: float | None) -> str:
-    """"mean ± sd", both to one decimal place: the sd's second significant figure, but no
+    """ "mean ± sd", both to one decimal place: the sd's second significant figure, but no
     finer than the mean's third ("0.140 ± 0.001", not "0.14 ± 0.000621"; issue 40), as the
     page's `meanSd`; an sd below the last place shown is one unit of it."""
     if sd is None:
         return format_value(mean)
     if sd == 0 or not (math.isfinite(sd) and math.isfinite(mean)):
         return f"{format_value(mean)} ± {format_value(sd)}"
-    places = 0 if abs(mean) >= 1000 else min(
-        _decimals_at(sd, 2), 20 if mean == 0 else _decimals_at(mean, 3)
+    places = (
+        0
+        if abs(mean) >= 1000
+        else min(_decimals_at(sd, 2), 20 if mean == 0 else _decimals_at(mean, 3))
     )
     return f"{mean:,.{places}f} ± {max(abs(sd), 10.0**-places):,.{places}f}"
 

@@ -154,10 +154,14 @@ export function agreementText(a: Annotator["agreement"]): string {
   return `κ ${kappaText(a.kappa)} · ${pct(a.share)} of ${a.n}`;
 }
 
-/** Agreement with the reward model: "75 % of 8", or "–" before it has anything to go on. */
+/**
+ * Agreement with the reward model: "75 % of 8 compared pairs", or "–" before it has anything
+ * to go on. Its unit is the behaviour pairs a person compared (each left behaviour with each
+ * right one), not the "Pairs" column's training pairs (max(m, n) a comparison; issue 40).
+ */
 export function modelAgreementText(m: Annotator["model_agreement"]): string {
   if (m.n === 0 || m.share === null) return "–";
-  return `${pct(m.share)} of ${m.n}`;
+  return `${pct(m.share)} of ${m.n} compared pairs`;
 }
 
 /** The whole sentence, for a title or a screen reader. */
@@ -170,7 +174,8 @@ export function agreementTitle(a: Annotator): string {
   const model =
     a.model_agreement.n === 0 || a.model_agreement.share === null
       ? "the reward model has not been compared with them yet"
-      : `the reward model prefers the same behaviour in ${pct(a.model_agreement.share)} of their ${a.model_agreement.n} pairs`;
+      : `the reward model prefers the same behaviour in ${pct(a.model_agreement.share)} of the ${a.model_agreement.n} ` +
+        "behaviour pairs they compared (each left behaviour with each right one)";
   return `${a.name} ${others}; ${model}.`;
 }
 

@@ -70,9 +70,26 @@ export function formatValue(value: number): string {
   return Number(value.toPrecision(3)).toLocaleString("en", { maximumSignificantDigits: 3 });
 }
 
-/** "mean ± sd" (the sd left out when unknown). */
+/** Decimals of `value` written to `digits` significant figures (0 for a whole number). */
+function decimalsAt(value: number, digits: number): number {
+  const rounded = Number(Math.abs(value).toPrecision(digits));
+  return rounded === 0 ? 0 : Math.max(0, digits - 1 - Math.floor(Math.log10(rounded)));
+}
+
+/**
+ * "mean ± sd" (the sd left out when unknown), both to one decimal place: the sd's second
+ * significant figure, but no finer than the mean's third ("0.140 ± 0.001", not
+ * "0.14 ± 0.000621"; "184 ± 3", "41.5 ± 3.2"; issue 40). `agent_file.text.mean_sd` writes
+ * the zip's README the same way.
+ */
 export function meanSd(mean: number, sd: number | null | undefined): string {
-  return sd === null || sd === undefined ? formatValue(mean) : `${formatValue(mean)} ± ${formatValue(sd)}`;
+  if (sd === null || sd === undefined) return formatValue(mean);
+  if (sd === 0 || !Number.isFinite(sd) || !Number.isFinite(mean)) return `${formatValue(mean)} ± ${formatValue(sd)}`;
+  const places = Math.abs(mean) >= 1000 ? 0 : Math.min(decimalsAt(sd, 2), mean === 0 ? 20 : decimalsAt(mean, 3));
+  const fixed = (v: number) =>
+    v.toLocaleString("en", { minimumFractionDigits: places, maximumFractionDigits: places });
+  // an sd below the last place shown is one unit of it, never "± 0.000"
+  return `${fixed(mean)} ± ${fixed(Math.max(Math.abs(sd), 10 ** -places))}`;
 }
 
 export function capitalise(words: string): string {

@@ -46,7 +46,7 @@ def next_suggestion(
 ) -> SuggestionOut:
     """The best group suggestion not answered yet, not excluded and not leased to another
     annotator (null when none); in a shared session it is leased to the caller for the
-    session's `lease_s` (409 for a round that is not the open one)."""
+    session's `lease_s`."""
     exclude = request.exclude if request is not None else None
     return pool_views.next_suggestion(context.db, session_id, round_index, exclude, me)
 
