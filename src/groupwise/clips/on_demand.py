@@ -72,7 +72,7 @@ def load_renderer() -> None:
 
 def warm_recipe_env(recipe: bytes) -> None:
     """Make this process's rendering env for a recipe's settings and draw one frame."""
-    from groupwise.clips.render_jobs import warm_up
+    from groupwise.clips.env_cache import warm_up
     from groupwise.envs.rendering import ensure_gl_backend
 
     ensure_gl_backend()

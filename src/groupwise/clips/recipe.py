@@ -35,6 +35,7 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from groupwise.clips.env_cache import cached_env
 from groupwise.clips.replay import (
     FrameSettings,
     check_observation,
@@ -42,7 +43,7 @@ from groupwise.clips.replay import (
     replay_windows,
 )
 from groupwise.clips.timing import ClipTiming
-from groupwise.clips.video import VideoConfig, poster_bytes, poster_frame
+from groupwise.clips.video import ClipEncoder, VideoConfig, poster_bytes, poster_frame
 from groupwise.envs.physics_state import restore_physics_state
 from groupwise.episodes.fragments import Fragment, Trajectory
 from groupwise.types import FloatArray
@@ -196,15 +197,13 @@ def render_recipe(
 ) -> RenderedMedia:
     """Render `recipe` in this process: its clip and poster, or (``clip=False``) its poster
     alone. Without `env`, uses this process's cached rendering env for the recipe's settings
-    (`render_jobs`).
+    (`env_cache`).
 
     Raises:
         ReplayMismatchError: an observation differs from the stored one.
         RenderingUnavailableError: no offscreen GL backend.
         VideoEncodingError: ffmpeg failed.
     """
-    from groupwise.clips.render_jobs import cached_env  # the worker-side env cache
-
     env = env if env is not None else cached_env(recipe.settings)
     video = recipe.settings.video
     if not clip:
@@ -282,8 +281,6 @@ def _restored_steps(
 
 def _encode(recipe: ClipRecipe, frames: np.ndarray) -> bytes:
     """The MP4 of (cropped) frames, encoded as `render_jobs.run_job` encodes a clip."""
-    from groupwise.clips.video import ClipEncoder
-
     _, height, width, _ = frames.shape
     with tempfile.TemporaryDirectory(prefix="groupwise-clip-") as tmp:
         path = Path(tmp) / "clip.mp4"

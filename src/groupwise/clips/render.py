@@ -28,13 +28,13 @@ from typing import Any
 import gymnasium as gym
 from tqdm.auto import tqdm
 
+from groupwise.clips.env_cache import warm_up
 from groupwise.clips.render_jobs import (
     ClipJob,
     JobReport,
     PosterJob,
     run_job,
     run_poster_job,
-    warm_up,
 )
 from groupwise.clips.replay import FrameSettings, make_render_env
 from groupwise.clips.store import ClipStore

@@ -16,8 +16,9 @@ from typing import Any
 import gymnasium as gym
 import numpy as np
 
+from groupwise.clips.env_cache import cached_env
 from groupwise.clips.recipe import ClipRecipe, render_recipe, replayed_posters, window_recipe
-from groupwise.clips.replay import FrameSettings, even_crop, make_render_env, replay_windows
+from groupwise.clips.replay import FrameSettings, even_crop, replay_windows
 from groupwise.clips.store import ClipStore
 from groupwise.clips.timing import ClipTiming
 from groupwise.clips.video import DEFAULT_FPS, ClipEncoder, poster_bytes, poster_frame
@@ -306,24 +307,3 @@ def _replayed_posters(
 def _children_cpu_s() -> float:
     usage = resource.getrusage(resource.RUSAGE_CHILDREN)
     return usage.ru_utime + usage.ru_stime
-
-
-_ENVS: dict[FrameSettings, gym.Env[Any, Any]] = {}
-"""This process's rendering envs, one per settings (a worker renders many jobs)."""
-
-
-def cached_env(settings: FrameSettings) -> gym.Env[Any, Any]:
-    """This process's rendering env for `settings`, made on first use and kept."""
-    env = _ENVS.get(settings)
-    if env is None:
-        env = _ENVS[settings] = make_render_env(settings)
-    return env
-
-
-def warm_up(settings: FrameSettings) -> float:
-    """Make (and cache) this worker's env and render one frame; returns the seconds it took."""
-    start = time.perf_counter()
-    env = cached_env(settings)
-    env.reset(seed=0)
-    env.render()
-    return time.perf_counter() - start
