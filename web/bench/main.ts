@@ -5,10 +5,11 @@
  * - `?demo=groupwise` / `?demo=pairwise`: the whole app on an in-memory fake server
  *   (`&n=1000` behaviours; `&clips=served`: clips and posters as files under clips/;
  *   `&shared=owner` / `&shared=annotator`: a session shared by three people, seen by its
- *   owner or by one of them; `&owner=NAME` names the owner).
+ *   owner or by one of them; `&owner=NAME` names the owner; `&training=continuous`: the
+ *   learning panel of a continuously training session).
  */
 import "../src/styles.css";
-import type { SessionState } from "../src/api";
+import { STALE, type SessionState } from "../src/api";
 import { startApp } from "../src/app";
 import { DEFAULT_BETA } from "../src/lib/edges";
 import { guideKey } from "../src/lib/guide";
@@ -67,6 +68,7 @@ async function run(n: number, suggestions = 100, history = 400, updates = 40): P
     groups: EMPTY_GROUPS,
     target: "A",
     hover: { id: null, from: null },
+    centre: null,
     suggestions: synth.suggestions,
     maxK: synth.suggestions.length,
     history: synth.judgements.flatMap((j) => j.pairs),
@@ -74,7 +76,7 @@ async function run(n: number, suggestions = 100, history = 400, updates = 40): P
     view: { showSuggestions: true, showHistory: true, k: suggestions, beta: DEFAULT_BETA, speed: 1 },
     clipUrl: (c) => c,
   };
-  const handlers: ExplorationHandlers = { select() {}, hover() {}, target() {}, view() {} };
+  const handlers: ExplorationHandlers = { select() {}, hover() {}, centre() {}, target() {}, view() {} };
   const flush = () => void document.body.offsetHeight;
 
   const t0 = performance.now();
@@ -286,6 +288,12 @@ if (demo === "groupwise" || demo === "pairwise") {
     synth.judgements.forEach((j, i) => (j.annotator = people[i % people.length]!));
   }
   const api = fakeApi(synth, demo, state);
+  // ?training=continuous: the session trains continuously (the learning panel shows).
+  if (params.get("training") === "continuous") {
+    void api.session("s-demo").then((s) => {
+      if (s !== STALE) s.settings.training = "continuous";
+    });
+  }
   // ?clips=served: clips and posters as files under clips/ (a test serves them and counts
   // the requests), instead of inline SVG posters.
   if (params.get("clips") === "served") api.clipUrl = (clip) => `clips/${clip}`;

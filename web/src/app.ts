@@ -6,6 +6,7 @@ import { type Annotator, type Api, type Edge, type JudgementOut, createApi } fro
 import { type Controller, createController } from "./controller";
 import { OWNER_COLOUR, OWNER_ID, annotatorColours, isShared, judgementAnnotator, meOf } from "./lib/annotators";
 import { clipCaption } from "./lib/clip-timing";
+import { outward } from "./lib/centre";
 import { guideSeen, rememberGuideSeen } from "./lib/guide";
 import { type KeyInput, keyCommand } from "./lib/keys";
 import type { Tree } from "./lib/tree";
@@ -103,17 +104,19 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
   const progressA = h("div", { class: "progress-overlay", hidden: true });
   const pairwise = h("section", {});
   const progressB = h("div", { class: "progress-overlay", hidden: true });
-  // The agent learning (a continuous session): under the behaviours, or under the pair.
+  // The agent learning (a continuous session): under the comparison, or under the pair.
   const trainingA = h("section", { hidden: true });
   const trainingB = h("section", { hidden: true });
-  // The people of a shared session: likewise under the behaviours, or under the pair.
+  // The people of a shared session: likewise under the comparison, or under the pair.
   const peopleA = h("section", { hidden: true });
   const peopleB = h("section", { hidden: true });
+  // The chart keeps the left column's height (issue 40: at least 60 % of a 768 px screen);
+  // the learning and people panels go under the comparison.
   const groupWorkspace = h(
     "div",
     { class: "workspace groupwise", hidden: true },
-    h("div", { class: "left" }, exploration, trainingA, peopleA),
-    h("div", { class: "right" }, comparison, progressA),
+    h("div", { class: "left" }, exploration),
+    h("div", { class: "right" }, h("div", { class: "compare-stack" }, comparison, progressA), trainingA, peopleA),
   );
   const pairWorkspace = h(
     "div",
@@ -291,6 +294,7 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
         groups: st.groups,
         target: st.target,
         hover: st.hover,
+        centre: st.centre,
         suggestions: topK(st.suggestions, st.view.k),
         maxK: st.suggestions.length,
         history: historyEdges(st.judgements),
@@ -301,6 +305,7 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
       {
         select: (click, other) => dispatch({ type: "select", click, other, at: Date.now() }),
         hover: (id) => dispatch({ type: "hover", id, from: id ? "chart" : null }),
+        centre: (id) => dispatch({ type: "centre", id }),
         target: (group) => dispatch({ type: "target", group }),
         view: (patch) => dispatch({ type: "view", patch }),
       },
@@ -451,6 +456,11 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
       case "guide":
         dispatch({ type: "guide", open: true });
         break;
+      case "out": {
+        const tree = st.round?.tree;
+        if (tree && st.centre !== null) dispatch({ type: "centre", id: outward(tree, st.centre) });
+        break;
+      }
     }
   });
 

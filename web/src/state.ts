@@ -28,6 +28,7 @@ import {
   removeLeaf,
 } from "./lib/selection";
 import type { Tree } from "./lib/tree";
+import { centresOn } from "./lib/centre";
 import { DEFAULT_BETA } from "./lib/edges";
 import { FRESH_ORIGIN, type GroupChange, type Origin, arcChange, originAfter } from "./lib/origin";
 import type { Schemas } from "./lib/settings-form";
@@ -119,6 +120,8 @@ export interface State {
   suggestionStatus: "idle" | "loading" | "none";
   view: ViewSettings;
   hover: { id: string | null; from: "chart" | "clip" | null };
+  /** The cluster the exploration chart is centred on (null: the whole round; issue 40). */
+  centre: string | null;
   submitting: boolean;
   undoing: boolean;
   /** A control request (pause, resume, end round, retry, create) is in flight. */
@@ -160,6 +163,7 @@ export const initialState: State = {
   suggestionStatus: "idle",
   view: { showSuggestions: true, showHistory: true, k: 100, beta: DEFAULT_BETA, speed: 1 },
   hover: { id: null, from: null },
+  centre: null,
   submitting: false,
   undoing: false,
   busy: false,
@@ -208,6 +212,8 @@ export type Action =
   | { type: "suggestion-status"; status: State["suggestionStatus"] }
   | { type: "view"; patch: Partial<ViewSettings> }
   | { type: "hover"; id: string | null; from: "chart" | "clip" | null }
+  /** Centres the chart on a cluster (null: the whole round). */
+  | { type: "centre"; id: string | null }
   | { type: "submitting"; value: boolean }
   | { type: "answered"; judgement: JudgementOut }
   | { type: "undoing"; value: boolean }
@@ -267,6 +273,7 @@ export function reduce(state: State, action: Action): State {
             origin: FRESH_ORIGIN,
             suggestionStatus: "idle",
             hover: { id: null, from: null },
+            centre: null,
           };
     }
     case "suggestions":
@@ -299,10 +306,12 @@ export function reduce(state: State, action: Action): State {
     case "people":
       return { ...state, people: { ...state.people, ...action.patch } };
     case "select": {
+      // A cluster too big to be a group: the click centres the chart on it (issue 40).
+      if (centresOn(action.click) && action.click.id !== undefined) return reduce(state, { type: "centre", id: action.click.id });
       const click = { ...action.click, target: action.other ? otherGroup(state.target) : state.target };
       const r = clickArc(state.groups, click);
       if (r.message) return toast(state, "info", r.message);
-      return r.changed ? withGroups(state, r.groups, arcChange(state.groups, click), action.at) : state;
+      return r.changed ? withGroups(state, r.groups, arcChange(click), action.at) : state;
     }
     case "remove":
     case "move": {
@@ -323,6 +332,8 @@ export function reduce(state: State, action: Action): State {
       return { ...state, suggestionStatus: action.status };
     case "view":
       return { ...state, view: { ...state.view, ...action.patch } };
+    case "centre":
+      return state.centre === action.id ? state : { ...state, centre: action.id, hover: { id: null, from: null } };
     case "hover":
       if (state.hover.id === action.id && state.hover.from === action.from) return state;
       return { ...state, hover: { id: action.id, from: action.from } };

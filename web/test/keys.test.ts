@@ -50,3 +50,16 @@ describe("keyCommand", () => {
     expect(keyCommand({ key: "ArrowLeft", altKey: true }, "groupwise")).toBeNull();
   });
 });
+
+describe("the chart's centre by key", () => {
+  it("Escape takes the chart one step out (groupwise only), not in a field", () => {
+    expect(keyCommand({ key: "Escape" }, "groupwise")).toEqual({ type: "out" });
+    expect(keyCommand({ key: "Escape", inField: true }, "groupwise")).toBeNull();
+    expect(keyCommand({ key: "Escape" }, "pairwise")).toBeNull();
+  });
+
+  it("leaves C and Shift + arrows to the chart", () => {
+    expect(keyCommand({ key: "c" }, "groupwise")).toBeNull();
+    expect(keyCommand({ key: "ArrowUp", shiftKey: true }, "groupwise")).toBeNull();
+  });
+});

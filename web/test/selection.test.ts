@@ -39,23 +39,42 @@ describe("clicking arcs", () => {
     expect(r.groups).toEqual({ A: [], B: ["b1", "b2"] });
   });
 
-  it("adds an unselected leaf, and removes a selected one", () => {
+  it("adds an unselected leaf; a plain click on a selected one changes nothing and says so", () => {
     let g = clickArc(EMPTY_GROUPS, leaf("b1")).groups;
     g = clickArc(g, leaf("b2")).groups;
     expect(g.A).toEqual(["b1", "b2"]);
-    g = clickArc(g, leaf("b1")).groups;
-    expect(g.A).toEqual(["b2"]);
+    const again = clickArc(g, leaf("b1"));
+    expect(again.groups).toBe(g);
+    expect(again.changed).toBe(false);
+    expect(again.message).toMatch(/b1 is in group A already; Shift-click it or its × takes it out/);
   });
 
-  it("removes a leaf of the other group on a plain click, moves it with the modifier", () => {
+  it("takes a leaf out of its group with the modifier (its own gesture), from either group", () => {
+    const g: Groups = { A: ["b1", "b3"], B: ["b2"] };
+    expect(clickArc(g, leaf("b1", "A", true)).groups).toEqual({ A: ["b3"], B: ["b2"] });
+    expect(clickArc(g, leaf("b2", "A", true)).groups).toEqual({ A: ["b1", "b3"], B: [] });
+    // …and adds a leaf in no group, as a plain click does
+    expect(clickArc(g, leaf("b4", "B", true)).groups).toEqual({ A: ["b1", "b3"], B: ["b2", "b4"] });
+  });
+
+  it("moves a leaf of the other group into the target group on a plain click", () => {
     const g: Groups = { A: ["b1"], B: ["b2"] };
-    expect(clickArc(g, leaf("b2", "A")).groups).toEqual({ A: ["b1"], B: [] });
-    expect(clickArc(g, leaf("b2", "A", true)).groups).toEqual({ A: ["b1", "b2"], B: [] });
+    expect(clickArc(g, leaf("b2", "A")).groups).toEqual({ A: ["b1", "b2"], B: [] });
   });
 
-  it("toggles a parent off when all its leaves are already in the target group", () => {
+  it("never empties a group by clicking the cluster it already is (issue 40)", () => {
+    const g: Groups = { A: ["b1", "b2"], B: ["b5"] };
+    const r = clickArc(g, arc(["b1", "b2"]));
+    expect(r.groups).toBe(g);
+    expect(r.changed).toBe(false);
+    expect(r.message).toBe("Group A holds these 2 behaviours already.");
+    // with the modifier (add) too
+    expect(clickArc(g, arc(["b2", "b1"], "A", true)).groups).toBe(g);
+  });
+
+  it("replaces a group that holds more than the clicked cluster with the cluster", () => {
     const r = clickArc({ A: ["b1", "b2", "b3"], B: [] }, arc(["b1", "b2"]));
-    expect(r.groups.A).toEqual(["b3"]);
+    expect(r.groups.A).toEqual(["b1", "b2"]);
   });
 
   it(`refuses more than ${MAX_GROUP} behaviours, leaving the groups unchanged`, () => {

@@ -2,7 +2,7 @@
  * Keyboard map (SPEC §9): ← left better, → right better, ↑ equal, ↓ skip (pairwise), with the
  * left-hand alternatives A / D / W / S; G switches the group that clicks fill (1 / 2 pick
  * A / B), N asks for the next suggestion, U or Ctrl+Z undoes the last answer, ? shows the
- * guide.
+ * guide, Escape takes the chart one step out of the cluster it is centred on.
  *
  * The answer keys act wherever focus is on the page except in form fields, the chart
  * included: the chart's own keyboard navigation uses Shift + arrows (and Home / End), so it
@@ -17,7 +17,8 @@ export type KeyCommand =
   | { type: "target"; group: GroupId }
   | { type: "next-suggestion" }
   | { type: "undo" }
-  | { type: "guide" };
+  | { type: "guide" }
+  | { type: "out" };
 
 export interface KeyInput {
   key: string;
@@ -65,6 +66,8 @@ export function keyCommand(e: KeyInput, mode: "groupwise" | "pairwise"): KeyComm
       return { type: "next-suggestion" };
     case "u":
       return { type: "undo" };
+    case "Escape":
+      return { type: "out" };
     default:
       return null;
   }

@@ -2,12 +2,18 @@
  * Radial arc layout of the behaviour tree (SPEC §9, paper "Visualisation of the behaviour
  * space"): leaves form the innermost ring, each parent is an arc spanning its children in
  * the ring of its level, the root is not drawn, and the disc inside the leaf ring is left for
- * the edges. Every leaf gets the same angle, in the tree's child order.
+ * the edges. Every leaf gets the same angle, in the tree's child order (d3-hierarchy's
+ * partition of the leaf counts).
+ *
+ * The chart's centre (issue 40): laid out around a cluster instead of the root, only that
+ * cluster's descendants are drawn, its leaves share the whole ring and its children's level
+ * is the outermost ring, so the 50 leaves of a cluster get the ring 1,000 shared before.
  *
  * Angles follow d3-shape's arc convention: radians clockwise from 12 o'clock, so a point is
  * (r sin a, -r cos a).
  */
-import type { Tree, TreeNode } from "./tree";
+import { partition } from "d3-hierarchy";
+import { type Tree, type TreeJson, type TreeNode, subtreeHierarchy } from "./tree";
 
 export interface LayoutOptions {
   /** Outer radius of the outermost ring. */
@@ -22,6 +28,8 @@ export interface LayoutOptions {
   arcGap: number;
   /** Gap between the leaf ring and the ends of the edges. */
   edgeGap: number;
+  /** The node the chart is centred on (its descendants are drawn); default the root. */
+  centre?: TreeNode | null;
 }
 
 export const DEFAULT_LAYOUT: LayoutOptions = {
@@ -48,11 +56,14 @@ export interface Arc {
 }
 
 export interface RadialLayout {
-  /** Every drawn node (all but the root), outer rings first, each ring by angle. */
+  /** The node the layout is centred on (not drawn): the root, or a cluster. */
+  centre: TreeNode;
+  /** Every drawn node (the centre's descendants), outer rings first, each ring by angle. */
   arcs: Arc[];
   byId: Map<string, Arc>;
   /** Ring index -> its arcs by angle. */
   rings: Arc[][];
+  /** Rings drawn: the centre's level. */
   levels: number;
   radius: number;
   /** Inner radius of the leaf ring. */
@@ -83,35 +94,30 @@ export function ringRadii(levels: number, o: LayoutOptions): Array<[number, numb
 
 export function radialLayout(tree: Tree, options: Partial<LayoutOptions> = {}): RadialLayout {
   const o = { ...DEFAULT_LAYOUT, ...options };
-  const levels = Math.max(1, tree.levels);
+  const centre = o.centre && !o.centre.isLeaf ? o.centre : tree.root;
+  const levels = Math.max(1, centre === tree.root ? tree.levels : centre.level);
   const radii = ringRadii(levels, o);
-  const n = tree.leaves.length;
-  const step = n > 0 ? (2 * Math.PI) / n : 0;
   const rings: Arc[][] = Array.from({ length: levels }, () => []);
   const byId = new Map<string, Arc>();
-
-  const visit = (node: TreeNode): void => {
-    // Children first is not needed: spans come from leaf positions, which are fixed.
-    if (node.level < levels && node !== tree.root) {
-      const first = tree.leafIndex.get(node.leaves[0]!)!;
-      const last = tree.leafIndex.get(node.leaves[node.leaves.length - 1]!)!;
-      const start = first * step;
-      const end = (last + 1) * step;
-      const ring = Math.max(0, node.level);
-      const [r0, r1] = radii[ring]!;
-      const span = end - start;
-      const pad = Math.min(o.arcGap / ((r0 + r1) / 2), span * 0.2) / 2;
-      const arc: Arc = { node, ring, start, end, a0: start + pad, a1: end - pad, r0, r1 };
-      rings[ring]!.push(arc);
-      byId.set(node.id, arc);
-    }
-    for (const child of node.children) visit(child);
-  };
-  visit(tree.root);
+  // Angles: a partition of the full circle by leaf counts, in child order (every leaf the
+  // same angle); radii: the ring of the node's level.
+  const parts = partition<TreeJson>().size([2 * Math.PI, levels])(subtreeHierarchy(centre).count());
+  for (const d of parts.descendants()) {
+    const node = tree.nodes.get(d.data.id);
+    if (!node || node === centre || node.level >= levels) continue;
+    const ring = Math.max(0, node.level);
+    const [r0, r1] = radii[ring]!;
+    const span = d.x1 - d.x0;
+    const pad = Math.min(o.arcGap / ((r0 + r1) / 2), span * 0.2) / 2;
+    const arc: Arc = { node, ring, start: d.x0, end: d.x1, a0: d.x0 + pad, a1: d.x1 - pad, r0, r1 };
+    rings[ring]!.push(arc);
+    byId.set(node.id, arc);
+  }
   for (const ring of rings) ring.sort((x, y) => x.start - y.start || x.end - y.end);
   const arcs = rings.slice().reverse().flat();
   const discRadius = radii[0]![0];
   return {
+    centre,
     arcs,
     byId,
     rings,

@@ -14,7 +14,7 @@
  * click that replaces a group's members is what makes it the person's own.
  */
 import type { Suggestion } from "../api";
-import { type ArcClick, type Groups, takesOut } from "./selection";
+import type { ArcClick, Groups } from "./selection";
 
 export type Source = "suggested" | "explored";
 
@@ -38,10 +38,10 @@ export const FRESH_ORIGIN: Origin = { source: "explored", edits: 0, startedAt: n
  */
 export type GroupChange = "fill" | "edit";
 
-/** What a click on an arc is: a cluster click without the modifier fills its target group
- * (unless all its behaviours are there already, which takes them out); the rest are edits. */
-export function arcChange(groups: Groups, click: ArcClick): GroupChange {
-  return click.isLeaf || click.add || takesOut(groups, click) ? "edit" : "fill";
+/** What a click on an arc is: a cluster click without the modifier fills its target group;
+ * the rest are edits. */
+export function arcChange(click: ArcClick): GroupChange {
+  return click.isLeaf || click.add ? "edit" : "fill";
 }
 
 /**

@@ -4,10 +4,13 @@
  * message saying why nothing changed.
  *
  * - Clicking a parent arc puts all its leaves into the target group, replacing it; with the
- *   modifier, adds them. Clicking a parent whose leaves are all in the target group already
- *   takes them out again (a toggle). A parent with more than MAX_GROUP leaves is refused.
- * - Clicking a leaf adds it to the target group; clicking a selected leaf removes it. With
- *   the modifier, a leaf of the other group moves into the target group instead.
+ *   modifier, adds them. A click that would change nothing (the cluster is the group
+ *   already) says so and leaves the group as it is: it never empties it (issue 40). A
+ *   cluster of more than MAX_GROUP leaves is refused here; the chart centres on it instead
+ *   (`lib/centre.ts`).
+ * - Clicking a leaf puts it into the target group (out of the other one); clicking a leaf
+ *   already in the target group says so. Removing a leaf is its own gesture: the modifier
+ *   click on a leaf in a group takes it out (as does the × on its clip).
  * - A behaviour is never in both groups: putting it in one takes it out of the other.
  * - A group holds at most MAX_GROUP behaviours (the server enforces it too).
  */
@@ -82,6 +85,8 @@ export function moveLeaf(groups: Groups, id: string): SelectionResult {
 }
 
 export interface ArcClick {
+  /** The clicked node (a click on a cluster too big for a group centres the chart on it). */
+  id?: string;
   /** Leaves under the clicked arc (one for a leaf). */
   leaves: readonly string[];
   isLeaf: boolean;
@@ -91,14 +96,6 @@ export interface ArcClick {
   add: boolean;
 }
 
-/** A plain click on a cluster whose behaviours are all in the target group already: it takes
- * them out again (the toggle). */
-export function takesOut(groups: Groups, click: ArcClick): boolean {
-  if (click.isLeaf || click.add || click.leaves.length === 0) return false;
-  const inTarget = new Set(groups[click.target]);
-  return click.leaves.every((id) => inTarget.has(id));
-}
-
 /** The selection after clicking an arc. */
 export function clickArc(groups: Groups, click: ArcClick): SelectionResult {
   const { leaves, target, add } = click;
@@ -106,12 +103,17 @@ export function clickArc(groups: Groups, click: ArcClick): SelectionResult {
     const id = leaves[0];
     if (id === undefined) return result(groups, groups);
     const where = groupOf(groups, id);
-    if (where === target || (where !== null && !add)) return removeLeaf(groups, id);
+    if (add && where !== null) return removeLeaf(groups, id);
+    if (where === target) {
+      return result(groups, groups, `${id} is in group ${target} already; Shift-click it or its × takes it out.`);
+    }
     return assign(groups, target, [id], true);
   }
-  if (takesOut(groups, click)) {
-    const drop = new Set(leaves);
-    return result(groups, withGroup(groups, target, groups[target].filter((id) => !drop.has(id))));
+  if (leaves.length === 0) return result(groups, groups);
+  const inTarget = new Set(groups[target]);
+  if (leaves.every((id) => inTarget.has(id)) && (add || groups[target].length === leaves.length)) {
+    const n = leaves.length;
+    return result(groups, groups, `Group ${target} holds ${n === 1 ? "this behaviour" : `these ${n} behaviours`} already.`);
   }
   if (!add && leaves.length > MAX_GROUP) {
     return result(

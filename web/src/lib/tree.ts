@@ -98,3 +98,9 @@ export function treePath(tree: Tree, a: string, b: string): TreeNode[] {
 export function ancestors(node: TreeNode): TreeNode[] {
   return hierarchyOf.get(node)!.ancestors().slice(1).map((d) => nodeOf.get(d)!);
 }
+
+/** A fresh d3 hierarchy of the subtree under `node` (depth 0 at `node`), for d3-hierarchy's
+ * layouts (the chart's partition, `layout.ts`); its nodes' `data` are the tree's JSON. */
+export function subtreeHierarchy(node: TreeNode): HierarchyNode<TreeJson> {
+  return hierarchyOf.get(node)!.copy();
+}

@@ -10,6 +10,9 @@
  *   gradient strokes (benchmarks/web_render.py).
  * - The highlight canvas above holds the hovered arc's edges, wider; hovering dims the bulk
  *   canvas through CSS opacity instead of redrawing it.
+ * - A zoom (d3-zoom's transform, in viewBox units) redraws both under the transform, the
+ *   lines as thin as unzoomed; a chart centred on a cluster draws the edges between its
+ *   behaviours (those with an end outside have no arc to go to).
  */
 import type { Edge } from "../api";
 import {
@@ -46,6 +49,8 @@ export interface EdgeInput {
   beta: number;
   /** The hovered arc (its leaves' edges are highlighted), or null. */
   hover: string | null;
+  /** The chart's zoom: a point p of the viewBox is drawn at k · p + (x, y). */
+  zoom: { k: number; x: number; y: number };
 }
 
 const HISTORY_BINS = 10;
@@ -57,7 +62,7 @@ const HISTORY_COLOURS = Array.from({ length: HISTORY_BINS }, (_, i) =>
   ]),
 );
 /** What the bulk canvas depends on; a change of any (by identity) redraws it. */
-const BULK_KEYS = ["tree", "layout", "size", "suggestions", "history", "showSuggestions", "showHistory", "beta"] as const;
+const BULK_KEYS = ["tree", "layout", "size", "suggestions", "history", "showSuggestions", "showHistory", "beta", "zoom"] as const;
 
 interface Layers {
   suggestions: Path2D[];
@@ -79,7 +84,7 @@ export class EdgeCanvas {
   private lines = new Map<string, Point[]>();
   private linesFor: { layout: RadialLayout; beta: number } | null = null;
   private layers: Layers | null = null;
-  private layersFor: { suggestions: readonly Edge[]; history: readonly HistoryEdge[] } | null = null;
+  private layersFor: Pick<EdgeInput, "suggestions" | "history" | "layout" | "beta"> | null = null;
   private drawn: EdgeInput | null = null;
   private frame = 0;
 
@@ -111,8 +116,9 @@ export class EdgeCanvas {
     const key = `${a}|${b}`;
     let line = this.lines.get(key);
     if (line) return line;
+    const drawn = input.layout.byId;
+    if (a === b || !drawn.has(a) || !drawn.has(b)) return null;
     const tree = input.tree;
-    if (a === b || !tree.nodes.has(a) || !tree.nodes.has(b)) return null;
     line = flattenEdge(edgePoints(tree, input.layout, a, b), input.beta);
     this.lines.set(key, line);
     return line;
@@ -173,7 +179,8 @@ export class EdgeCanvas {
     ctx.clearRect(0, 0, px, px);
     if (!input || px === 0) return null;
     const scale = px / input.viewBox;
-    ctx.setTransform(scale, 0, 0, scale, px / 2, px / 2);
+    const { k, x, y } = input.zoom;
+    ctx.setTransform(scale * k, 0, 0, scale * k, px / 2 + scale * x, px / 2 + scale * y);
     ctx.lineCap = "butt";
     ctx.lineJoin = "bevel";
     return ctx;
@@ -190,12 +197,14 @@ export class EdgeCanvas {
       return;
     }
     const src = this.layersFor;
-    if (!this.layers || !src || src.suggestions !== input.suggestions || src.history !== input.history) {
+    const stale = (["suggestions", "history", "layout", "beta"] as const).some((key) => src?.[key] !== input[key]);
+    if (!this.layers || stale) {
       this.layers = this.buildLayers(input);
-      this.layersFor = { suggestions: input.suggestions, history: input.history };
+      const { suggestions, history, layout, beta } = input;
+      this.layersFor = { suggestions, history, layout, beta };
     }
     const layers = this.layers;
-    const cssPixel = input.viewBox / Math.max(1, input.size);
+    const cssPixel = input.viewBox / Math.max(1, input.size) / input.zoom.k;
     if (input.showSuggestions) {
       ctx.strokeStyle = SUGGESTION;
       ctx.lineWidth = cssPixel;
@@ -212,7 +221,7 @@ export class EdgeCanvas {
         ctx.stroke(path);
       });
       ctx.strokeStyle = EQUAL;
-      ctx.setLineDash([9, 7]);
+      ctx.setLineDash([9 / input.zoom.k, 7 / input.zoom.k]);
       ctx.stroke(layers.equal);
       ctx.setLineDash([]);
     }
@@ -231,8 +240,9 @@ export class EdgeCanvas {
     if (!ctx || !input || !node) return;
     const focus = new Set(node.leaves);
     const touches = (e: { a: string; b: string }) => focus.has(e.a) || focus.has(e.b);
+    const k = input.zoom.k;
     if (input.showSuggestions) {
-      ctx.lineWidth = 2.4;
+      ctx.lineWidth = 2.4 / k;
       for (const e of input.suggestions) {
         const line = touches(e) && this.line(e.a, e.b);
         if (!line) continue;
@@ -245,18 +255,18 @@ export class EdgeCanvas {
     if (input.showHistory) {
       for (const e of input.history) {
         const line = touches(e) && this.line(e.a, e.b);
-        if (line) strokeHistory(ctx, line, e.label);
+        if (line) strokeHistory(ctx, line, e.label, k);
       }
     }
   }
 }
 
-function strokeHistory(ctx: CanvasRenderingContext2D, line: readonly Point[], label: number): void {
+function strokeHistory(ctx: CanvasRenderingContext2D, line: readonly Point[], label: number, k: number): void {
   const path = new Path2D();
   addLine(path, line);
-  ctx.lineWidth = 3.6;
+  ctx.lineWidth = 3.6 / k;
   if (label === 0.5) {
-    ctx.setLineDash([9, 7]);
+    ctx.setLineDash([9 / k, 7 / k]);
     ctx.strokeStyle = EQUAL;
   } else {
     const p0 = line[0]!;

@@ -1,10 +1,12 @@
 /**
- * The exploration view's rings: one SVG arc per tree node (a focusable button), their group
- * tints and labels, the marks of behaviours not compared yet, and the hover outline. A
- * selection only retints the arcs whose counts change.
+ * The exploration view's rings: one SVG arc per drawn tree node (a focusable button), the
+ * cluster sizes on the arcs where they fit, their group tints and labels, the marks of
+ * behaviours not compared yet, and the hover outline. A selection only retints the arcs
+ * whose counts change. Centred on a cluster (issue 40), only its descendants are drawn.
  */
 import { arc as d3arc } from "d3-shape";
 import { GROUP_COLOURS, groupTint, neutralFill } from "../lib/colour";
+import { centreNode } from "../lib/centre";
 import { type Arc, midAngle, polar, radialLayout } from "../lib/layout";
 import { groupCounts } from "../lib/selection";
 import { ancestors } from "../lib/tree";
@@ -19,9 +21,17 @@ const arcPath = d3arc<Arc>()
   .startAngle((d) => d.a0)
   .endAngle((d) => d.a1);
 
-/** Draws one arc per node of the round's tree (or clears the chart without a round). */
-export function buildArcs(chart: Chart, round: RoundData | null): void {
+/** Font size of the cluster sizes, in viewBox units (about 11 CSS px on a 480 px chart). */
+const SIZE_FONT = 23;
+
+/**
+ * Draws one arc per node of the round's tree under `centre` (null: the whole round), or
+ * clears the chart without a round. The arc of `focusable` (else the first behaviour) is the
+ * one Tab reaches.
+ */
+export function buildArcs(chart: Chart, round: RoundData | null, centre: string | null, focusable?: string): void {
   chart.round = round;
+  chart.centre = centre;
   chart.arcEls.clear();
   chart.ancestorIds.clear();
   chart.counts = new Map();
@@ -31,10 +41,12 @@ export function buildArcs(chart: Chart, round: RoundData | null): void {
   if (!round) {
     chart.layout = null;
     chart.arcsG.replaceChildren();
+    chart.sizes.replaceChildren();
     text(chart.subtitle, "");
     return;
   }
-  const layout = radialLayout(round.tree, { radius: VIEWBOX / 2 - 20 });
+  const node = centreNode(round.tree, centre);
+  const layout = radialLayout(round.tree, { radius: VIEWBOX / 2 - 20, centre: node });
   chart.layout = layout;
   const frag = document.createDocumentFragment();
   for (const a of layout.arcs) {
@@ -50,13 +62,32 @@ export function buildArcs(chart: Chart, round: RoundData | null): void {
     chart.arcEls.set(node.id, el);
   }
   chart.arcsG.replaceChildren(frag);
+  chart.sizes.replaceChildren(sizeLabels(layout.arcs));
   for (const leaf of round.tree.leaves) {
     chart.ancestorIds.set(leaf.id, ancestors(leaf).map((n) => n.id));
   }
-  const first = layout.rings[0]?.[0];
+  const first = (focusable && layout.byId.get(focusable)) || layout.rings[0]?.[0];
   if (first) setFocusable(chart, first.node.id);
   const n = round.tree.leaves.length;
-  text(chart.subtitle, `round ${round.round} · ${n} behaviours · ${layout.levels} levels`);
+  text(chart.subtitle, `round ${round.round} · ${n} behaviours`);
+}
+
+/** The number of behaviours on every cluster's arc wide and deep enough for it. */
+function sizeLabels(arcs: readonly Arc[]): DocumentFragment {
+  const frag = document.createDocumentFragment();
+  for (const a of arcs) {
+    const n = a.node.leaves.length;
+    if (a.node.isLeaf || n < 2) continue;
+    const label = String(n);
+    const mid = (a.r0 + a.r1) / 2;
+    const along = (a.a1 - a.a0) * mid;
+    if (along < label.length * SIZE_FONT * 0.62 + 10 || a.r1 - a.r0 < SIZE_FONT * 1.1) continue;
+    const [x, y] = polar(midAngle(a), mid);
+    const t = s("text", { x: x.toFixed(1), y: y.toFixed(1), "font-size": SIZE_FONT, "data-for": a.node.id });
+    t.textContent = label;
+    frag.append(t);
+  }
+  return frag;
 }
 
 /** The one arc reached by Tab (a roving tabindex). */

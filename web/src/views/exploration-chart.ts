@@ -2,6 +2,7 @@
  * What the exploration view's modules share: its data and handlers (the view's API), and the
  * `Chart` that one mounted view keeps between renders — its elements and what is drawn now.
  */
+import type { ZoomBehavior, ZoomTransform } from "d3-zoom";
 import type { Edge } from "../api";
 import type { RadialLayout } from "../lib/layout";
 import type { GroupId, Groups } from "../lib/selection";
@@ -17,6 +18,8 @@ export interface ExplorationData {
   groups: Groups;
   target: GroupId;
   hover: State["hover"];
+  /** The cluster the chart is centred on (null: the whole round). */
+  centre: string | null;
   /** The suggestion edges to draw (already the top k). */
   suggestions: readonly Edge[];
   /** How many suggestions exist (the k slider's maximum). */
@@ -28,7 +31,9 @@ export interface ExplorationData {
 }
 
 export interface ExplorationHandlers {
-  select(click: { leaves: string[]; isLeaf: boolean; add: boolean }, other: boolean): void;
+  select(click: { id: string; leaves: string[]; isLeaf: boolean; add: boolean }, other: boolean): void;
+  /** Centres the chart on a cluster (null: the whole round). */
+  centre(id: string | null): void;
   hover(id: string | null): void;
   target(group: GroupId | "switch"): void;
   view(patch: Partial<ViewSettings>): void;
@@ -36,6 +41,8 @@ export interface ExplorationHandlers {
 
 /** Side of the SVG viewBox, centred on the disc. */
 export const VIEWBOX = 1000;
+/** The largest wheel or pinch zoom (d3-zoom's scale extent; `lib/centre.ts` counts on it). */
+export const MAX_ZOOM = 16;
 
 /** Calls one of the current handlers (they change with every render). */
 export type CallHandler = <K extends keyof ExplorationHandlers>(
@@ -49,10 +56,20 @@ export interface Chart {
   box: HTMLElement;
   wrap: HTMLElement;
   empty: HTMLElement;
+  /** Holds the arcs, labels, marks and outline; d3-zoom's transform applies to it. */
+  zoomLayer: SVGGElement;
   arcsG: SVGGElement;
+  /** Cluster sizes drawn on the arcs where they fit. */
+  sizes: SVGGElement;
   marks: SVGPathElement;
   outline: SVGGElement;
   subtitle: HTMLElement;
+  /** The breadcrumb back out of a centred chart, and the zoom's reset. */
+  crumbs: HTMLElement;
+  resetZoom: HTMLButtonElement;
+  zoom: ZoomBehavior<SVGSVGElement, unknown>;
+  /** The zoom drawn now (identity: none). */
+  transform: ZoomTransform;
   targetButtons: Record<GroupId, HTMLButtonElement>;
   legend: Legend;
   preview: Preview;
@@ -60,6 +77,8 @@ export interface Chart {
   data: ExplorationData | null;
   handlers: ExplorationHandlers | null;
   round: RoundData | null;
+  /** The centre the arcs are drawn around (null: the whole round). */
+  centre: string | null;
   layout: RadialLayout | null;
   arcEls: Map<string, SVGPathElement>;
   ancestorIds: Map<string, string[]>;

@@ -1,8 +1,10 @@
 /**
  * The exploration view's interaction: clicks, the context menu and keys on the arcs select
- * groups and move the focus; pointer and focus show the hovered node and, after a short
- * delay, its preview (the tooltip with clips).
+ * groups, centre the chart and move the focus; pointer and focus show the hovered node and,
+ * after a short delay, its preview (the tooltip with clips). Wheel and pinch are d3-zoom's
+ * (`exploration.ts`).
  */
+import { canCentre, outward } from "../lib/centre";
 import { type Arc, arcAt, neighbourArc } from "../lib/layout";
 import type { TreeNode } from "../lib/tree";
 import { setFocusable } from "./exploration-arcs";
@@ -23,7 +25,7 @@ export function attachArcEvents(chart: Chart, call: CallHandler): void {
    * right-click's `contextmenu` did, now and then, right after a load: issue 23). */
   const arcUnder = (e: MouseEvent): Arc | null => {
     const hit = arcOf(e.target);
-    const m = svg.getScreenCTM();
+    const m = chart.zoomLayer.getScreenCTM(); // the layout's coordinates, zoomed
     if (hit || !chart.layout || !m) return hit;
     const p = new DOMPoint(e.clientX, e.clientY).matrixTransform(m.inverse());
     return arcAt(chart.layout, p.x, p.y);
@@ -31,7 +33,7 @@ export function attachArcEvents(chart: Chart, call: CallHandler): void {
   /** The arc a right button went down on: the context menu that follows fills with it. */
   let pressed: Arc | null = null;
   const select = (a: Arc, add: boolean, other: boolean) =>
-    call("select", { leaves: [...a.node.leaves], isLeaf: a.node.isLeaf, add }, other);
+    call("select", { id: a.node.id, leaves: [...a.node.leaves], isLeaf: a.node.isLeaf, add }, other);
 
   svg.addEventListener("click", (e) => {
     const a = arcUnder(e);
@@ -85,6 +87,20 @@ export function attachArcEvents(chart: Chart, call: CallHandler): void {
     if (e.key === "Enter" || e.key === " ") {
       e.preventDefault();
       select(a, e.shiftKey || e.ctrlKey || e.metaKey, e.altKey);
+      return;
+    }
+    // C centres the chart on the focused cluster; Escape or Backspace goes one step out.
+    const plain = !e.ctrlKey && !e.metaKey && !e.altKey;
+    if (plain && (e.key === "c" || e.key === "C") && canCentre(a.node)) {
+      e.preventDefault();
+      e.stopPropagation();
+      call("centre", a.node.id);
+      return;
+    }
+    if (plain && (e.key === "Escape" || e.key === "Backspace") && chart.round && chart.centre !== null) {
+      e.preventDefault();
+      e.stopPropagation();
+      call("centre", outward(chart.round.tree, chart.centre));
       return;
     }
     // Shift + arrows move between arcs; plain arrows are the page's answer keys

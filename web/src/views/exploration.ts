@@ -6,7 +6,14 @@
  * This module builds the panel and decides, per render, what must be redrawn. Arcs are SVG
  * (`exploration-arcs.ts`); edges are drawn on canvases under them (`edge-canvas.ts`;
  * benchmarks/web_render.py); pointer, keys and the preview are `exploration-events.ts`.
+ *
+ * Issue 40: the chart centres on a cluster (the store's `centre`, with a breadcrumb back
+ * out) and zooms with the wheel or a pinch (d3-zoom: its transform moves the arcs' layer and
+ * redraws the edges, so the bundles stay); a new centre or round starts unzoomed.
  */
+import { select } from "d3-selection";
+import { type ZoomTransform, zoom, zoomIdentity } from "d3-zoom";
+import { crumbs } from "../lib/centre";
 import { GROUP_COLOURS } from "../lib/colour";
 import { attr, h, kbd, memo, s, text } from "./dom";
 import { EdgeCanvas } from "./edge-canvas";
@@ -16,6 +23,7 @@ import {
   type Chart,
   type ExplorationData,
   type ExplorationHandlers,
+  MAX_ZOOM,
   VIEWBOX,
 } from "./exploration-chart";
 import { attachArcEvents, refreshPreview } from "./exploration-events";
@@ -37,8 +45,17 @@ export function renderExploration(
   chart.handlers = handlers;
   chart.data = data;
 
-  const rebuilt = data.round !== chart.round;
-  if (rebuilt) buildArcs(chart, data.round);
+  const rebuilt = data.round !== chart.round || data.centre !== chart.centre;
+  if (rebuilt) {
+    // A keyboard user keeps the focus in the chart: on the former centre going out, else
+    // on the first behaviour.
+    const hadFocus = chart.svg.contains(document.activeElement);
+    const newRound = data.round?.sid !== chart.round?.sid || data.round?.round !== chart.round?.round;
+    buildArcs(chart, data.round, data.centre, newRound ? undefined : (chart.centre ?? undefined));
+    if (chart.transform !== zoomIdentity) select(chart.svg).call(chart.zoom.transform, zoomIdentity);
+    updateCrumbs(chart);
+    if (hadFocus && chart.focusId) chart.arcEls.get(chart.focusId)?.focus();
+  }
   chart.empty.hidden = data.round !== null;
   text(chart.empty, data.round ? "" : data.placeholder);
 
@@ -108,22 +125,33 @@ function build(element: HTMLElement): Chart {
     ),
   );
   const arcsG = s("g", { class: "arcs" });
+  const sizes = s("g", { class: "arc-sizes", "aria-hidden": "true" });
   const marks = s("path", { class: "uncompared-marks", "aria-hidden": "true" });
   const outline = s("g", { class: "outline", "aria-hidden": "true" });
-  svg.append(defs, arcsG, marks, outline);
+  const zoomLayer = s("g", { class: "zoom-layer" });
+  zoomLayer.append(arcsG, sizes, marks, outline);
+  svg.append(defs, zoomLayer);
   const canvas = h("canvas", { class: "chart-canvas chart-edges", "aria-hidden": "true" });
   const highlight = h("canvas", { class: "chart-canvas chart-highlight", "aria-hidden": "true" });
   const box = h("div", { class: "chart-box" }, canvas, highlight, svg);
   const empty = h("div", { class: "chart-empty", role: "status" });
-  const wrap = h("div", { class: "chart-wrap" }, box, empty);
+  const crumbList = h("nav", { class: "chart-crumbs", "aria-label": "Chart centre", hidden: true });
+  const resetZoom = h(
+    "button",
+    { type: "button", class: "small reset-zoom", hidden: true, title: "Back to the whole chart (0)" },
+    "Zoom 1×",
+  );
+  const wrap = h("div", { class: "chart-wrap" }, box, empty, h("div", { class: "chart-tools" }, crumbList, resetZoom));
   const help = h(
     "p",
     { id: "chart-help", class: "sr-only" },
-    "Arcs are behaviours (inner ring) and clusters of them (outer rings). Enter or click " +
-      "puts an arc's behaviours in the selected group; Shift adds them instead; Alt or " +
-      "right-click fills the other group. Shift with the arrow keys moves between arcs: left " +
-      "and right along a ring, up to the enclosing cluster, down into it. The arrow keys " +
-      "alone answer the comparison, wherever the focus is.",
+    "Arcs are behaviours (inner ring) and clusters of them (outer rings), each cluster's " +
+      "size on its arc. Enter or click puts an arc's behaviours in the selected group; Shift " +
+      "adds them instead, and on a behaviour already in a group takes it out; Alt or " +
+      "right-click fills the other group. A cluster too big for a group, or C on any " +
+      "cluster, becomes the chart's centre; Escape goes back out. Shift with the arrow keys " +
+      "moves between arcs: left and right along a ring, up to the enclosing cluster, down " +
+      "into it. The arrow keys alone answer the comparison, wherever the focus is.",
   );
 
   const legend = createLegend((patch) => chart.handlers?.view(patch));
@@ -138,10 +166,16 @@ function build(element: HTMLElement): Chart {
     box,
     wrap,
     empty,
+    zoomLayer,
     arcsG,
+    sizes,
     marks,
     outline,
     subtitle,
+    crumbs: crumbList,
+    resetZoom,
+    zoom: zoom<SVGSVGElement, unknown>(),
+    transform: zoomIdentity,
     targetButtons,
     legend,
     // Inside the chart's area: beside it lie the answer buttons and the legend's controls.
@@ -149,6 +183,7 @@ function build(element: HTMLElement): Chart {
     data: null,
     handlers: null,
     round: null,
+    centre: null,
     layout: null,
     arcEls: new Map(),
     ancestorIds: new Map(),
@@ -162,6 +197,20 @@ function build(element: HTMLElement): Chart {
   const call: CallHandler = (name, ...args) =>
     (chart.handlers![name] as (...a: typeof args) => void)(...args);
 
+  const half = VIEWBOX / 2;
+  chart.zoom
+    .scaleExtent([1, MAX_ZOOM])
+    .extent([[-half, -half], [half, half]])
+    .translateExtent([[-half, -half], [half, half]])
+    .on("zoom", (e: { transform: ZoomTransform }) => applyZoom(chart, e.transform));
+  // Double-clicks stay clicks (two fills), not a zoom.
+  select(svg).call(chart.zoom).on("dblclick.zoom", null);
+  resetZoom.addEventListener("click", () => select(svg).call(chart.zoom.transform, zoomIdentity));
+  crumbList.addEventListener("click", (e) => {
+    const id = (e.target as Element).closest<HTMLElement>("[data-centre]")?.dataset.centre;
+    if (id !== undefined) call("centre", id === "" ? null : id);
+  });
+
   targetButtons.A.addEventListener("click", () => call("target", "A"));
   targetButtons.B.addEventListener("click", () => call("target", "B"));
   switchBtn.addEventListener("click", () => call("target", "switch"));
@@ -169,6 +218,39 @@ function build(element: HTMLElement): Chart {
   attachArcEvents(chart, call);
   new ResizeObserver(() => resize(chart)).observe(wrap);
   return chart;
+}
+
+/** d3-zoom moved: the arcs' layer takes the transform, the edges are redrawn under it. */
+function applyZoom(chart: Chart, t: ZoomTransform): void {
+  chart.transform = t;
+  chart.zoomLayer.setAttribute("transform", t.k === 1 && t.x === 0 && t.y === 0 ? "" : t.toString());
+  chart.wrap.dataset.zoom = t.k.toFixed(2);
+  chart.resetZoom.hidden = t.k === 1;
+  chart.preview.hide();
+  drawEdges(chart);
+}
+
+/** The breadcrumb of a centred chart: the whole round, the clusters on the way, the centre. */
+function updateCrumbs(chart: Chart): void {
+  const round = chart.round;
+  const path = round ? crumbs(round.tree, chart.centre) : [];
+  chart.crumbs.hidden = path.length < 2;
+  if (chart.crumbs.hidden || !round) {
+    chart.crumbs.replaceChildren();
+    return;
+  }
+  const items = path.map((node, i) => {
+    const n = node.leaves.length;
+    const name = i === 0 ? `All ${n}` : `${n} behaviours`;
+    if (i === path.length - 1) return h("li", {}, h("span", { "aria-current": "location" }, name));
+    const label = i === 0 ? `Back to all ${n} behaviours` : `Back out to the cluster of ${n} behaviours`;
+    return h(
+      "li",
+      {},
+      h("button", { type: "button", class: "link", "data-centre": i === 0 ? "" : node.id, "aria-label": label }, name),
+    );
+  });
+  chart.crumbs.replaceChildren(h("ol", {}, ...items));
 }
 
 function resize(chart: Chart): void {
@@ -200,6 +282,7 @@ function drawEdges(chart: Chart): void {
           showHistory: data.view.showHistory,
           beta: data.view.beta,
           hover: data.hover.id,
+          zoom: chart.transform,
         }
       : null,
   );
