@@ -24,6 +24,7 @@ from typing import Any
 
 import gymnasium as gym
 
+from groupwise.envs.mujoco_log import log_mujoco_warnings
 from groupwise.envs.rendering import RenderingUnavailableError, ensure_gl_backend
 
 NAMESPACE = "dm_control"
@@ -53,6 +54,16 @@ def prepare_import() -> None:
         ensure_gl_backend()
     except RenderingUnavailableError:
         pass
+
+
+def after_import() -> None:
+    """Take MuJoCo's warnings back from dm_control, which routes every one to absl's log at
+    import (cheetah.xml's "settotalmass is deprecated" then printed once per env made: eleven
+    lines for a smoke-sized study cell), to `log_mujoco_warnings`: each text once."""
+    import mujoco
+
+    mujoco.set_mju_user_warning(None)
+    log_mujoco_warnings()
 
 
 def make_kwargs(render_mode: str | None, kwargs: dict[str, Any]) -> dict[str, Any]:

@@ -208,6 +208,8 @@ def _import_registering_module(name: str, module: str) -> None:
                 f"({error})"
             ) from None
         raise ValueError(f"env {name!r}: cannot import module {module!r} ({error})") from None
+    if module == dmc.MODULE:
+        dmc.after_import()
 
 
 def make_env(name: str, render_mode: str | None = None, **kwargs: Any) -> gym.Env[Any, Any]:
