@@ -38,7 +38,7 @@ import json
 import re
 import shlex
 import sys
-from collections.abc import Iterable, Iterator, Sequence
+from collections.abc import Callable, Iterable, Iterator, Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
@@ -401,18 +401,79 @@ def summary_table(runs: Sequence[Run], options: dict[str, str]) -> list[str]:
     return lines
 
 
+def _seed_span(runs: Sequence[Run]) -> str:
+    seeds = sorted(int(run.get("seed")) for run in runs)
+    if seeds == list(range(seeds[0], seeds[-1] + 1)) and len(seeds) > 1:
+        return f"{seeds[0]}–{seeds[-1]}"
+    return ", ".join(map(str, seeds))
+
+
+def _count(runs: Sequence[Run], column: str, fallback: str = "") -> str:
+    won = sum(
+        _number(run.get(column) or run.get(fallback or column)) >= SEED_SUCCESS for run in runs
+    )
+    return f"{won}/{len(runs)}"
+
+
+SETUP_CELLS: dict[str, tuple[str, Callable[[Sequence[Run]], str]]] = {
+    "seeds": ("---", _seed_span),
+    "last": ("---:", lambda runs: _count(runs, FINAL)),
+    "takeaway": ("---:", lambda runs: _count(runs, "summary.takeaway.success_rate", FINAL)),
+    "stretch": ("---:", lambda runs: _count(runs, "summary.final.stretch_rate")),
+    "scores": (
+        "---",
+        lambda runs: ", ".join(f"{_number(run.get('target_score_mean')):.2f}" for run in runs),
+    ),
+}
+"""The cells of a `setups` row, each with its column's alignment: the seeds, the successful
+seeds after the last round, as take-away agent, at the stretch, and every seed's target
+score after the last round."""
+
+
+def setups_table(args: str, rows: Sequence[str], base: Path) -> list[str]:
+    """One row per setup: `args` holds `head="first|second|..."` (the header cells) and
+    `cells="last|takeaway|..."` (`SETUP_CELLS`, after the setup's own text); each line of
+    `rows` is "TEXT :: key=value ..." (filters, `csv=`, `bold=CELL|CELL`), its runs in seed
+    order."""
+    options, _ = _parse("setups", args, {"head", "cells", "csv"})
+    cells = options.get("cells", "last|takeaway|stretch|scores").split("|")
+    if unknown := [cell for cell in cells if cell not in SETUP_CELLS]:
+        raise TableError(
+            f"table:setups: unknown cell {unknown[0]!r} (one of {', '.join(SETUP_CELLS)})"
+        )
+    head = options.get("head", "|".join(["setup", *cells])).split("|")
+    if len(head) != len(cells) + 1:
+        raise TableError(f"table:setups: {len(head)} header cells for {len(cells) + 1} columns")
+    lines = [
+        "| " + " | ".join(cell.strip() for cell in head) + " |",
+        "|---|" + "".join(f"{SETUP_CELLS[cell][0]}|" for cell in cells),
+    ]
+    for row in rows:
+        text, sep, spec = row.partition(" :: ")
+        if not sep:
+            raise TableError(f"table:setups: {row!r} is not 'TEXT :: filters'")
+        row_options, filters = _parse("setups", spec, {"csv", "bold"})
+        tables = row_options.get("csv", options.get("csv", "runs.csv")).split("|")
+        runs = select((run for table in tables for run in read_runs(base / table)), filters)
+        if not runs:
+            raise TableError(f"table:setups: no run matches {spec.strip()!r}")
+        runs = sorted(runs, key=lambda run: int(run.get("seed")))
+        bold = set(row_options.get("bold", "").split("|"))
+        values = [SETUP_CELLS[cell][1](runs) for cell in cells]
+        values = [f"**{v}**" if cell in bold else v for cell, v in zip(cells, values, strict=True)]
+        lines.append("| " + " | ".join([text.strip(), *values]) + " |")
+    return lines
+
+
 KINDS = {"runs": runs_table, "summary": summary_table}
 OPTIONS = {"csv", "scores", "pool", "title", "name"}
 
 
-def render_table(kind: str, args: str, base: Path) -> list[str]:
-    """The Markdown lines of one marker's table; `base` is the folder of the file holding it.
-
-    Raises:
-        TableError: an unknown kind or argument, or a selection without runs.
-    """
-    if kind not in KINDS:
-        raise TableError(f"unknown table kind {kind!r} (one of {', '.join(KINDS)})")
+def _parse(
+    kind: str, args: str, options_allowed: set[str]
+) -> tuple[dict[str, str], dict[str, list[str]]]:
+    """A marker's key=value words: the options among `options_allowed` (and `name:SETUP`),
+    and the filters (every other key; a value's "|" separates alternatives)."""
     options: dict[str, str] = {}
     filters: dict[str, list[str]] = {}
     try:
@@ -423,10 +484,25 @@ def render_table(kind: str, args: str, base: Path) -> list[str]:
         key, sep, value = arg.partition("=")
         if not sep:
             raise TableError(f"table:{kind}: {arg!r} is not key=value")
-        if key in OPTIONS or key.startswith("name:"):
+        if key in options_allowed or key.startswith("name:"):
             options[key] = value
         else:
             filters[key] = value.split("|")
+    return options, filters
+
+
+def render_table(kind: str, args: str, base: Path) -> list[str]:
+    """The Markdown lines of one marker's table; `base` is the folder of the file holding it.
+
+    Raises:
+        TableError: an unknown kind or argument, or a selection without runs.
+    """
+    if kind == "setups":
+        first, *rows = args.split("\n")
+        return setups_table(first, [row for row in rows if row.strip()], base)
+    if kind not in KINDS:
+        raise TableError(f"unknown table kind {kind!r} (one of {', '.join([*KINDS, 'setups'])})")
+    options, filters = _parse(kind, args, OPTIONS)
     tables = options.get("csv", "runs.csv").split("|")
 
     def template(run: Run) -> str:
