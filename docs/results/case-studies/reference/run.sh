@@ -9,11 +9,11 @@ export OMP_NUM_THREADS=1 MUJOCO_GL=${MUJOCO_GL:-egl}
 mkdir -p "$out"
 for ppo in study mujoco; do   # seed 0, both PPO settings (*-study.csv, *-mujoco.csv)
   for t in walker-splits halfcheetah-standup; do echo "$t 0 $ppo"; done
-done | xargs -P "$parallel" -L 1 bash -c 'python -m groupwise.study.target_reference \
+done | xargs -P "$parallel" -L 1 bash -c 'python -m groupwise.study.case_studies.target_reference \
   --target $0 --seeds $1 --steps 204800 --every 40960 --ppo $2 --out '"$out"'/$0-$2'
 for t in hopper-backflip walker-splits halfcheetah-standup; do   # *-mujoco-seeds-0-4.csv
   for s in 0 1 2 3 4; do echo "$t $s"; done
-done | xargs -P "$parallel" -L 1 bash -c 'python -m groupwise.study.target_reference \
+done | xargs -P "$parallel" -L 1 bash -c 'python -m groupwise.study.case_studies.target_reference \
   --target $0 --seeds $1 --steps 204800 --every 40960 --ppo mujoco --out '"$out"'/$0-mujoco-s$1'
 # the old-score case studies (git checkout 4044402 first)
 for s in 1 4; do
