@@ -49,8 +49,6 @@ VARIANTS: dict[str, dict[str, dict[str, Any]]] = {
     "joint": {"reward": {"action_term": "joint"}},  # SPEC §3's one MLP, the old default
     "additive": {"reward": {"action_term": "additive"}},
     "cost": {"reward": {"action_term": "cost"}},
-    # RUNE's exploration: PPO's reward adds the members' sd, halved each round
-    "bonus": {"reward": {"exploration_bonus": 1.0}},
     # the ceiling: the same loop and labels, but PPO on the env's own reward
     "true-reward": {},
 }

@@ -10,6 +10,8 @@ they are rather than mirroring them.
 
 import dataclasses
 import json
+import logging
+from collections.abc import Mapping
 from dataclasses import field
 from pathlib import Path
 from typing import Annotated, Any, Literal
@@ -18,7 +20,8 @@ from pydantic import ConfigDict, Field, TypeAdapter, model_validator
 from pydantic.dataclasses import dataclass
 
 from groupwise.preferences.judgement import MAX_GROUP
-from groupwise.query.groups import SuggestionRank
+
+log = logging.getLogger(__name__)
 
 _STRICT = ConfigDict(extra="forbid", use_attribute_docstrings=True)
 """Unknown fields fail; each field's docstring is its description (OpenAPI, the page's help)."""
@@ -85,21 +88,6 @@ class RewardConfig:
     standardise_output: bool = False
     """After each fit, centre and scale every member's reward to mean 0, sd 1 over the
     dataset's steps in the reward PPO sees (`RewardEnsemble.standardise_output`)."""
-    exploration_bonus: Annotated[float, Field(ge=0)] = 0.0
-    """β: PPO's reward adds β_r times the members' sd, their disagreement, to their mean
-    (RUNE, Liang et al. 2022: the policy seeks out states the reward model is unsure of, so
-    the next pools hold behaviour the teacher has not yet judged). The members are then
-    standardised after each fit (as with `standardise_output`) so that their sd compares
-    rewards, not offsets. 0 (default) trains on the mean alone."""
-    pessimism: Annotated[float, Field(ge=0)] = 0.0
-    """κ: PPO's reward subtracts κ times the members' sd from their mean, every round (a
-    conservative reward: PPO is paid less where the members disagree, off what the teacher
-    judged; issue 20: a walker's greedy stance, never judged, was paid more than the splits
-    the teacher preferred). The members are standardised as for the bonus, which it
-    offsets. 0 (default): none."""
-    exploration_decay: Annotated[float, Field(gt=0, le=1)] = 0.5
-    """β_r = β · decay^r after a fit whose newest pairs are round r's: the bonus fades as
-    the reward model learns."""
     use_actions: bool = True
     """The members see [obs ; act] (SPEC §3); off, the observation alone. Neither wins on
     every env (ARCHITECTURE.md, "Reward inputs"): observation-only members stopped Pendulum-v1
@@ -177,7 +165,7 @@ PPO_PRESETS: dict[str, PPOConfig] = {
 behaviours, small nets). "mujoco": PPO's own MuJoCo settings (Schulman et al. 2017, also
 SB3's defaults: lr 3e-4, clip 0.2, γ 0.99, no entropy bonus, 64 × 64) at the same rollout
 and minibatch size, for the case studies' 1,000-step locomotion episodes. PPO on a target's
-own step score (`study.target_reference`) with "study" lost what it had learned (issue 20)."""
+own step score (`study.case_studies.target_reference`) with "study" lost what it had learned (issue 20)."""
 
 
 @dataclass(frozen=True, config=_STRICT)
@@ -230,30 +218,8 @@ class LoopConfig:
     pool_variant_scale: Annotated[float, Field(ge=0, le=1)] = 0.5
     """... and how far each pushes the actions: a fixed offset per action dimension of up
     to this share of half its range."""
-    pool_variants_greedy: bool = False
-    """The variants push the greedy policy (its mean action: what the evaluation scores and
-    the take-away agent does) instead of the stochastic one, and the first of them does not
-    push, so the pool shows the teacher what the agent actually does (issue 20: a walker's
-    greedy posture, never in its pools, was paid more by the learned reward than the splits
-    the teacher had preferred)."""
-    pool_lookahead: Annotated[int, Field(ge=0)] = 0
-    """PPO steps of a lookahead before the round's pool is sampled, once the reward has
-    learned from a round: a copy of the agent trains this many steps on the current learned
-    reward and the variants are of its policy instead (the first unpushed), so the teacher
-    judges where PPO is going before it gets there (issue 20: PPO climbed to a walker
-    posture no pool had shown, which the learned reward overpaid); the agent itself is
-    unchanged. Measured on the walker's splits: no gain (0/5 seeds against 2/5,
-    docs/results/case-studies/walker). 0: no lookahead."""
-    adopt_variants: bool = False
-    """After a round's feedback, when the teacher preferred one variant's behaviours to the
-    policy's own, the policy takes that variant's push before PPO trains on (its action
-    mean shifts by the variant's offset; `groupwise.run.adopt`, issue 20). Box actions."""
     candidate_pairs: PositiveInt = 10
     """Pairwise active learning: random candidate pairs scored per query."""
-    suggestion_rank: SuggestionRank = "variance"
-    """The order of the group suggestions (the Groupwise-DM's queries, the app's list):
-    by SPEC §5's group-variance score, or the most promising groups first, each against its
-    most disputed partners (`query.groups`; ours, issue 20)."""
     eval_episodes: Annotated[int, Field(ge=0)] = 5
     """Episodes of the true reward used to measure the policy after each round."""
     pair_derivation: PairDerivation = "cover"
@@ -273,16 +239,6 @@ class LoopConfig:
     """Largest group the group DMs compare (paper §6: 8 keeps comparisons humanly possible)."""
     seed: Seed = 0
     """Every random generator of the run derives from it (`run.streams.round_streams`)."""
-
-    @model_validator(mode="after")
-    def _variants_to_adopt(self) -> "LoopConfig":
-        if self.adopt_variants and self.pool_variants == 0:
-            raise ValueError("adopt_variants needs pool variants to adopt (pool_variants >= 1)")
-        if self.pool_variants_greedy and self.pool_variants == 0:
-            raise ValueError("pool_variants_greedy needs pool variants (pool_variants >= 1)")
-        if self.pool_lookahead and self.pool_variants == 0:
-            raise ValueError("pool_lookahead needs pool variants (pool_variants >= 1)")
-        return self
 
 
 @dataclass(frozen=True, config=_STRICT)
@@ -338,15 +294,6 @@ class TrainingConfig:
     """PPO steps of unsupervised pre-training before round 0, paid a state-entropy bonus
     instead of the learned reward (`groupwise.run.pretrain`, PEBBLE), so that the first
     pools show more different behaviours; 0: none (issue 20)."""
-    continue_from: Literal["last", "preferred"] = "last"
-    """Which policy each round's PPO trains on from: "last", the previous round's (SPEC §3);
-    "preferred", the one the run's simulated teacher prefers so far: before round r >= 2 it
-    compares round r − 1's greedy episodes with those of the policy round r − 1 began from,
-    and the winner trains on (`groupwise.run.keep`; issue 20: runs that had learned their
-    target lost it a round later). Headless runs only; in the app the person picks among
-    the rounds' agents on the results page."""
-    continue_episodes: PositiveInt = 3
-    """Greedy episodes of each of the two policies the teacher compares ("preferred")."""
     pretrain_k: Annotated[int, Field(ge=1, le=100)] = 5
     """k of the pre-training's k-nearest-neighbour entropy estimate (PEBBLE's 5)."""
     pretrain_states: Annotated[int, Field(ge=10, le=1_000_000)] = 10_000
@@ -408,12 +355,33 @@ class RunConfig:
         """Validate a config read from JSON (lists become tuples; unknown fields fail).
 
         Configs written before `TeacherConfig` existed (their teacher fields inside "loop",
-        `LEGACY_TEACHER_FIELDS`) are read as if written now.
+        `LEGACY_TEACHER_FIELDS`) are read as if written now; the fields of mechanisms
+        removed since (`REMOVED_FIELDS`) are dropped, with a warning when one was in use.
 
         Raises:
             ValueError: a field fails validation, or an old and a new name give one field.
         """
-        return _RUN_CONFIG.validate_python(_teacher_moved_out_of_loop(data))
+        return _RUN_CONFIG.validate_python(_removed_dropped(_teacher_moved_out_of_loop(data)))
+
+    def merged(self, partial: Mapping[str, Any]) -> "RunConfig":
+        """This config with the fields `partial` gives replaced, section by section (a
+        partial config: ``{"loop": {"pool_variants": 8}}`` changes one field; a whole one
+        replaces every field), validated as `from_dict` does.
+
+        Raises:
+            ValueError: `partial` is not a JSON object of sections, or a field fails
+                validation.
+        """
+        if not isinstance(partial, Mapping):
+            raise ValueError(f"a config is a JSON object, got {type(partial).__name__}")
+        base = dataclasses.asdict(self)
+        merged = dict(base)
+        for section, fields in _teacher_moved_out_of_loop(dict(partial)).items():
+            if section in base and isinstance(fields, Mapping):
+                merged[section] = {**base[section], **fields}
+            else:
+                merged[section] = fields  # validation names an unknown section or bad value
+        return RunConfig.from_dict(merged)
 
     @classmethod
     def load(cls, path: Path) -> "RunConfig":
@@ -430,6 +398,44 @@ LEGACY_TEACHER_FIELDS = {
     "teacher_equal_fraction": "equal_fraction",
 }
 """Old `LoopConfig` field → its `TeacherConfig` field (issue 19 moved them out of the loop)."""
+
+
+REMOVED_FIELDS: dict[str, dict[str, Any]] = {
+    "reward": {"exploration_bonus": 0.0, "pessimism": 0.0, "exploration_decay": 0.5},
+    "loop": {
+        "pool_variants_greedy": False,
+        "pool_lookahead": 0,
+        "adopt_variants": False,
+        "suggestion_rank": "variance",
+    },
+    "training": {"continue_from": "last", "continue_episodes": 3},
+}
+"""Section → field → its default: fields of mechanisms that measured no gain, removed in
+issue 38 (their results, commands and the commit with their code: docs/case-studies.md,
+"Measured and removed"). Configs of older runs still load without them."""
+
+
+def _removed_dropped(data: dict[str, Any]) -> dict[str, Any]:
+    """`data` without `REMOVED_FIELDS`; a warning names those that were not their default
+    (the run used a mechanism that is gone, so it cannot be repeated as it ran)."""
+    dropped: dict[str, Any] = {}
+    cleaned = dict(data)
+    for section, removed in REMOVED_FIELDS.items():
+        fields = data.get(section)
+        if not isinstance(fields, dict) or not fields.keys() & removed.keys():
+            continue
+        cleaned[section] = {k: v for k, v in fields.items() if k not in removed}
+        dropped |= {
+            f"{section}.{k}": v for k, v in fields.items() if k in removed and v != removed[k]
+        }
+    if dropped:
+        used = ", ".join(f"{key}={value!r}" for key, value in sorted(dropped.items()))
+        log.warning(
+            "config uses removed mechanisms (%s): read without them; their code is in "
+            "commit 697627f (docs/case-studies.md, 'Measured and removed')",
+            used,
+        )
+    return cleaned
 
 
 def _teacher_moved_out_of_loop(data: dict[str, Any]) -> dict[str, Any]:

@@ -13,6 +13,7 @@ from groupwise.cli import main
 from groupwise.clips.video import probe
 from groupwise.envs import TARGETS, horizon
 from groupwise.run.run import CONFIG_FILE, RESULTS_FILE
+from groupwise.study.case_studies.splits_posture import replay_posture
 from groupwise.study.case_study import CASE_FILE, STRIP_FILE, SUMMARY_FILE, VIDEO_FILE, CaseRecord
 from groupwise.study.case_study_table import (
     curves_figure,
@@ -20,7 +21,6 @@ from groupwise.study.case_study_table import (
     strips_figure,
     summary_rows,
 )
-from groupwise.study.splits_posture import replay_posture
 
 COLUMNS = [
     "round",
@@ -149,12 +149,15 @@ def test_backflip_case_study_writes_rounds_video_and_strip(tmp_path, capsys):
 )
 def test_other_targets_and_decision_makers_run(tmp_path, target, dm, seconds):
     out = tmp_path / target
-    args = ("--no-video", "--reward-inputs", "obs-act", "--ppo", "mujoco", "--pairs", "24")
+    research = tmp_path / "research.json"  # a partial config: research settings
+    research.write_text(json.dumps({"reward": {"use_actions": True}, "ppo": {"n_epochs": 3}}))
+    args = ("--no-video", "--config", str(research), "--ppo", "mujoco", "--pairs", "24")
     assert _case_study(out, target, dm, seconds, *args) == 0
     config = json.loads((out / CONFIG_FILE).read_text())
     assert config["loop"]["pair_cap"] == pytest.approx(24 / 20)
     assert config["reward"]["use_actions"] is True
     assert config["ppo"]["learning_rate"] == 3e-4 and config["ppo"]["net_arch"] == [64, 64]
+    assert config["ppo"]["n_epochs"] == 3  # the file changes the preset --ppo picked
     rows = _rows(out)
     assert len(rows) == 2 and int(rows[1]["comparisons_total"]) == 20
     assert int(rows[1]["judgements_total"]) > 0
@@ -185,3 +188,22 @@ def test_bad_input_is_one_line_and_exit_code_2(tmp_path, capsys, args, message):
     assert code == 2
     err = capsys.readouterr().err.strip()
     assert message in err and "Traceback" not in err
+
+
+@pytest.mark.parametrize(
+    ("config", "message"),
+    [
+        ('{"loop": {"env": "Hopper-v5"}}', "leave loop.env out of --config"),
+        ('{"loop": {"pool_varients": 2}}', "pool_varients"),
+        ('{"loop": {"rounds": 0}}', "rounds"),
+        ("[1, 2]", "JSON object"),
+        ("{not json", "is not JSON"),
+    ],
+)
+def test_a_bad_config_file_is_one_line_and_exit_code_2(tmp_path, capsys, config, message):
+    path = tmp_path / "research.json"
+    path.write_text(config)
+    args = ["--target", "hopper-backflip", "--config", str(path), "--out", str(tmp_path / "o")]
+    assert main(["case-study", *args, "-q"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert message in err and "Traceback" not in err and len(err.splitlines()) == 1

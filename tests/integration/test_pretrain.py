@@ -11,7 +11,12 @@ import torch
 from groupwise.cli import main
 from groupwise.config import LoopConfig, PPOConfig, RewardConfig, RunConfig, TrainingConfig
 from groupwise.run.headless import feedback_of, run_rounds, run_session
-from groupwise.run.pretrain import pretrain
+from groupwise.run.pretrain import (
+    StateEntropyPretraining,
+    before_first_round,
+    pretrain,
+    setup_hooks,
+)
 from groupwise.run.progress import OnRoundEnd, RunCallback
 from groupwise.run.records import RoundRecord
 from groupwise.run.run import Run
@@ -83,6 +88,27 @@ def test_no_pretraining_by_default_and_none_after_round_0():
         pretrain(run)
         with pytest.raises(ValueError, match="before round 0"):
             pretrain(run)  # once is all
+
+
+def test_pretraining_is_a_setup_hook_run_once_on_a_fresh_run():
+    assert setup_hooks(WITHOUT) == ()
+    assert setup_hooks(TINY) == (StateEntropyPretraining(PRETRAIN_STEPS, k=5, states=10_000),)
+
+    class Counted:
+        def __init__(self) -> None:
+            self.runs = 0
+
+        def before_first_round(self, run: Run, callback: RunCallback) -> None:
+            self.runs += 1
+
+    hook = Counted()
+    with Run.create(WITHOUT) as run:
+        assert before_first_round(run, hooks=[hook]) and hook.runs == 1
+        run.agent.learn(256, 0)  # an agent that has trained is not fresh: nothing runs
+        assert not before_first_round(run, hooks=[hook]) and hook.runs == 1
+    with Run.create(TINY) as run:
+        assert before_first_round(run)  # the config's hooks: pre-training
+        assert run.agent.num_timesteps >= PRETRAIN_STEPS
 
 
 def test_a_pretrained_run_differs_from_one_without(tmp_path):

@@ -93,3 +93,37 @@ def test_a_teacher_field_given_under_its_old_and_new_name_is_refused():
     stored["loop"]["teacher_patience"] = 1
     with pytest.raises(ValueError, match="teacher_patience"):
         RunConfig.from_dict(stored)
+
+
+def test_configs_of_removed_mechanisms_load_without_them(caplog):
+    """Runs written before issue 38 carry the fields of 7 mechanisms that measured no gain;
+    they still load, and a warning names a removed mechanism the run actually used."""
+    stored = json.loads(RunConfig(loop=LoopConfig(pool_variants=8)).to_json())
+    stored["loop"] |= {"pool_variants_greedy": False, "pool_lookahead": 0}
+    stored["reward"] |= {"exploration_bonus": 0.0, "pessimism": 0.0, "exploration_decay": 0.5}
+    stored["training"] |= {"continue_from": "last", "continue_episodes": 3}
+    with caplog.at_level("WARNING", logger="groupwise.config"):
+        assert RunConfig.from_dict(stored) == RunConfig(loop=LoopConfig(pool_variants=8))
+    assert not caplog.records  # the defaults: nothing was used
+    stored["loop"]["adopt_variants"] = True
+    stored["reward"]["pessimism"] = 1.0
+    with caplog.at_level("WARNING", logger="groupwise.config"):
+        assert RunConfig.from_dict(stored) == RunConfig(loop=LoopConfig(pool_variants=8))
+    (warning,) = caplog.records
+    assert "loop.adopt_variants=True, reward.pessimism=1.0" in warning.getMessage()
+    assert "697627f" in warning.getMessage()
+
+
+def test_a_partial_config_is_merged_over_the_defaults_section_by_section():
+    base = RunConfig(loop=LoopConfig(env="Pendulum-v1", rounds=3))
+    merged = base.merged({"loop": {"pool_variants": 8}, "reward": {"ensemble_size": 5}})
+    assert merged.loop == LoopConfig(env="Pendulum-v1", rounds=3, pool_variants=8)
+    assert merged.reward == RewardConfig(ensemble_size=5) and merged.ppo == base.ppo
+    assert base.merged(json.loads(merged.to_json())) == merged  # a whole config replaces all
+    assert base.merged({}) == base
+    assert base.merged({"loop": {"noise_sigma": 0.5}}).teacher.noise_sigma == 0.5  # old layout
+    for partial, field in (({"loop": {"rounds": 0}}, "rounds"), ({"lop": {}}, "lop")):
+        with pytest.raises(ValueError, match=field):
+            base.merged(partial)
+    with pytest.raises(ValueError, match="a config is a JSON object"):
+        base.merged([("loop", {})])  # type: ignore[arg-type]  # what a JSON list would be

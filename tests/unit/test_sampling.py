@@ -6,7 +6,8 @@ import pytest
 from groupwise.config import RewardConfig
 from groupwise.envs import make_env
 from groupwise.episodes.fragments import stack_fragments, tile_fragments
-from groupwise.pool.sampling import sample_pool, split_windows, windows_to_sample
+from groupwise.pool.sampling import sample_pool, windows_to_sample
+from groupwise.pool.sources import CurrentPolicy, PolicyVariants
 from groupwise.reward import RewardEnsemble
 from groupwise.rl.policy import RandomPolicy, biased_variants
 
@@ -77,16 +78,6 @@ class _Constant:
         return np.full((obs.shape[0], 1), self.action, dtype=np.float32)
 
 
-def test_split_windows_deals_the_share_evenly_over_the_variants():
-    assert split_windows(100, 0, 0.5) == [100]
-    assert split_windows(100, 8, 0.5) == [50, 7, 7, 6, 6, 6, 6, 6, 6]
-    assert split_windows(10, 3, 1.0) == [0, 4, 3, 3]
-    assert split_windows(10, 3, 0.0) == [10, 0, 0, 0]
-    for args in ((-1, 2, 0.5), (10, -1, 0.5), (10, 2, 1.5)):
-        with pytest.raises(ValueError, match="need n_windows"):
-            split_windows(*args)
-
-
 def test_biased_variants_push_the_actions_one_way_within_the_bounds():
     space = make_env("Pendulum-v1").action_space  # Box(-2, 2, (1,))
     obs = np.zeros((4, 3), dtype=np.float32)
@@ -110,15 +101,13 @@ def test_a_share_of_the_pool_comes_from_the_variants():
     def pendulum():
         return make_env("Pendulum-v1")
 
-    space = pendulum().action_space
     policy = _Constant(0.0)
-    variants = biased_variants(policy, space, 3, 0.5, np.random.default_rng(5))
 
-    def sample(share: float, with_variants: bool = True):
+    def sample(share: float, variants: int = 3):
+        sources = [CurrentPolicy(), PolicyVariants(variants, share)] if variants else None
         return sample_pool(
-            pendulum, policy, 36, 30, np.random.default_rng(1), variant_share=share,
-            variants=variants if with_variants else (), processes=1,
-        )  # fmt: skip
+            pendulum, policy, 36, 30, np.random.default_rng(1), sources=sources, processes=1
+        )
 
     pool = sample(0.5)
     episodes = pool.episodes
@@ -129,9 +118,10 @@ def test_a_share_of_the_pool_comes_from_the_variants():
     assert pushes[:3] == [0.0] * 3 and all(p != 0.0 for p in pushes[3:]) and len(pushes) == 6
     assert [e.source for e in episodes] == [0, 0, 0, 1, 2, 3]  # who played each episode
     assert len(pool) == 36
-    alone, unshared = sample(0.0, with_variants=False), sample(0.0)
-    assert [f.key for f in alone.fragments] == [f.key for f in unshared.fragments]
-    assert all(
+    # a variant's offsets are drawn first, from the pool's stream: no share, other windows
+    alone, unshared = sample(0.0, variants=0), sample(0.0)
+    assert [e.source for e in unshared.episodes] == [0] * 6
+    assert not all(
         np.array_equal(a.obs, b.obs)
         for a, b in zip(alone.fragments, unshared.fragments, strict=True)
     )

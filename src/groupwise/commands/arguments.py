@@ -2,10 +2,11 @@
 
 import argparse
 import dataclasses
+import json
 import os
 from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 if TYPE_CHECKING:
     from groupwise.config import RunConfig
@@ -67,21 +68,58 @@ def writable_dir(path: Path) -> Path:
     return path
 
 
+def add_config_argument(parser: argparse.ArgumentParser, below: str = "") -> None:
+    """--config FILE: research settings as a JSON `RunConfig`, whole or partial (`read_config`)."""
+    parser.add_argument(
+        "--config",
+        type=Path,
+        metavar="FILE",
+        help="research settings: a JSON config, whole (a run's config.json) or partial "
+        '(e.g. {"reward": {"ensemble_size": 5}}), merged over the defaults' + below + "; the "
+        "options given here win over it (its fields: groupwise.config)",
+    )
+
+
+def read_config(path: Path | None) -> dict[str, Any]:
+    """The JSON object in `path` (a whole or partial `RunConfig`, `RunConfig.merged`); {}
+    for None.
+
+    Raises:
+        UsageError: the file cannot be read or is not a JSON object.
+    """
+    if path is None:
+        return {}
+    try:
+        data = json.loads(path.read_text())
+    except OSError as error:
+        raise UsageError(f"cannot read --config {path}: {error.strerror}") from None
+    except ValueError as error:
+        raise UsageError(f"--config {path} is not JSON: {error}") from None
+    if not isinstance(data, dict):
+        raise UsageError(f"--config {path} must hold a JSON object of config sections")
+    return data
+
+
+def config_error(error: ValueError) -> UsageError:
+    """A config's validation error in one line: "config loop.rounds: Input should be
+    greater than or equal to 1; …" (pydantic's own message spans lines)."""
+    errors = getattr(error, "errors", None)
+    if not callable(errors):
+        return UsageError(str(error))
+    parts = []
+    for item in errors():
+        where = ".".join(str(part) for part in item.get("loc", ()))
+        parts.append(f"{where}: {item.get('msg', 'invalid')}" if where else item.get("msg", ""))
+    return UsageError("config " + "; ".join(parts))
+
+
 def add_training_arguments(parser: argparse.ArgumentParser) -> None:
-    """--training, --continue-from, --teacher-error and --teacher-pace
-    (`groupwise.run.continuous`, `groupwise.run.keep`)."""
+    """--training, --teacher-error and --teacher-pace (`groupwise.run.continuous`)."""
     parser.add_argument(
         "--training",
         choices=("rounds", "continuous"),
         help="rounds: PPO trains after each round's feedback (default); continuous: PPO "
         "trains while a timed teacher answers, on a virtual clock",
-    )
-    parser.add_argument(
-        "--continue-from",
-        choices=("last", "preferred"),
-        help="which policy each round trains on from: the last round's (default), or the one "
-        "the simulated teacher prefers so far (it compares the last round's greedy episodes "
-        "with those of the policy that round began from)",
     )
     parser.add_argument(
         "--teacher-error",
@@ -100,10 +138,8 @@ def add_training_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def add_pool_arguments(parser: argparse.ArgumentParser) -> None:
-    """--pool-size, --pool-variants, --pool-variants-greedy, --pool-lookahead,
-    --adopt-variants, --suggestions, --reward-pessimism and --reward-bonus
-    (`LoopConfig.pool_size`, `.pool_variants`, `.pool_variants_greedy`, `.pool_lookahead`,
-    `.adopt_variants`, `.suggestion_rank`, `RewardConfig.pessimism`, `.exploration_bonus`)."""
+    """--pool-size, --pool-variants and --pretrain-steps (`LoopConfig.pool_size`,
+    `.pool_variants`, `TrainingConfig.pretrain_steps`): the app's pool settings."""
     parser.add_argument(
         "--pool-size",
         type=int_at_least(2),
@@ -120,57 +156,29 @@ def add_pool_arguments(parser: argparse.ArgumentParser) -> None:
         "behaviours the policy rarely reaches (default 0: the policy alone)",
     )
     parser.add_argument(
-        "--pool-variants-greedy",
-        action="store_true",
-        default=None,
-        help="with --pool-variants: the variants push the greedy policy (what the evaluation "
-        "scores and the take-away agent does) and the first does not push, so the teacher "
-        "sees what the agent actually does",
-    )
-    parser.add_argument(
-        "--pool-lookahead",
-        type=int_at_least(0),
+        "--pretrain-steps",
+        type=non_negative_int,
         metavar="N",
-        help="with --pool-variants: from the second round on, the variants are of the policy "
-        "a copy of the agent reaches after N more PPO steps on the current learned reward, "
-        "so the teacher judges where PPO is going (default 0: of the current policy)",
+        help="PPO steps of unsupervised pre-training on a state-entropy bonus before round 0, "
+        "so that the first pools are more diverse (PEBBLE; default 0: none)",
     )
-    parser.add_argument(
-        "--adopt-variants",
-        action="store_true",
-        default=None,
-        help="with --pool-variants: when the teacher preferred one variant's behaviours to the "
-        "policy's own in a round's comparisons, the policy takes that variant's push before "
-        "PPO trains on (run.adopt)",
-    )
-    parser.add_argument(
-        "--suggestions",
-        choices=("variance", "optimistic"),
-        help="the order of the group suggestions (the Groupwise-DM's queries): SPEC's "
-        "group-variance score (default), or the most promising groups first, each against "
-        "the partners the reward ensemble disputes most",
-    )
-    parser.add_argument(
-        "--reward-pessimism",
-        type=non_negative_float,
-        metavar="K",
-        help="PPO's reward subtracts K times the reward members' disagreement (their sd), "
-        "every round, so the policy is paid less where the teacher has not judged (default 0)",
-    )
-    parser.add_argument(
-        "--reward-bonus",
-        type=non_negative_float,
-        metavar="B",
-        help="PPO's reward adds B times the reward members' disagreement (their sd), halved "
-        "every round, so the policy seeks what the teacher has not judged yet (default 0)",
-    )
+
+
+def pool_options(args: argparse.Namespace) -> dict[str, dict[str, Any]]:
+    """The config sections --pool-size, --pool-variants and --pretrain-steps give (those
+    given only), for `RunConfig.merged`."""
+    loop = {"pool_size": args.pool_size, "pool_variants": args.pool_variants}
+    options: dict[str, dict[str, Any]] = {"loop": {k: v for k, v in loop.items() if v is not None}}
+    if args.pretrain_steps is not None:
+        options["training"] = {"pretrain_steps": args.pretrain_steps}
+    return options
 
 
 def apply_teacher_options(
     cfg: "RunConfig", args: argparse.Namespace, target: str | None
 ) -> "RunConfig":
-    """`cfg` with --training, --continue-from, --teacher-error and --teacher-pace applied;
-    continuous training without a pace gets the paper's (`run.continuous.paper_pace`).
+    """`cfg` with --training, --teacher-error and --teacher-pace applied; continuous
+    training without a pace gets the paper's (`run.continuous.paper_pace`).
 
     Raises:
         ValueError: a teacher error outside (0, 0.5).
@@ -182,10 +190,9 @@ def apply_teacher_options(
     if mode == "continuous" and pace is None:  # the pairwise DMs: "pairwise", "pairwise-…"
         pace = paper_pace(target, pairwise=cfg.loop.oracle.startswith("pairwise"))
     error = args.teacher_error or cfg.teacher.label_error
-    keep = args.continue_from or cfg.training.continue_from
     return dataclasses.replace(
         cfg,
-        training=dataclasses.replace(cfg.training, mode=mode, continue_from=keep),
+        training=dataclasses.replace(cfg.training, mode=mode),
         teacher=dataclasses.replace(cfg.teacher, pace_s=pace, label_error=error),
     )
 

@@ -4,19 +4,27 @@ decision-maker and measure it by the behaviour's target score (docs/case-studies
 import argparse
 import dataclasses
 from pathlib import Path
+from typing import TYPE_CHECKING, Any
 
 from groupwise.commands.arguments import (
     UsageError,
+    add_config_argument,
     add_pool_arguments,
     add_takeaway_arguments,
     add_training_arguments,
     apply_teacher_options,
+    config_error,
     non_negative_int,
+    pool_options,
     positive_int,
+    read_config,
     writable_dir,
 )
 from groupwise.config import PPO_PRESETS
 from groupwise.envs import TARGETS
+
+if TYPE_CHECKING:
+    from groupwise.config import RunConfig
 
 
 def _positive_float(text: str) -> float:
@@ -46,6 +54,67 @@ def pair_cap(pairs: int | str | None, target: str, comparisons: int) -> float | 
     return budget / comparisons
 
 
+CASE_DEFAULTS: dict[str, Any] = {
+    "oracle": "groupwise",
+    "comparisons": 1000,
+    "rounds": 10,
+    "eval_episodes": 0,  # the case study scores the target itself, after each round
+}
+"""A case study's `LoopConfig` fields where they differ from the study's defaults."""
+CASE_STEPS_PER_ROUND = 100_000
+"""A case study's PPO steps per round (`LoopConfig.steps` = this × its rounds)."""
+
+
+def case_config(args: argparse.Namespace, partial: dict[str, Any]) -> "RunConfig":
+    """The run config of a case study: the defaults with `CASE_DEFAULTS`, the target's env
+    and clip length, reward members on the observation alone (a target has no action cost,
+    and a clip shows states) and the PPO preset --ppo; then `partial` (--config) merged
+    over it; then the options given.
+
+    Raises:
+        ValueError: `partial` names another env than the target's, or a field fails
+            validation.
+    """
+    from groupwise.clips.timing import clip_timing, default_clip_seconds, env_step_seconds
+    from groupwise.config import RunConfig
+
+    target = TARGETS[args.target]
+    loop_part = partial.get("loop")
+    env = loop_part.get("env", target.env) if isinstance(loop_part, dict) else target.env
+    if env != target.env:
+        raise ValueError(f"{target.name} runs on {target.env}; leave loop.env out of --config")
+    seconds = args.seconds or default_clip_seconds(target.base)
+    base = RunConfig().merged(
+        {
+            "loop": {
+                **CASE_DEFAULTS,
+                "env": target.env,
+                "steps": CASE_STEPS_PER_ROUND * CASE_DEFAULTS["rounds"],
+                "fragment_length": clip_timing(env_step_seconds(target.env), seconds).steps,
+            },
+            "reward": {"use_actions": False},
+            "ppo": dataclasses.asdict(PPO_PRESETS[args.ppo or "study"]),
+        }
+    )
+    cfg = base.merged(partial)
+    loop = cfg.loop
+    rounds = args.rounds or loop.rounds
+    comparisons = args.preferences or loop.comparisons
+    given = {
+        "oracle": args.dm,
+        "comparisons": comparisons,
+        "rounds": rounds,
+        "steps": (args.steps or loop.steps // loop.rounds) * rounds,
+        "seed": args.seed,
+        "pair_cap": pair_cap(args.pairs, target.name, comparisons),
+    }
+    if args.seconds is not None:
+        given["fragment_length"] = clip_timing(env_step_seconds(target.env), seconds).steps
+    options = pool_options(args)
+    options["loop"] |= {k: v for k, v in given.items() if v is not None}
+    return apply_teacher_options(cfg.merged(options), args, target.name)
+
+
 def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
     case = subparsers.add_parser(
         "case-study",
@@ -59,12 +128,14 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
         ),
     )
     case.add_argument("--target", required=True, choices=sorted(TARGETS), help="the behaviour")
-    case.add_argument("--dm", default="groupwise", help="simulated decision-maker (ORACLES)")
+    case.add_argument(
+        "--dm", help=f"simulated decision-maker (ORACLES; default {CASE_DEFAULTS['oracle']})"
+    )
     case.add_argument(
         "--preferences",
         type=positive_int,
-        default=1000,
-        help="total comparisons over the rounds (a group comparison gives several pairs)",
+        help="total comparisons over the rounds (a group comparison gives several pairs; "
+        f"default {CASE_DEFAULTS['comparisons']})",
     )
     case.add_argument(
         "--pairs",
@@ -74,99 +145,56 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
         "gave for this target): each round keeps at most ⌊P / comparisons × its comparisons⌋ "
         "of its pairs (LoopConfig.pair_cap; default: every pair)",
     )
-    case.add_argument("--rounds", type=positive_int, default=10, help="feedback rounds")
-    case.add_argument("--steps", type=positive_int, default=100_000, help="PPO steps per round")
+    case.add_argument(
+        "--rounds",
+        type=positive_int,
+        help=f"feedback rounds (default {CASE_DEFAULTS['rounds']})",
+    )
+    case.add_argument(
+        "--steps",
+        type=positive_int,
+        help=f"PPO steps per round (default {CASE_STEPS_PER_ROUND:,})",
+    )
     case.add_argument(
         "--seconds",
         type=_positive_float,
         help="simulated seconds per behaviour (default: the env's clip duration)",
     )
     case.add_argument(
-        "--reward-inputs",
-        choices=("obs", "obs-act"),
-        default="obs",
-        help="what the reward members see: the observation alone (default: a target has no "
-        "action cost, and a clip shows states) or [obs ; act] as in the study",
-    )
-    case.add_argument(
         "--ppo",
         choices=sorted(PPO_PRESETS),
-        default="study",
-        help="PPO settings (config.PPO_PRESETS): the study's (SPEC §3) or PPO's own MuJoCo "
-        "settings (lr 3e-4, clip 0.2, γ 0.99, 64 × 64)",
+        help="PPO settings (config.PPO_PRESETS): the study's (SPEC §3, default) or PPO's own "
+        "MuJoCo settings (lr 3e-4, clip 0.2, γ 0.99, 64 × 64); --config's ppo fields change it",
     )
     case.add_argument(
         "--eval-episodes", type=positive_int, default=5, help="episodes scored after each round"
     )
-    case.add_argument("--seed", type=non_negative_int, default=0, help="random seed")
+    case.add_argument("--seed", type=non_negative_int, help="random seed (default 0)")
     case.add_argument("--out", type=Path, required=True, help="output directory")
     case.add_argument("--no-video", action="store_true", help="skip the video and the strip")
     add_training_arguments(case)
     add_pool_arguments(case)
-    case.add_argument(
-        "--pretrain-steps",
-        type=non_negative_int,
-        default=0,
-        metavar="N",
-        help="PPO steps of unsupervised pre-training on a state-entropy bonus before round 0, "
-        "so that the first pools are more diverse (PEBBLE; default 0: none)",
-    )
+    add_config_argument(case, " of a case study (CASE_DEFAULTS, the target's env and clip)")
     add_takeaway_arguments(case)
     case.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
     case.set_defaults(handler=run)
 
 
 def run(args: argparse.Namespace) -> int:
-    from groupwise.clips.timing import clip_timing, default_clip_seconds, env_step_seconds
-    from groupwise.config import LoopConfig, RunConfig
-    from groupwise.oracles import ORACLES
     from groupwise.agent_file.summary import AGENT_ZIP
+    from groupwise.oracles import ORACLES
     from groupwise.run.takeaway import TakeawayConfig
     from groupwise.study.case_study import CASE_FILE, STRIP_FILE, VIDEO_FILE, run_case_study
 
-    if args.dm not in ORACLES:
-        raise UsageError(f"unknown decision-maker {args.dm!r}; choose from {', '.join(ORACLES)}")
     target = TARGETS[args.target]
-    seconds = args.seconds or default_clip_seconds(target.base)
-    length = clip_timing(env_step_seconds(target.env), seconds).steps
     try:
-        base = RunConfig()
-        loop = LoopConfig(
-            **{
-                **dataclasses.asdict(base.loop),
-                "env": target.env,
-                "oracle": args.dm,
-                "comparisons": args.preferences,
-                "rounds": args.rounds,
-                "steps": args.steps * args.rounds,
-                "fragment_length": length,
-                "eval_episodes": 0,  # the case study scores the target itself
-                "pair_cap": pair_cap(args.pairs, target.name, args.preferences),
-                "seed": args.seed,
-                "pool_size": args.pool_size,
-                "pool_variants": args.pool_variants or 0,
-                "pool_variants_greedy": bool(args.pool_variants_greedy),
-                "pool_lookahead": args.pool_lookahead or 0,
-                "adopt_variants": bool(args.adopt_variants),
-                "suggestion_rank": args.suggestions or "variance",
-            }
-        )
-        reward = dataclasses.replace(
-            base.reward,
-            use_actions=args.reward_inputs == "obs-act",
-            exploration_bonus=args.reward_bonus or 0.0,
-            pessimism=args.reward_pessimism or 0.0,
-        )
-        training = dataclasses.replace(base.training, pretrain_steps=args.pretrain_steps)
-        cfg = apply_teacher_options(
-            dataclasses.replace(
-                base, loop=loop, reward=reward, training=training, ppo=PPO_PRESETS[args.ppo]
-            ),
-            args,
-            target.name,
-        )
+        cfg = case_config(args, read_config(args.config))
     except ValueError as error:
-        raise UsageError(str(error)) from None
+        raise config_error(error) from None
+    if cfg.loop.oracle not in ORACLES:
+        raise UsageError(
+            f"unknown decision-maker {cfg.loop.oracle!r}; choose from {', '.join(ORACLES)}"
+        )
     if cfg.loop.pair_cap is not None and cfg.training.mode == "continuous":
         raise UsageError("--pairs caps each round's pairs: use it with --training rounds")
     out = writable_dir(args.out)

@@ -2,18 +2,21 @@
 continuation of an app session (`--from-session DIR`)."""
 
 import argparse
-import dataclasses
 import math
 from pathlib import Path
 
 from groupwise.commands.arguments import (
     UsageError,
+    add_config_argument,
     add_pool_arguments,
     add_takeaway_arguments,
     add_training_arguments,
     apply_teacher_options,
+    config_error,
     non_negative_int,
+    pool_options,
     positive_int,
+    read_config,
     writable_dir,
 )
 
@@ -24,18 +27,11 @@ FROM_SESSION_EXCLUDES = (
     "final_steps",
     "seed",
     "training",
-    "continue_from",
     "teacher_pace",
     "teacher_error",
     "pretrain_steps",
     "pool_size",
     "pool_variants",
-    "pool_variants_greedy",
-    "pool_lookahead",
-    "adopt_variants",
-    "suggestions",
-    "reward_bonus",
-    "reward_pessimism",
 )
 """Options --from-session takes from DIR itself (its config.json)."""
 
@@ -70,7 +66,7 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
         help="PPO steps on the frozen learned reward after the last round",
     )
     train.add_argument("--seed", type=non_negative_int, help="random seed")
-    train.add_argument("--config", type=Path, help="JSON config (as written by a previous run)")
+    add_config_argument(train)
     train.add_argument("--out", type=Path, help="output directory (not with --from-session)")
     train.add_argument(
         "--resume", action="store_true", help="continue from the last checkpoint in --out"
@@ -84,13 +80,6 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
     )
     add_training_arguments(train)
     add_pool_arguments(train)
-    train.add_argument(
-        "--pretrain-steps",
-        type=non_negative_int,
-        metavar="N",
-        help="PPO steps of unsupervised pre-training on a state-entropy bonus before round 0 "
-        "(PEBBLE; default 0: none)",
-    )
     add_takeaway_arguments(train)
     train.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
     train.set_defaults(handler=run)
@@ -100,7 +89,7 @@ def run(args: argparse.Namespace) -> int:
     if args.from_session is not None:
         return _from_session(args)
     from groupwise.agent_file.summary import AGENT_ZIP
-    from groupwise.config import LoopConfig, RunConfig
+    from groupwise.config import RunConfig
     from groupwise.envs import make_env
     from groupwise.oracles import ORACLES
     from groupwise.run.headless import run_session
@@ -120,34 +109,16 @@ def run(args: argparse.Namespace) -> int:
         "steps": args.steps,
         "seed": args.seed,
         "final_steps": args.final_steps,
-        "pool_size": args.pool_size,
-        "pool_variants": args.pool_variants,
-        "pool_variants_greedy": args.pool_variants_greedy,
-        "pool_lookahead": args.pool_lookahead,
-        "adopt_variants": args.adopt_variants,
-        "suggestion_rank": args.suggestions,
     }
-    given = {key: value for key, value in overrides.items() if value is not None}
+    given = pool_options(args)
+    given["loop"] |= {key: value for key, value in overrides.items() if value is not None}
     try:
         make_env(args.env).close()  # the registry's message names the known envs
-        base = RunConfig.load(args.config) if args.config else RunConfig()
-        cfg = apply_teacher_options(
-            dataclasses.replace(
-                base, loop=LoopConfig(**{**dataclasses.asdict(base.loop), **given})
-            ),
-            args,
-            None,
-        )
-        if args.pretrain_steps is not None:
-            training = dataclasses.replace(cfg.training, pretrain_steps=args.pretrain_steps)
-            cfg = dataclasses.replace(cfg, training=training)
-        if args.reward_bonus is not None:
-            reward = dataclasses.replace(cfg.reward, exploration_bonus=args.reward_bonus)
-            cfg = dataclasses.replace(cfg, reward=reward)
-        if args.reward_pessimism is not None:
-            reward = dataclasses.replace(cfg.reward, pessimism=args.reward_pessimism)
-            cfg = dataclasses.replace(cfg, reward=reward)
-    except (ValueError, OSError) as error:
+        base = RunConfig().merged(read_config(args.config))
+        cfg = apply_teacher_options(base.merged(given), args, None)
+    except ValueError as error:
+        raise config_error(error) from None
+    except OSError as error:
         raise UsageError(str(error)) from None
     out = writable_dir(args.out)
     try:

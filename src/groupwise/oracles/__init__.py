@@ -49,9 +49,7 @@ def _perceived_noise(cfg: TeacherConfig) -> Callable[[FloatArray], float] | None
 
 STRATEGIES: dict[str, Callable[[RunConfig], QueryStrategy]] = {
     "pairwise": lambda run: PairwiseQueries(candidates=run.loop.candidate_pairs),
-    "groupwise": lambda run: GroupSuggestions(
-        tree=run.tree, max_group=run.loop.max_group_size, rank=run.loop.suggestion_rank
-    ),
+    "groupwise": lambda run: GroupSuggestions(tree=run.tree, max_group=run.loop.max_group_size),
     # the paper's reference code: sum of true returns, every level-1/2 node (padding nodes
     # over single leaves included), two passes
     "interactive": lambda run: InteractiveWalk(

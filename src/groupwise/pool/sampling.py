@@ -3,8 +3,8 @@
 Episodes of the policy (with random exploration mixed in) are cut into non-overlapping
 windows of L steps; of `oversample` × N windows (at most `max_windows`, never fewer than N:
 `windows_to_sample`) the N the reward ensemble is most uncertain about are kept (a uniformly
-random N without an ensemble). A share of the windows may come from variants of the policy
-instead (`variants`, e.g. `rl.policy.biased_variants`: `split_windows` deals them out). The
+random N without an ensemble). The episodes come from the round's pool sources
+(`pool.sources`: the policy, and a share of them from its biased variants when asked). The
 headless loop, the app and `groupwise pool` all sample through `sample_pool`.
 """
 
@@ -15,18 +15,20 @@ from typing import Literal
 
 import numpy as np
 
-from groupwise.clips.timing import clip_timing, step_seconds
 from groupwise.behaviour.pool import BehaviourPool
+from groupwise.clips.timing import clip_timing, step_seconds
 from groupwise.episodes.fragments import (
     Trajectory,
     most_uncertain,
     stack_fragments,
     tile_fragments,
 )
+from groupwise.pool.sources import CurrentPolicy, PoolSource, SourceContext, split_windows
 from groupwise.query.groups import step_variance
 from groupwise.reward import RewardEnsemble
+from groupwise.rl.agents import Agent
 from groupwise.rl.policy import Policy
-from groupwise.rl.rollout import EnvFactory, sample_episodes_for_windows
+from groupwise.rl.rollout import EnvFactory
 from groupwise.types import IntArray, ProgressFn
 
 
@@ -46,8 +48,8 @@ def sample_pool(
     progress: ProgressFn | None = None,
     snapshot_offsets: Sequence[int] | None = None,
     processes: int | None = None,
-    variants: Sequence[Policy] = (),
-    variant_share: float = 0.5,
+    sources: Sequence[PoolSource] | None = None,
+    agent: Agent | None = None,
 ) -> BehaviourPool:
     """A pool of (up to) `size` behaviours of `length` steps (module docstring).
 
@@ -60,15 +62,25 @@ def sample_pool(
     (`ClipTiming.snapshot_offsets`: two states of a few hundred bytes a window), so a clip can
     be rendered on demand without replaying its episode (`clips.recipe`). `processes` step
     the episodes' envs (None: the free cores for large batches; `rl.batch_envs`): the pool is
-    the same whatever it is. `variants`: other policies a share `variant_share` of the
-    windows are sampled from, dealt evenly (`split_windows`); the episodes are numbered
-    `policy`'s first, then each variant's, and each knows its `Trajectory.source`. Without
-    variants the draws are exactly those of sampling from `policy` alone.
+    the same whatever it is.
+
+    `sources` are where the episodes come from (`pool.sources`; default: `policy` alone with
+    `exploration_fraction`, `CurrentPolicy`): each draws what it fixes for the round
+    (`PoolSource.for_round`), then each samples its share of the windows (`split_windows`),
+    in order, from `rng`; the episodes are numbered in that order and each knows its
+    `Trajectory.source` (0 the policy, then the other sources' tags). `agent` is the learner
+    `policy` is of, for a source that reads it (`SourceContext.agent`).
 
     Raises:
-        ValueError: `size` < 1, `oversample` < 1 or `max_windows` < 1, `variant_share`
-            outside [0, 1], or episodes too short for a window.
+        ValueError: `size` < 1, `oversample` < 1 or `max_windows` < 1, sources whose shares
+            do not add up (`pool.sources.split_windows`), both `sources` and a nonzero
+            `exploration_fraction`, or episodes too short for a window.
     """
+    if sources is not None and exploration_fraction:
+        raise ValueError("give the exploration fraction to the sources, not beside them")
+    composed: Sequence[PoolSource] = (
+        (CurrentPolicy(exploration_fraction),) if sources is None else sources
+    )
     n_windows = windows_to_sample(size, oversample, max_windows)
     if snapshot_offsets is None:
         probe = make_env()
@@ -76,29 +88,35 @@ def sample_pool(
             snapshot_offsets = clip_timing(step_seconds(probe), steps=length).snapshot_offsets
         finally:
             probe.close()
+    ctx = SourceContext(
+        make_env,
+        policy,
+        length,
+        round_index,
+        tuple(snapshot_offsets),
+        processes,
+        agent,
+    )
+    counts = split_windows(n_windows, composed)
+    drawn = [source.for_round(ctx, rng) for source in composed]
     total = n_windows * length
     episodes: list[Trajectory] = []
-    sampled = 0  # steps towards the windows of the policies before this one
-    counts = split_windows(n_windows, len(variants), variant_share)
-    for source, (member, count) in enumerate(zip((policy, *variants), counts, strict=True)):
-        if count == 0:
-            continue
-        own = sample_episodes_for_windows(
-            make_env,
-            member,
-            count,
-            length,
-            rng,
-            exploration_fraction,
-            progress=None if progress is None else _shifted(progress, sampled, total),
-            snapshot_offsets=snapshot_offsets,
-            processes=processes,
-        )
-        episodes += [
-            dataclasses.replace(e, episode=len(episodes) + i, source=source)
-            for i, e in enumerate(own)
-        ]
+    sampled = 0  # steps towards the windows of the sources before this one
+    first_tag = 0  # the Trajectory.source of this source's first tag
+    for source, count in zip(drawn, counts, strict=True):
+        if count > 0:
+            own = source.sample(
+                ctx,
+                count,
+                rng,
+                None if progress is None else _shifted(progress, sampled, total),
+            )
+            episodes += [
+                dataclasses.replace(e, episode=len(episodes) + i, source=first_tag + e.source)
+                for i, e in enumerate(own)
+            ]
         sampled += count * length
+        first_tag += source.tags
     windows = tile_fragments(episodes, length)
     if ensemble is None:
         keep = _random_subset(len(windows), size, rng)
@@ -134,26 +152,6 @@ def windows_to_sample(size: int, oversample: float, max_windows: int | None = No
         )
     wanted = math.ceil(size * oversample)
     return wanted if max_windows is None else max(size, min(wanted, max_windows))
-
-
-def split_windows(n_windows: int, variants: int, share: float) -> list[int]:
-    """How many of `n_windows` windows the policy and each of `variants` variants are sampled
-    for: round(`share` × n_windows) for the variants, dealt evenly (the first ones get one
-    more), the rest for the policy. Returns 1 + `variants` counts that sum to n_windows.
-
-    Raises:
-        ValueError: a negative count, or `share` outside [0, 1].
-    """
-    if n_windows < 0 or variants < 0 or not 0.0 <= share <= 1.0:
-        raise ValueError(
-            f"need n_windows >= 0, variants >= 0 and share in [0, 1], got {n_windows}, "
-            f"{variants} and {share}"
-        )
-    if variants == 0:
-        return [n_windows]
-    spread = round(share * n_windows)
-    each, extra = divmod(spread, variants)
-    return [n_windows - spread] + [each + (k < extra) for k in range(variants)]
 
 
 def _shifted(progress: ProgressFn, before: int, total: int) -> ProgressFn:

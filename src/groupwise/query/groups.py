@@ -31,20 +31,11 @@ high but finitely.
 
 Variances are population variances over members (ddof 0), as in `pair_scores`.
 
-The suggestions are taken in the order of this score (SPEC §5, `rank="variance"`), or, with
-`rank="optimistic"` (ours, issue 20), the most promising groups first: a group's promise is
-its upper confidence bound mean_k G_k + sd_k G_k, G_k the mean of member k's predicted
-returns over its behaviours, and a pair's promise is that of its more promising group. Pairs
-are taken by descending promise, and among pairs of the same group by the score: the group
-the ensemble rates best, optimism included, is compared with the partners the ensemble
-disputes most, then the next group. This is the dueling-bandit rule (compare the best
-candidate with its most uncertain challenger) put in groups; it asks what a person teaching
-a target does in the paper's case studies, look at the most promising behaviours first.
+The suggestions are taken in the order of this score (SPEC §5).
 """
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Literal
 
 import numpy as np
 from scipy import sparse
@@ -53,9 +44,6 @@ from groupwise.types import FloatArray, IntArray
 
 INTRA_FLOOR = 1e-6
 """Smallest normalised intra term: keeps the score finite for a group the ensemble is sure of."""
-
-SuggestionRank = Literal["variance", "optimistic"]
-"""The order suggestions are taken in (module docstring): by score, or most promising first."""
 
 
 @dataclass(frozen=True)
@@ -84,7 +72,6 @@ class GroupPairScores:
     intra: FloatArray  # (P,) max of the two groups' mean intra variance
     size_penalty: FloatArray  # (P,) 1 + |m − n| / (m + n)
     score: FloatArray  # (P,)
-    promise: FloatArray  # (P,) the larger of the two groups' upper confidence bounds
 
     def __len__(self) -> int:
         return int(self.pairs.shape[0])
@@ -192,7 +179,7 @@ def score_group_pairs(
         raise ValueError(f"expected returns (N, K) and intra (N,), got {r.shape} and {v.shape}")
     if len(candidates) < 2:
         empty = np.zeros(0)
-        return GroupPairScores(np.zeros((0, 2), dtype=np.int64), *(empty,) * 5)
+        return GroupPairScores(np.zeros((0, 2), dtype=np.int64), *(empty,) * 4)
     membership = _membership(candidates, n)
     pairs = _disjoint_pairs(candidates, n)
     i, j = pairs[:, 0], pairs[:, 1]
@@ -204,22 +191,13 @@ def score_group_pairs(
     score = _normalised(inter, floor=0.0, if_zero=0.0) / _normalised(
         intra_pair, floor=INTRA_FLOOR, if_zero=1.0
     )
-    upper = group_upper_bound(r, membership)
     return GroupPairScores(
         pairs=pairs,
         inter=inter,
         intra=intra_pair,
         size_penalty=penalty,
         score=score / penalty,
-        promise=np.maximum(upper[i], upper[j]),
     )
-
-
-def group_upper_bound(returns: FloatArray, membership: FloatArray) -> FloatArray:
-    """(G,) mean_k G_k + sd_k G_k, G_k = member k's mean predicted return over the group
-    (ddof 0): how good the ensemble thinks the group could be."""
-    per_member = membership @ np.asarray(returns, dtype=np.float64)  # (G, K)
-    return np.asarray(per_member.mean(axis=1) + per_member.std(axis=1))
 
 
 def _normalised(x: FloatArray, floor: float, if_zero: float) -> FloatArray:
@@ -235,12 +213,10 @@ def suggestion_order(
     count: int,
     max_uses: int = 2,
     refill: bool = False,
-    rank: SuggestionRank = "variance",
 ) -> IntArray:
     """Rows of `scores` to suggest, best first, at most `count` of them.
 
-    Pairs are taken by descending score, or with `rank="optimistic"` by descending promise
-    and then score (module docstring); ties keep the lower row. A pair is skipped when
+    Pairs are taken by descending score; ties keep the lower row. A pair is skipped when
     either candidate already appears in `max_uses` taken pairs (SPEC §5: each node in at
     most 2 suggestions). With `refill`, once that list is used up a new list is built the
     same way over the pairs not yet taken (use counts start again), as a user who keeps
@@ -248,12 +224,7 @@ def suggestion_order(
     """
     if max_uses < 1:
         raise ValueError(f"max uses must be >= 1, got {max_uses}")
-    if rank == "variance":
-        order = np.argsort(-scores.score, kind="stable")
-    elif rank == "optimistic":  # lexsort: last key first; both stable
-        order = np.lexsort((-scores.score, -scores.promise))
-    else:
-        raise ValueError(f"unknown suggestion rank {rank!r}; choose variance or optimistic")
+    order = np.argsort(-scores.score, kind="stable")
     chosen: list[int] = []
     if len(scores) == 0 or count <= 0:
         return np.asarray(chosen, dtype=np.int64)
@@ -291,12 +262,11 @@ def suggest_groups(
     count: int,
     max_uses: int = 2,
     refill: bool = False,
-    rank: SuggestionRank = "variance",
 ) -> list[GroupSuggestion]:
     """Up to `count` suggested comparisons, best first (`score_group_pairs`, then
     `suggestion_order`). The left group is the one listed first among the candidates."""
     scores = score_group_pairs(returns, intra, candidates)
-    rows = suggestion_order(scores, count, max_uses, refill, rank)
+    rows = suggestion_order(scores, count, max_uses, refill)
     return [
         GroupSuggestion(
             left=candidates[int(scores.pairs[row, 0])],

@@ -25,7 +25,6 @@ from groupwise.behaviour.pool import BehaviourPool
 from groupwise.preferences.judgement import MAX_GROUP
 from groupwise.query.groups import (
     GroupCandidate,
-    SuggestionRank,
     return_variance,
     suggest_groups,
 )
@@ -118,12 +117,10 @@ class GroupSuggestions(_TreeGroups):
     With `refill` a list that is used up is followed by the next one over the pairs not yet
     asked (a pool of 2 × queries behaviours has far fewer candidate nodes than queries, so
     one list rarely covers the round). The intra term uses `pool.step_variance`; a pool
-    without it falls back to Var_k[R_k(f)] / L (`query.groups.return_variance`). `rank`
-    "optimistic" takes the most promising groups first (`query.groups`).
+    without it falls back to Var_k[R_k(f)] / L (`query.groups.return_variance`).
     """
 
     refill: bool = True
-    rank: SuggestionRank = "variance"
 
     def propose(self, pool: BehaviourPool, n_queries: int, rng: np.random.Generator) -> list[Query]:
         del rng  # the list is a function of the pool
@@ -140,7 +137,6 @@ class GroupSuggestions(_TreeGroups):
             n_queries,
             self.max_uses,
             self.refill,
-            self.rank,
         )
         return [Query(s.left.members, s.right.members) for s in suggestions]
 

@@ -179,10 +179,8 @@ def fit(
         _flush_denormals(params, optimiser)
         net.eval()
 
-    if cfg.standardise_output or cfg.exploration_bonus > 0 or cfg.pessimism > 0:
+    if cfg.standardise_output:
         ensemble.standardise_output(dataset.obs, dataset.acts)
-    latest = int(dataset.rounds.max()) if len(dataset.rounds) else 0
-    ensemble.bonus = cfg.exploration_bonus * cfg.exploration_decay**latest - cfg.pessimism
     loss, accuracy = _evaluate(ensemble, fragments, pairs, labels, train)
     val_loss, val_accuracy = (
         _evaluate(ensemble, fragments, pairs, labels, val) if len(val) else (math.nan, math.nan)

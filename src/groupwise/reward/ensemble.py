@@ -73,9 +73,6 @@ class RewardEnsemble:
         self.l2_weight = float(cfg.initial_l2)
         self.output_shift = torch.zeros(cfg.ensemble_size, 1)
         self.output_scale = torch.ones(cfg.ensemble_size, 1)
-        self.bonus = 0.0
-        """β_r of `RewardConfig.exploration_bonus`: the weight of the members' sd in
-        `mean_reward`, set by each fit."""
 
     @classmethod
     def for_env(
@@ -149,9 +146,7 @@ class RewardEnsemble:
         return np.ascontiguousarray(self.step_rewards(obs, acts).sum(axis=-1).T)
 
     def mean_reward(self, obs: np.ndarray, acts: np.ndarray) -> FloatArray:
-        """Ensemble-mean per-step reward: obs (B, obs_dim), acts (B, act_dim) -> (B,) float32,
-        plus `bonus` × the members' sd when exploring (`RewardConfig.exploration_bonus`;
-        negative with `RewardConfig.pessimism`).
+        """Ensemble-mean per-step reward: obs (B, obs_dim), acts (B, act_dim) -> (B,) float32.
 
         This is the reward PPO trains on, called every env step: one forward pass over all
         members, no per-member Python loop, and only the cheapest shape check.
@@ -170,10 +165,7 @@ class RewardEnsemble:
             x = x[:, : self.obs_dim]
         with torch.inference_mode():
             out = (self.net(x) - self.output_shift) / self.output_scale
-            if not self.bonus:
-                return out.mean(dim=0).numpy()
-            spread, mean = torch.std_mean(out, dim=0, correction=0)
-            return (mean + self.bonus * spread).numpy()
+            return out.mean(dim=0).numpy()
 
     def reinitialise(self, rng: np.random.Generator) -> None:
         """Fresh member weights drawn from `rng` and the initial L2 weight (a refit from
@@ -237,7 +229,6 @@ class RewardEnsemble:
                 "l2_weight": self.l2_weight,
                 "output_shift": self.output_shift,
                 "output_scale": self.output_scale,
-                "bonus": self.bonus,
                 "state_dict": self.net.state_dict(),
             },
             path,
@@ -264,7 +255,6 @@ class RewardEnsemble:
         # files written before outputs were standardised hold neither: the identity
         self.output_shift = payload.get("output_shift", torch.zeros(self.size, 1))
         self.output_scale = payload.get("output_scale", torch.ones(self.size, 1))
-        self.bonus = float(payload.get("bonus", 0.0))
 
     @classmethod
     def load(cls, path: Path) -> "RewardEnsemble":

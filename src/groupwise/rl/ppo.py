@@ -5,9 +5,7 @@ inside this adapter, and every round reseeds it from the loop's generator, so a 
 repeats an uninterrupted one.
 """
 
-import copy
 import logging
-import tempfile
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -200,45 +198,6 @@ class PPOAgent:
                 stats = self.step_norm.stats
                 stats.mean, stats.var = data["step_mean"], data["step_var"]
                 stats.count = float(data["step_count"])
-
-    def shift_actions(self, offset: FloatArray) -> None:
-        """Move the policy's action mean by `offset` (act_dim,): its greedy actions, and the
-        centre of its stochastic ones, shift by it before they are clipped to the bounds,
-        as a `rl.policy.BiasedPolicy` of the same offset acts.
-
-        Raises:
-            TypeError: the policy's actions are not Box (no mean to move).
-        """
-        if not isinstance(self.model.action_space, gym.spaces.Box):
-            raise TypeError(f"only Box actions have a mean, not {self.model.action_space}")
-        action_net = self.model.policy.action_net
-        assert isinstance(action_net, torch.nn.Linear)  # a Gaussian policy's mean
-        with torch.no_grad():
-            action_net.bias.add_(torch.as_tensor(np.asarray(offset), dtype=action_net.bias.dtype))
-
-    def revert(self, directory: Path) -> None:
-        """Go back to the policy, its optimiser and the observation and return statistics
-        saved by `save` in `directory`, keeping this agent's step count and the learned
-        reward's running statistics (they belong to the reward model, which stays)."""
-        steps = self.model.num_timesteps
-        reward_stats = None if self.step_norm is None else copy.deepcopy(self.step_norm.stats)
-        self.load(directory)
-        self.model.num_timesteps = steps
-        if self.step_norm is not None and reward_stats is not None:
-            self.step_norm.stats = reward_stats
-
-    def lookahead(self, steps: int, seed: int, deterministic: bool = False) -> "PolicySnapshot":
-        """The policy this agent would have after `steps` more PPO steps (seeded as `learn`)
-        on its reward as it is now, as a frozen snapshot; the agent itself comes back
-        exactly as it was (policy, optimiser, step count, normalisers: `save` and `load`
-        around the steps)."""
-        with tempfile.TemporaryDirectory(prefix="groupwise-lookahead-") as scratch:
-            self.save(Path(scratch))
-            try:
-                self.learn(steps, seed)
-                return self.snapshot(deterministic)
-            finally:
-                self.load(Path(scratch))
 
     def close(self) -> None:
         self.venv.close()

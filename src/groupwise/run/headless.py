@@ -14,8 +14,7 @@ from groupwise.oracles import ORACLES, Feedback
 from groupwise.query.schedule import comparisons_per_round
 from groupwise.run.continuous import continuous_round
 from groupwise.run.final import choose_takeaway, publish_agent
-from groupwise.run.keep import keep_preferred
-from groupwise.run.pretrain import pretrain
+from groupwise.run.pretrain import before_first_round
 from groupwise.run.progress import CallbackList, ProgressBars, RunCallback, as_callback
 from groupwise.run.records import RoundRecord
 from groupwise.run.round import run_round, train_frozen
@@ -57,16 +56,12 @@ def run_rounds(
     directory; the one round driver of `run_session`, the case studies and
     `PreferenceComparisons.train`. With `training.mode` "continuous" a feedback round's PPO
     runs while its timed teacher answers (`run.continuous`), not the plan's steps. A run
-    whose agent has not trained yet first pre-trains when `training.pretrain_steps` asks
-    (`run.pretrain`). With `training.continue_from` "preferred" each round first goes back
-    to the policy the teacher prefers so far (`run.keep`)."""
+    whose agent has not trained yet first runs the config's setup hooks
+    (`run.pretrain.setup_hooks`: state-entropy pre-training when asked)."""
     plan = round_plan(run.cfg.loop)
-    if run.next_round == 0 and run.agent.num_timesteps == 0:
-        pretrain(run, callback=callback)
+    before_first_round(run, callback)
     while run.next_round < len(plan):
         budget, steps = plan[run.next_round]
-        if run.cfg.training.continue_from == "preferred":
-            keep_preferred(run, feedback.teacher, callback)
         if budget == 0:  # the final row: PPO on the frozen reward
             train_frozen(run, steps, callback=callback)
         elif run.cfg.training.mode == "continuous":  # PPO's steps come from the clock

@@ -55,14 +55,12 @@ class OnRoundEnd(RunCallback):
 
 class ProgressBars(RunCallback):
     """tqdm bars: the rounds of a run, each round's PPO steps, and the rounds' policies the
-    take-away choice (`groupwise.run.takeaway`) and the choice of which policy trains on
-    (`groupwise.run.keep`) sample."""
+    take-away choice (`groupwise.run.takeaway`) samples."""
 
     _BARS: ClassVar[dict[str, str]] = {
         "ppo": "step",
         "pretrain": "step",
         "takeaway": "round",
-        "keep": "round",
     }
 
     def __init__(self, rounds: int, done: int = 0, desc: str = "rounds") -> None:

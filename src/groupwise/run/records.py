@@ -4,8 +4,10 @@ import csv
 import dataclasses
 import math
 import time
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 
 @dataclass(frozen=True)
@@ -60,13 +62,6 @@ class RoundRecord:
     evaluation episodes; `true_return_mean` is the sum of its per-step scores. nan for other
     envs and without evaluation."""
     target_score_std: float = math.nan
-    continued_from: int = -1
-    """The round whose policy this round's PPO trained on from: the previous round's, or
-    with `TrainingConfig.continue_from` "preferred" the teacher's choice (`run.keep`); -1
-    for round 0 (the fresh or pre-trained policy)."""
-    adopted_variant: int = 0
-    """The pool variant (1 … K) whose push the policy took before this round's PPO
-    (`LoopConfig.adopt_variants`, `run.adopt`); 0: none."""
 
     def stats(self) -> dict[str, object]:
         """The record as JSON-ready values (nan and inf as None): the app's round stats."""
@@ -74,6 +69,20 @@ class RoundRecord:
             k: (None if isinstance(v, float) and not math.isfinite(v) else v)
             for k, v in dataclasses.asdict(self).items()
         }
+
+
+REMOVED_COLUMNS = frozenset({"continued_from", "adopted_variant"})
+"""Columns of runs written before issue 38 removed their mechanisms (training on from the
+preferred policy, adopting a variant's push; docs/case-studies.md, "Measured and removed")."""
+
+
+def read_record(row: Mapping[str, Any]) -> RoundRecord:
+    """A record read back from a checkpoint's state, dropping `REMOVED_COLUMNS` (old runs).
+
+    Raises:
+        TypeError: another unknown or a missing column.
+    """
+    return RoundRecord(**{k: v for k, v in row.items() if k not in REMOVED_COLUMNS})
 
 
 def write_records(path: Path, records: list[RoundRecord]) -> None:

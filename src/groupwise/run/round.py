@@ -22,23 +22,20 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
-import gymnasium as gym
 import numpy as np
 
 from groupwise.behaviour import BehaviourTree
+from groupwise.behaviour.pool import BehaviourPool
 from groupwise.config import LoopConfig, RunConfig
 from groupwise.oracles.base import Feedback
 from groupwise.oracles.calibration import calibrated_noise_sd
-from groupwise.behaviour.pool import BehaviourPool
 from groupwise.pool.sampling import sample_pool
+from groupwise.pool.sources import PoolSource, pool_sources
 from groupwise.preferences.judgement import Judgement
 from groupwise.preferences.pairs import Pair, cap_pairs, judgement_pairs
 from groupwise.query.strategies import Query, QueryStrategy
 from groupwise.reward import FitReport, fit
-from groupwise.rl.policy import BiasedPolicy, Policy, biased_variants
-from groupwise.rl.ppo import PolicySnapshot
 from groupwise.rl.rollout import Evaluation, evaluate_episodes
-from groupwise.run.adopt import adopt_variant
 from groupwise.run.progress import RunCallback, as_callback
 from groupwise.run.records import PhaseTimer, RoundRecord
 from groupwise.run.run import Run
@@ -61,9 +58,6 @@ class Offer:
     budget: int
     candidates: float = math.nan
     sample_s: float = 0.0
-    variants: tuple[BiasedPolicy, ...] = ()
-    """The biased variants of the policy part of the pool came from (`pool_variants`; a
-    fragment's episode knows which, `Trajectory.source`)."""
 
     @property
     def round(self) -> int:
@@ -87,40 +81,40 @@ def begin_round(
     streams: RoundStreams | None = None,
     callback: RunCallback | None = None,
     round_index: int | None = None,
+    sources: Sequence[PoolSource] | None = None,
 ) -> Offer:
     """The first half of round `run.next_round` (or of `round_index`: the next round's
     offer, prepared while round `run.next_round` is still open, as continuous training
-    does): sample the pool from the current policy, a share of it from biased variants of
-    the policy when `loop.pool_variants` asks for them (`pool_variants`)
-    (the `pool_oversample` × N windows the ensemble is most uncertain about, or a random N,
-    `loop.pool_selection`), build its tree, and let `strategy` propose `n_queries` (default
-    `budget`) comparisons of it.
+    does): sample the pool from the round's sources (`pool.sources.pool_sources`: the
+    current policy, a share of it from biased variants of the policy when
+    `loop.pool_variants` asks for them) (of the `pool_oversample` × N windows those the
+    ensemble is most uncertain about, or a random N, `loop.pool_selection`), build its tree,
+    and let `strategy` propose `n_queries` (default `budget`) comparisons of it.
 
     `streams` are the round's (`round_streams`); pass them to continue their `feedback`
-    stream with a simulated teacher, as `run_round` does. `callback` hears the phases
+    stream with a simulated teacher, as `run_round` does. `sources`: where the pool comes
+    from (default `pool_sources(loop)`; continuous training's `pool.recent.fresh_sources`).
+    `callback` hears the phases
     "sample" (steps sampled towards the windows) and "dtw" (pairs of behaviours measured).
     """
     loop, callback = run.cfg.loop, as_callback(callback)
     index = run.next_round if round_index is None else round_index
     streams = streams or round_streams(loop.seed, index)
     tick = time.perf_counter()
-    policy = run.agent.policy()
-    variants = pool_variants(run, policy, streams.sample)
     pool = sample_pool(
         run.make_env,
-        policy,
+        run.agent.policy(),
         pool_size(loop, budget),
         loop.fragment_length,
         streams.sample,
         round_index=index,
-        exploration_fraction=loop.exploration_fraction,
         oversample=loop.pool_oversample,
         max_windows=loop.pool_windows_max,
         ensemble=run.ensemble,
         select=loop.pool_selection,
         progress=lambda done, total: callback.on_phase("sample", done, total),
-        variants=variants,
-        variant_share=loop.pool_variant_share,
+        sources=pool_sources(loop) if sources is None else sources,
+        agent=run.agent,
     )
     sample_s = time.perf_counter() - tick
     tree = None
@@ -139,48 +133,7 @@ def begin_round(
         budget=budget,
         candidates=float(len(offered(pool))) if callable(offered) else math.nan,
         sample_s=sample_s,
-        variants=tuple(variants),
     )
-
-
-def pool_variants(run: Run, policy: Policy, rng: np.random.Generator) -> list[BiasedPolicy]:
-    """The round's `loop.pool_variants` biased variants of `policy` (`rl.policy.biased_variants`,
-    drawn from `rng`, the round's sample stream; none drawn when there are none); with
-    `loop.pool_variants_greedy` of the run's greedy policy instead, and with
-    `loop.pool_lookahead`, once the dataset holds pairs, of the policy a lookahead reaches
-    (`lookahead_policy`; greedy or not as the variants are): in both cases the first
-    variant pushes nothing."""
-    loop = run.cfg.loop
-    if loop.pool_variants == 0:
-        return []
-    probe = run.make_env()
-    try:
-        space = probe.action_space
-    finally:
-        probe.close()
-    base: Policy = policy
-    if loop.pool_lookahead and len(run.dataset):
-        base = lookahead_policy(run, loop.pool_lookahead, rng, loop.pool_variants_greedy)
-    elif loop.pool_variants_greedy:
-        base = run.agent.policy(deterministic=True)
-    else:
-        return biased_variants(policy, space, loop.pool_variants, loop.pool_variant_scale, rng)
-    variants = biased_variants(base, space, loop.pool_variants, loop.pool_variant_scale, rng)
-    unpushed = (
-        BiasedPolicy(base, space, offset=np.zeros(space.shape, dtype=space.dtype))
-        if isinstance(space, gym.spaces.Box)
-        else BiasedPolicy(base, space, action=variants[0].action, share=0.0)
-    )
-    return [unpushed, *variants[1:]]
-
-
-def lookahead_policy(
-    run: Run, steps: int, rng: np.random.Generator, deterministic: bool
-) -> PolicySnapshot:
-    """Where PPO is going: the policy a copy of the run's agent reaches after `steps` PPO
-    steps on the current learned reward (`PPOAgent.lookahead`, seeded from `rng`); the
-    run's agent is left as it was."""
-    return run.ppo.lookahead(steps, int(rng.integers(2**31 - 1)), deterministic)
 
 
 def derive_pairs(
@@ -239,9 +192,8 @@ def end_round(
 ) -> RoundRecord:
     """The second half of the round: the judgements' pairs (`round_pairs`) into the
     cumulative dataset, the reward ensemble fitted on it (round 0 with
-    `initial_epoch_multiplier` × the epochs), the push of the pool variant the teacher
-    preferred taken over when `loop.adopt_variants` asks (`run.adopt`), `steps` PPO steps
-    on the learned reward, the greedy policy's true return; the record appended and, when
+    `initial_epoch_multiplier` × the epochs), `steps` PPO steps on the learned reward,
+    the greedy policy's true return; the record appended and, when
     the run has a directory, committed (checkpoint and ``rounds.csv``).
 
     `keys` are the judgements' places in the round (default: their places in the list; the
@@ -262,7 +214,6 @@ def end_round(
         multiplier = run.cfg.reward.initial_epoch_multiplier if index == 0 else 1.0
         epochs = max(1, round(run.cfg.reward.epochs * multiplier))
         report = fit(run.ensemble, run.dataset, run.cfg.reward, streams.fit, epochs)
-    adopted = adopt_variant(run, offer.pool, offer.variants, pairs) if loop.adopt_variants else 0
     _learn(run, steps, streams, timer, callback)
     clock_s = math.nan
     if run.cfg.teacher.pace_s is not None and asked is not None:
@@ -277,7 +228,6 @@ def end_round(
         callback,
         asked=asked,
         clock_s=clock_s,
-        adopted_variant=adopted,
     )
 
 
@@ -291,12 +241,10 @@ def finish_round(
     *,
     asked: int | None,
     clock_s: float = math.nan,
-    adopted_variant: int = 0,
 ) -> RoundRecord:
     """Every feedback round's end, once its pairs are in the dataset and the agent trained:
     the greedy policy's true return, the round's record (`report`: the round's last fit,
-    None when there was none; `adopted_variant`: the variant whose push the policy took,
-    `run.adopt`), appended and committed."""
+    None when there was none), appended and committed."""
     evaluation = _evaluate(run, timer, callback)
     this_round = run.dataset.rounds == run.next_round
     record = _record(
@@ -312,7 +260,6 @@ def finish_round(
         reward_accuracy=report.accuracy if report else math.nan,
         reward_val_accuracy=report.validation_accuracy if report else math.nan,
         clock_s=clock_s,
-        adopted_variant=adopted_variant,
         **_diagnostics(offer, asked, len(judgements), run.cfg),
     )
     return _append(run, record, callback)
@@ -414,14 +361,12 @@ def _record(run: Run, evaluation: Evaluation, timer: PhaseTimer, **fields: Any) 
         true_return_std=float(evaluation.returns.std()),
         target_score_mean=float(evaluation.scores.mean()),
         target_score_std=float(evaluation.scores.std()),
-        continued_from=run.next_round - 1 if run.continued_from is None else run.continued_from,
         **values,
     )
 
 
 def _append(run: Run, record: RoundRecord, callback: RunCallback) -> RoundRecord:
     run.records.append(record)
-    run.continued_from = None
     if run.out is not None:
         callback.on_phase("checkpoint", 0, 1)
         run.commit()

@@ -39,7 +39,7 @@ from groupwise.run.checkpoint import (
     latest_checkpoint,
     write_checkpoint,
 )
-from groupwise.run.records import RoundRecord, write_records
+from groupwise.run.records import RoundRecord, read_record, write_records
 from groupwise.run.streams import init_rng
 
 log = logging.getLogger(__name__)
@@ -66,9 +66,6 @@ class Run:
     dataset: PreferenceDataset
     records: list[RoundRecord]
     out: Path | None = None
-    continued_from: int | None = None
-    """The round whose policy the agent went back to for the round being run
-    (`groupwise.run.keep`); None: the previous round's, as usual."""
 
     @classmethod
     def create(cls, cfg: RunConfig, out: Path | None = None, *, check: bool = False) -> "Run":
@@ -124,9 +121,9 @@ class Run:
 
     @property
     def ppo(self) -> PPOAgent:
-        """The agent as groupwise's own PPO (checkpoints and the pool lookahead need it)."""
+        """The agent as groupwise's own PPO (checkpoints and pre-training need it)."""
         if not isinstance(self.agent, PPOAgent):
-            raise TypeError("checkpoints and the pool lookahead need groupwise's own PPOAgent")
+            raise TypeError("checkpoints and pre-training need groupwise's own PPOAgent")
         return self.agent
 
     @property
@@ -155,7 +152,7 @@ class Run:
         self.ppo.load(directory)
         self.ensemble.load_state(directory / REWARD_FILE)
         self.dataset = PreferenceDataset.load(directory / DATASET_FILE)
-        self.records = [RoundRecord(**row) for row in state["records"]]
+        self.records = [read_record(row) for row in state["records"]]
         log.info("%s restored after round %d", self.directory, state["round"])
         return True
 

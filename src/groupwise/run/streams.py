@@ -54,11 +54,3 @@ def takeaway_streams(seed: int) -> tuple[np.random.SeedSequence, np.random.Gener
     seeds) and the teacher's generator."""
     episodes, teacher = np.random.SeedSequence([seed, 2**22]).spawn(2)
     return episodes, np.random.default_rng(teacher)
-
-
-def keep_streams(seed: int, round_index: int) -> tuple[np.random.SeedSequence, np.random.Generator]:
-    """The streams of the choice before round `round_index` of which policy trains on
-    (`groupwise.run.keep`): the seed of both policies' episodes (the same reset seeds for
-    each) and the teacher's generator."""
-    episodes, teacher = np.random.SeedSequence([seed, 2**24, round_index]).spawn(2)
-    return episodes, np.random.default_rng(teacher)

@@ -19,9 +19,11 @@ against its preference pairs, one panel per target, the success threshold dashed
 import argparse
 import csv
 import json
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import Any
+
+from groupwise.config import REMOVED_FIELDS
 
 HEADER = (
     "| target | DM | seed | comparisons | preference pairs | tied pairs | label error "
@@ -40,36 +42,39 @@ SUMMARY_HEADER = (
 )
 
 
+SETUP_FIELDS: dict[tuple[str, str], Callable[[Any], str]] = {
+    ("loop", "pool_size"): lambda size: f"pools of {size:,}",
+    ("loop", "pool_variants"): lambda count: f"{count} pool variants",
+    ("training", "pretrain_steps"): lambda steps: f"pre-training {steps:,}",
+}
+"""The config fields a run's label names when they are set (not None or 0), in order."""
+
+
 def setup_label(run: Path) -> str:
-    """The run's decision-maker, with the exploration and suggestion order it ran with:
-    "groupwise", "groupwise · 8 pool variants", "groupwise · pre-training 100,000",
-    "groupwise · optimistic suggestions", "groupwise · reward bonus 1", "groupwise · pools
-    of 500", "groupwise · 8 pool variants of the greedy policy · adopted", "groupwise · 8
-    pool variants after a 40,960-step lookahead", "groupwise · training on from the
-    preferred policy"."""
+    """The run's decision-maker with the setup it ran with (`SETUP_FIELDS`), e.g.
+    "groupwise", "groupwise · 8 pool variants · pre-training 100,000", "groupwise · pools of
+    500"; a run of a mechanism removed since (`config.REMOVED_FIELDS`) names the field and
+    its value, e.g. "groupwise · 8 pool variants · adopt variants"."""
     summary, _ = _read(run)
     cfg = json.loads((run / "config.json").read_text())
     parts = [summary["decision_maker"]]
-    if size := cfg["loop"].get("pool_size"):
-        parts.append(f"pools of {size:,}")
-    if variants := cfg["loop"].get("pool_variants", 0):
-        greedy = " of the greedy policy" if cfg["loop"].get("pool_variants_greedy") else ""
-        steps = cfg["loop"].get("pool_lookahead", 0)
-        ahead = f" after a {steps:,}-step lookahead" if steps else ""
-        parts.append(f"{variants} pool variants{greedy}{ahead}")
-    if cfg["loop"].get("adopt_variants"):
-        parts.append("adopted")
-    if pretrain := cfg.get("training", {}).get("pretrain_steps", 0):
-        parts.append(f"pre-training {pretrain:,}")
-    if cfg["loop"].get("suggestion_rank", "variance") != "variance":
-        parts.append(f"{cfg['loop']['suggestion_rank']} suggestions")
-    if bonus := cfg.get("reward", {}).get("exploration_bonus", 0):
-        parts.append(f"reward bonus {bonus:g}")
-    if pessimism := cfg.get("reward", {}).get("pessimism", 0):
-        parts.append(f"reward pessimism {pessimism:g}")
-    if cfg.get("training", {}).get("continue_from", "last") != "last":
-        parts.append("training on from the preferred policy")
+    for (section, name), label in SETUP_FIELDS.items():
+        if value := cfg.get(section, {}).get(name):
+            parts.append(label(value))
+    for section, removed in REMOVED_FIELDS.items():
+        for name, default in removed.items():
+            value = cfg.get(section, {}).get(name, default)
+            if value != default:
+                parts.append(_removed_label(name, value))
     return " · ".join(parts)
+
+
+def _removed_label(name: str, value: Any) -> str:
+    """ "adopt variants", "pool lookahead 40,960", "suggestion rank optimistic"."""
+    words = name.replace("_", " ")
+    if value is True:
+        return words
+    return f"{words} {value:,g}" if isinstance(value, int | float) else f"{words} {value}"
 
 
 def _pool_means(rows_of_runs: Sequence[list[dict[str, str]]], column: str) -> str:

@@ -4,7 +4,6 @@ import pytest
 from groupwise.query.groups import (
     INTRA_FLOOR,
     GroupCandidate,
-    group_upper_bound,
     pair_variance_matrix,
     return_variance,
     score_group_pairs,
@@ -81,33 +80,6 @@ def test_suggestion_order_with_one_use_and_refill():
     # refill: the next list over AD, AC takes AD (AC shares A), then a third list takes AC
     assert suggestion_order(scores, 10, max_uses=1, refill=True).tolist() == [0, 3, 2, 1]
     assert suggestion_order(scores, 3, max_uses=1, refill=True).tolist() == [0, 3, 2]
-
-
-# promise: per group the members' mean predicted returns G_k, then mean_k + sd_k:
-#   A (0, 1): G = (1, 0) -> 0.5 + 0.5 = 1;  B (2, 3): G = (0.5, 2.5) -> 1.5 + 1 = 2.5
-#   C (3,):   G = (1, 1) -> 1 + 0 = 1;      D (2,):   G = (0, 4)     -> 2 + 2 = 4
-#   per pair the larger: AB 2.5, AC 1, AD 4, CD 4
-
-
-def test_group_upper_bound_and_pair_promise_by_hand():
-    scores = score_group_pairs(RETURNS, INTRA, CANDIDATES)
-    np.testing.assert_allclose(scores.promise, [2.5, 1.0, 4.0, 4.0])  # AB, AC, AD, CD
-    membership = np.array([[0.5, 0.5, 0, 0], [0, 0, 0.5, 0.5], [0, 0, 0, 1.0], [0, 0, 1.0, 0]])
-    np.testing.assert_allclose(group_upper_bound(RETURNS, membership), [1.0, 2.5, 1.0, 4.0])
-
-
-def test_optimistic_order_takes_the_most_promising_group_first():
-    # D is the most promising: AD and CD first, the better score first (AD 3/4 > CD 8/13);
-    # then AB; AC is dropped because A is already in two suggestions
-    suggestions = suggest_groups(RETURNS, INTRA, CANDIDATES, count=10, rank="optimistic")
-    assert [(s.left.id, s.right.id) for s in suggestions] == [("a", "d"), ("c", "d"), ("a", "b")]
-    assert [s.score for s in suggestions] == pytest.approx([3 / 4, 8 / 13, 14 / 13])
-    scores = score_group_pairs(RETURNS, INTRA, CANDIDATES)
-    assert suggestion_order(scores, 10, max_uses=1, rank="optimistic").tolist() == [2]
-    refilled = suggestion_order(scores, 10, max_uses=1, refill=True, rank="optimistic")
-    assert refilled.tolist() == [2, 3, 0, 1]
-    with pytest.raises(ValueError, match="unknown suggestion rank"):
-        suggestion_order(scores, 10, rank="best")  # type: ignore[arg-type]
 
 
 def test_zero_maxima_give_finite_scores():

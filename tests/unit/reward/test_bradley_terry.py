@@ -122,48 +122,6 @@ def test_bootstrap_makes_members_differ():
     assert member_spread(bootstrap=True) > 20 * member_spread(bootstrap=False)
 
 
-def test_exploration_bonus_fades_by_round_and_is_largest_off_the_data():
-    cfg = RewardConfig(exploration_bonus=2.0, exploration_decay=0.5)
-    data = make_dataset(100)
-    data.rounds = np.repeat([0, 1, 2, 2], 25)
-    ens = _ensemble(cfg=cfg)
-    fit(ens, data, cfg, np.random.default_rng(0), epochs=4)
-    assert ens.bonus == pytest.approx(2.0 * 0.5**2)  # the newest pairs are round 2's
-    raw = ens.step_rewards(data.obs, data.acts).reshape(ens.size, -1)
-    np.testing.assert_allclose(ens.output_shift.squeeze(1), raw.mean(axis=1), rtol=1e-4, atol=1e-5)
-
-    def member_sd(obs: np.ndarray, acts: np.ndarray) -> float:
-        """The mean sd of the standardised members: what the bonus pays, per unit of it."""
-        out = ens.step_rewards(obs, acts) - ens.output_shift.numpy()
-        return float((out / ens.output_scale.numpy()).std(axis=0).mean())
-
-    obs, acts = data.obs.reshape(-1, OBS_DIM), data.acts.reshape(-1, ACT_DIM)
-    assert member_sd(obs + 6.0, acts) > 2 * member_sd(obs, acts)  # they disagree off the data
-
-    without = RewardConfig()
-    ens = _ensemble(cfg=without)
-    fit(ens, data, without, np.random.default_rng(0), epochs=1)
-    assert ens.bonus == 0.0 and not ens.output_shift.any()
-
-
-def test_pessimism_subtracts_the_members_sd_every_round():
-    cfg = RewardConfig(pessimism=1.0, exploration_bonus=2.0, exploration_decay=0.5)
-    data = make_dataset(100)
-    data.rounds = np.repeat([0, 1, 2, 2], 25)
-    ens = _ensemble(cfg=cfg)
-    fit(ens, data, cfg, np.random.default_rng(0), epochs=4)
-    assert ens.bonus == pytest.approx(2.0 * 0.5**2 - 1.0)  # it does not fade
-    only = RewardConfig(pessimism=1.0)
-    ens = _ensemble(cfg=only)
-    fit(ens, data, only, np.random.default_rng(0), epochs=4)
-    assert ens.bonus == -1.0 and ens.output_shift.any()  # members standardised
-    obs, acts = data.obs.reshape(-1, OBS_DIM) + 6.0, data.acts.reshape(-1, ACT_DIM)
-    out = (ens.step_rewards(obs, acts) - ens.output_shift.numpy()) / ens.output_scale.numpy()
-    np.testing.assert_allclose(
-        ens.mean_reward(obs, acts), out.mean(axis=0) - out.std(axis=0), rtol=1e-4, atol=1e-5
-    )
-
-
 def test_l2_weight_grows_when_validation_loss_runs_away():
     data = make_dataset(60)
     data.labels = np.random.default_rng(0).integers(0, 2, size=60).astype(np.float32)

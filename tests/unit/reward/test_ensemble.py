@@ -130,23 +130,6 @@ def test_standardised_output_is_what_ppo_sees_and_survives_save(tmp_path: Path):
     np.testing.assert_allclose(again.mean_reward(obs, acts), ens.mean_reward(obs, acts))
 
 
-def test_exploration_bonus_adds_the_members_sd_and_survives_save(tmp_path: Path):
-    ens = _ensemble(cfg=RewardConfig(ensemble_size=3))
-    obs, acts = _inputs(200, seed=3)
-    ens.standardise_output(obs, acts)
-    plain = ens.mean_reward(obs, acts)
-    raw = ens.step_rewards(obs, acts)
-    standard = (raw - raw.mean(axis=1, keepdims=True)) / raw.std(axis=1, keepdims=True)
-    ens.bonus = 0.5
-    explored = ens.mean_reward(obs, acts)
-    np.testing.assert_allclose(explored, plain + 0.5 * standard.std(axis=0), atol=1e-4)
-    assert (explored >= plain).all() and (explored > plain).any()
-    ens.save(tmp_path / "r.pt")
-    again = RewardEnsemble.load(tmp_path / "r.pt")
-    assert again.bonus == 0.5
-    np.testing.assert_allclose(again.mean_reward(obs, acts), explored)
-
-
 def test_reinitialise_draws_fresh_seeded_weights():
     a, b = _ensemble(), _ensemble()
     obs, acts = _inputs(9)

@@ -44,32 +44,31 @@ def _run(
     return path
 
 
-def test_runs_are_labelled_by_the_exploration_they_ran_with(tmp_path):
+def test_runs_are_labelled_by_the_setup_they_ran_with(tmp_path):
     assert setup_label(_run(tmp_path / "a", 0, 0, None)) == "groupwise"
     assert setup_label(_run(tmp_path / "b", 8, 0, None)) == "groupwise · 8 pool variants"
-    assert setup_label(_run(tmp_path / "c", 0, 100_000, None)) == (
-        "groupwise · pre-training 100,000"
-    )
-    assert setup_label(_run(tmp_path / "d", 8, 0, None, "optimistic")) == (
-        "groupwise · 8 pool variants · optimistic suggestions"
+    assert setup_label(_run(tmp_path / "c", 8, 100_000, None)) == (
+        "groupwise · 8 pool variants · pre-training 100,000"
     )
     assert setup_label(_run(tmp_path / "e", 0, 0, None, pool_size=500)) == (
         "groupwise · pools of 500"
     )
+
+
+def test_runs_of_removed_mechanisms_name_the_field_and_its_value(tmp_path):
+    assert setup_label(_run(tmp_path / "d", 8, 0, None, "optimistic")) == (
+        "groupwise · 8 pool variants · suggestion rank optimistic"
+    )
     kept = _run(tmp_path / "f", 8, 0, None)
     config = json.loads((kept / "config.json").read_text())
-    config["loop"] |= {"pool_variants_greedy": True, "adopt_variants": True}
+    config["loop"] |= {"pool_variants_greedy": True, "pool_lookahead": 40_960}
     config["training"]["continue_from"] = "preferred"
+    config["reward"] = {"pessimism": 1.0, "exploration_bonus": 0.0}  # a default: not named
     (kept / "config.json").write_text(json.dumps(config))
     assert setup_label(kept) == (
-        "groupwise · 8 pool variants of the greedy policy · adopted · training on from the "
-        "preferred policy"
+        "groupwise · 8 pool variants · pessimism 1 · pool variants greedy · pool lookahead "
+        "40,960 · continue from preferred"
     )
-    ahead = _run(tmp_path / "g", 8, 0, None)
-    config = json.loads((ahead / "config.json").read_text())
-    config["loop"]["pool_lookahead"] = 40_960
-    (ahead / "config.json").write_text(json.dumps(config))
-    assert setup_label(ahead) == "groupwise · 8 pool variants after a 40,960-step lookahead"
 
 
 def test_the_summary_averages_the_pools_of_each_setup_over_its_seeds(tmp_path):
