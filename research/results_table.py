@@ -20,15 +20,17 @@ to FOLDER/runs-config.json. Values are copied as written, never re-formatted.
 names (`csv=`, default runs.csv beside the file); `check` renders the same and exits 1,
 printing a diff, when a file's table differs. KIND is `runs` (a row per run: comparisons,
 preference pairs, tied pairs, label error on the untied ones, target score after each
-round, final success and stretch, wall time) or `summary` (a row per target and label:
+round, final success and stretch, wall time), `summary` (a row per target and label:
 successful seeds after the last round and as take-away agent, stretch, comparisons, pairs,
-the pools' target-score spread and best in rounds 0–2). Any other key=value filters the
-rows on that CSV column (`seed=5|6|7`, `label="groupwise · 8 pool variants"`; the runs are
-ordered by the filters' lists, in the order the filters are written). Options: `csv=PATH|PATH`
-(the runs of several tables); `name="{dm}, {ppo} PPO"` names a run by its columns
-(`{column:format spec}`; by default `{label}`), `name:SETUP=...` the runs of one setup;
-`scores=rounds` heads the score column "target score after rounds 0 … N"; `pool=no` drops
-the summary's pool columns; `title="..."` names the label column ("DM" by default).
+the pools' target-score spread and best in rounds 0–2), `setups` (a row per selection
+written in the marker, `setups_table`) or `matrix` (targets × selections, `matrix_table`).
+For `runs` and `summary`, any other key=value filters the rows on that CSV column
+(`seed=5|6|7`, `label="groupwise · 8 pool variants"`; the runs are ordered by the filters'
+lists, in the order the filters are written). Options: `csv=PATH|PATH` (the runs of
+several tables); `name="{dm}, {ppo} PPO"` names a run by its columns (`{column:format
+spec}`; by default `{label}`), `name:SETUP=...` the runs of one setup; `scores=rounds`
+heads the score column "target score after rounds 0 … N"; `pool=no` drops the summary's
+pool columns; `title="..."` names the label column ("DM" by default).
 """
 
 import argparse
@@ -465,6 +467,42 @@ def setups_table(args: str, rows: Sequence[str], base: Path) -> list[str]:
     return lines
 
 
+def matrix_table(args: str, columns: Sequence[str], base: Path) -> list[str]:
+    """Targets down, setups across: `args` holds `rows="target|target|..."` and the cell
+    template `cell="{last} ({takeaway})"` (fields `last`, `takeaway`, `stretch`: successful
+    seeds of the target's runs in the column, as in `SETUP_CELLS`); each line of `columns`
+    is "HEADER :: key=value ..." (filters, `csv=`, `cell=` for this column, and
+    `bold=target:field|...` to set a field in bold)."""
+    options, _ = _parse("matrix", args, {"rows", "cell", "csv", "title"})
+    targets = options.get("rows", "").split("|")
+    if not columns or targets == [""]:
+        raise TableError("table:matrix: needs rows=target|... and a line per column")
+    header = [options.get("title", "target")]
+    cells: list[list[str]] = [[target] for target in targets]
+    for column in columns:
+        text, sep, spec = column.partition(" :: ")
+        if not sep:
+            raise TableError(f"table:matrix: {column!r} is not 'HEADER :: filters'")
+        column_options, filters = _parse("matrix", spec, {"csv", "cell", "bold"})
+        tables = column_options.get("csv", options.get("csv", "runs.csv")).split("|")
+        runs = select((run for table in tables for run in read_runs(base / table)), filters)
+        template = column_options.get("cell", options.get("cell", "{last} ({takeaway})"))
+        bold = set(column_options.get("bold", "").split("|"))
+        header.append(text.strip())
+        for row, target in zip(cells, targets, strict=True):
+            mine = [run for run in runs if run.get("target") == target]
+            if not mine:
+                raise TableError(f"table:matrix: no {target} run matches {spec.strip()!r}")
+            fields = {name: SETUP_CELLS[name][1](mine) for name in ("last", "takeaway", "stretch")}
+            fields = {k: f"**{v}**" if f"{target}:{k}" in bold else v for k, v in fields.items()}
+            row.append(template.format_map(fields))
+    return [
+        "| " + " | ".join(header) + " |",
+        "|---|" + "---:|" * len(columns),
+        *("| " + " | ".join(row) + " |" for row in cells),
+    ]
+
+
 KINDS = {"runs": runs_table, "summary": summary_table}
 OPTIONS = {"csv", "scores", "pool", "title", "name"}
 
@@ -497,11 +535,14 @@ def render_table(kind: str, args: str, base: Path) -> list[str]:
     Raises:
         TableError: an unknown kind or argument, or a selection without runs.
     """
-    if kind == "setups":
-        first, *rows = args.split("\n")
-        return setups_table(first, [row for row in rows if row.strip()], base)
+    if kind in ("setups", "matrix"):
+        first, *lines = args.split("\n")
+        table = setups_table if kind == "setups" else matrix_table
+        return table(first, [line for line in lines if line.strip()], base)
     if kind not in KINDS:
-        raise TableError(f"unknown table kind {kind!r} (one of {', '.join([*KINDS, 'setups'])})")
+        raise TableError(
+            f"unknown table kind {kind!r} (one of {', '.join([*KINDS, 'setups', 'matrix'])})"
+        )
     options, filters = _parse(kind, args, OPTIONS)
     tables = options.get("csv", "runs.csv").split("|")
 

@@ -174,3 +174,36 @@ def test_collect_without_runs_is_an_error(
 ) -> None:
     assert rt.main(["collect", str(tmp_path)]) == 2
     assert "no run folder" in capsys.readouterr().err
+
+
+SETUPS = """<!-- table:setups head="setup|seeds|last round|per seed" cells="seeds|last|scores"
+all pools :: bold=last
+pools of 500 :: setup=big
+-->
+<!-- /table -->
+
+<!-- table:matrix rows=hopper-backflip cell="{last} ({takeaway}; stretch {stretch})"
+every run :: bold=hopper-backflip:last
+the default pools :: setup="" cell={last}
+-->
+<!-- /table -->
+"""
+
+
+def test_setups_and_matrix_tables(rt: ModuleType, folder: Path) -> None:
+    rt.main(["collect", str(folder)])
+    (folder / "README.md").write_text(SETUPS)
+    assert rt.main(["render", str(folder)]) == 0
+    text = (folder / "README.md").read_text()
+    assert (
+        "| setup | seeds | last round | per seed |\n"
+        "|---|---|---:|---|\n"
+        "| all pools | 0–1 | **1/2** | 1.75, 0.25 |\n"  # seed order, whatever the CSV's
+        "| pools of 500 | 1 | 0/1 | 0.25 |\n"
+    ) in text
+    assert (
+        "| target | every run | the default pools |\n"
+        "|---|---:|---:|\n"
+        "| hopper-backflip | **1/2** (0/2; stretch 0/2) | 1/1 |\n"
+    ) in text
+    assert rt.main(["check", str(folder)]) == 0
