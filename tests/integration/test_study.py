@@ -12,9 +12,9 @@ from groupwise.cli import main
 from groupwise.oracles import ORACLES
 from groupwise.run.headless import run_session
 from groupwise.run.progress import OnRoundEnd
-from groupwise.study.cells import Cell, is_done
-from groupwise.study.profiles import SMOKE
-from groupwise.study.runner import StudySpec, run_study
+from groupwise.study.simulation.cells import Cell, is_done
+from groupwise.study.simulation.profiles import SMOKE
+from groupwise.study.simulation.runner import StudySpec, run_study
 
 DMS = tuple(dm for dm in SMOKE.dms if dm in ORACLES)
 SPEC = StudySpec(SMOKE, ("GridWorld",), DMS, seeds=2)

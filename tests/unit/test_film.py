@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from groupwise.envs import TARGET_SCORE_KEY, TARGETS, make_env
-from groupwise.study.case_study_film import best_moment, film_episode, strip_image, strip_steps
+from groupwise.study.case_studies.film import best_moment, film_episode, strip_image, strip_steps
 
 
 def test_best_moment_is_the_window_with_the_highest_sum() -> None:

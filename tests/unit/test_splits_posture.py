@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from groupwise.study.splits_posture import posture_shares
+from groupwise.study.case_studies.splits_posture import posture_shares
 
 
 def test_each_condition_and_all_three_are_shares_of_the_steps():

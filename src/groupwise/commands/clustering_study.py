@@ -56,10 +56,10 @@ def run(args: argparse.Namespace) -> int:
 
     from groupwise.behaviour import TreeConfig
     from groupwise.rl.policy_files import load_policy
-    from groupwise.study.clustering_plot import plot_variances
-    from groupwise.study.clustering_report import markdown_table, to_json
-    from groupwise.study.clustering_runner import ClusteringStudyConfig, run_clustering_study
-    from groupwise.study.policy_mix import mixed_policies
+    from groupwise.study.clustering.plot import plot_variances
+    from groupwise.study.clustering.policy_mix import mixed_policies
+    from groupwise.study.clustering.report import markdown_table, to_json
+    from groupwise.study.clustering.runner import ClusteringStudyConfig, run_clustering_study
 
     try:
         cfg = ClusteringStudyConfig(

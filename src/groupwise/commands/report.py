@@ -34,7 +34,7 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
 
 
 def run(args: argparse.Namespace) -> int:
-    from groupwise.study.report import write_report
+    from groupwise.study.simulation.report import write_report
 
     for directory in args.sources or [args.dir]:
         if not directory.is_dir():

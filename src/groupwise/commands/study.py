@@ -8,8 +8,8 @@ from groupwise.commands.arguments import UsageError, positive_int, writable_dir
 
 
 def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
-    from groupwise.study.ablations import ABLATIONS
-    from groupwise.study.profiles import PROFILES
+    from groupwise.study.simulation.ablations import ABLATIONS
+    from groupwise.study.simulation.profiles import PROFILES
 
     visible = [name for name, p in PROFILES.items() if not p.hidden]
     profiles = "; ".join(f"{name}: {PROFILES[name].summary}" for name in visible)
@@ -70,9 +70,9 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
 def run(args: argparse.Namespace) -> int:
     from groupwise.envs import resolve_id
     from groupwise.oracles import ORACLES
-    from groupwise.study.cells import CONDITIONS
-    from groupwise.study.profiles import PROFILES
-    from groupwise.study.runner import (
+    from groupwise.study.simulation.cells import CONDITIONS
+    from groupwise.study.simulation.profiles import PROFILES
+    from groupwise.study.simulation.runner import (
         RayUnavailableError,
         StudyMismatchError,
         StudySpec,

@@ -1,9 +1,13 @@
-"""Studies: the simulated RLHF study (SPEC §8) and the clustering study (SPEC §4).
+"""Studies, one subpackage each:
 
-Simulated study: `runner` runs (env, DM, seed) cells locally or on Ray, `profiles` sizes
-them, `cells` and `results` read what they wrote, `statistics` holds the pure statistics,
-`figures` draws, `report` writes ``report.md``. Clustering study: `clustering`,
-`clustering_plot`, `policy_mix`.
+- `simulation`: the simulated RLHF study (SPEC §8): (env, DM, seed) cells run locally or on
+  Ray (`runner`), sized by `profiles`, varied by `ablations`, read back by `cells` and
+  `results`, summarised by `statistics`, drawn by `figures`, written up by `report`;
+- `clustering`: the clustering study (SPEC §4): behaviours from a mix of policies
+  (`policy_mix`), cut by each method (`methods`), run by `runner`, reported and plotted;
+- `case_studies`: teaching a target behaviour without a reward (`groupwise case-study`),
+  its film, results tables, the reference PPO on the target's own score, and the walker's
+  posture analysis.
 
 Nothing is imported here, so importing one study does not load the other's dependencies.
 """

@@ -7,8 +7,9 @@ score is the true reward the simulated decision-maker perceives (with the SPEC Â
 After every round the greedy policy is evaluated on the target: ``case-study.csv`` gets
 the preferences so far, the target score (mean, sd), the success and stretch rates, the
 label error and the wall time of each phase. At the end the evaluated episode with the
-highest target score is filmed (``final.mp4``, ``strip.png``, `groupwise.study.case_study_film`) and
-``summary.json`` states the target, its thresholds and the final evaluation.
+highest target score is filmed (``final.mp4``, ``strip.png``,
+`groupwise.study.case_studies.film`) and ``summary.json`` states the target, its thresholds
+and the final evaluation.
 """
 
 import csv
@@ -22,11 +23,11 @@ from typing import Any
 
 import numpy as np
 
+from groupwise.behaviour.pool import BehaviourPool
 from groupwise.config import RunConfig
 from groupwise.envs import TARGET_TOTAL_KEY, Target
 from groupwise.envs.targets import TARGET_SCORE_KEY
 from groupwise.oracles import Feedback
-from groupwise.behaviour.pool import BehaviourPool
 from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.query.strategies import Query, QueryStrategy
 from groupwise.rl.policy import Policy
@@ -37,7 +38,7 @@ from groupwise.run.records import RoundRecord
 from groupwise.run.run import Run
 from groupwise.run.streams import eval_rng
 from groupwise.run.takeaway import TakeawayChoice, TakeawayConfig
-from groupwise.study.case_study_film import Film, film_episode, write_film
+from groupwise.study.case_studies.film import Film, film_episode, write_film
 from groupwise.types import FloatArray
 
 CASE_FILE = "case-study.csv"

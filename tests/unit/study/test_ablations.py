@@ -9,11 +9,11 @@ from groupwise.cli import main
 from groupwise.config import LoopConfig, RunConfig
 from groupwise.preferences.judgement import LEFT_BETTER, Judgement
 from groupwise.run.round import round_pairs
-from groupwise.study import runner
-from groupwise.study.ablations import ABLATIONS, ablate
-from groupwise.study.cells import Cell, planned_cells, write_plan
-from groupwise.study.profiles import SESSION, SMOKE
-from groupwise.study.runner import StudySpec, StudySummary
+from groupwise.study.simulation import runner
+from groupwise.study.simulation.ablations import ABLATIONS, ablate
+from groupwise.study.simulation.cells import Cell, planned_cells, write_plan
+from groupwise.study.simulation.profiles import SESSION, SMOKE
+from groupwise.study.simulation.runner import StudySpec, StudySummary
 
 INTENDED = {
     "capped": {("loop", "pair_cap"): 1.0},

@@ -7,7 +7,7 @@ import pytest
 from scipy.spatial.distance import pdist, squareform
 
 from groupwise.behaviour import TreeConfig, build_tree
-from groupwise.study.clustering_methods import (
+from groupwise.study.clustering.methods import (
     classical_mds,
     cluster_count,
     dbscan,
@@ -15,8 +15,8 @@ from groupwise.study.clustering_methods import (
     hc_clusters,
     intra_cluster_variance,
 )
-from groupwise.study.clustering_report import markdown_table
-from groupwise.study.clustering_runner import (
+from groupwise.study.clustering.report import markdown_table
+from groupwise.study.clustering.runner import (
     METHODS,
     ClusteringStudyConfig,
     ClusteringStudyResult,

@@ -1,4 +1,5 @@
-"""The continuous-vs-rounds table reads timed case-study runs (`study.continuous_table`)."""
+"""The continuous-vs-rounds table reads timed case-study runs
+(`study.case_studies.continuous_table`)."""
 
 import csv
 import json
@@ -6,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from groupwise.study.continuous_table import main, minutes_to_pass, read_run
+from groupwise.study.case_studies.continuous_table import main, minutes_to_pass, read_run
 
 
 def test_minutes_to_pass_is_the_first_round_with_enough_successful_episodes():

@@ -3,7 +3,7 @@
 import gymnasium as gym
 import numpy as np
 
-from groupwise.study.policy_mix import BiasedRandomPolicy, biased_policies, sample_mixed
+from groupwise.study.clustering.policy_mix import BiasedRandomPolicy, biased_policies, sample_mixed
 
 
 def test_box_bias_shifts_the_action_mean_within_bounds() -> None:

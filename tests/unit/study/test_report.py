@@ -9,10 +9,10 @@ import pytest
 
 from groupwise.cli import main
 from groupwise.run.records import RoundRecord, write_records
-from groupwise.study.cells import Cell, mark_done, write_plan
-from groupwise.study.profiles import SMOKE
-from groupwise.study.report import NoResultsError, write_report
-from groupwise.study.results import load_results, merge_results
+from groupwise.study.simulation.cells import Cell, mark_done, write_plan
+from groupwise.study.simulation.profiles import SMOKE
+from groupwise.study.simulation.report import NoResultsError, write_report
+from groupwise.study.simulation.results import load_results, merge_results
 
 # (env, dm, seed) → final true return; rounds: 0 and 1 ask 2 and 14 comparisons, row 2 is
 # the frozen-reward PPO row.

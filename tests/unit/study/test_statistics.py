@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from groupwise.study.statistics import (
+from groupwise.study.simulation.statistics import (
     confidence_band,
     iqm,
     iqr_bounds,

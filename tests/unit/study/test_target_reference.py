@@ -4,7 +4,7 @@ import pytest
 from groupwise.config import PPOConfig
 from groupwise.envs import TARGETS, make_env
 from groupwise.envs.targets import TARGET_SCORE_KEY
-from groupwise.study.target_reference import ScoreAsReward, train_on_score
+from groupwise.study.case_studies.target_reference import ScoreAsReward, train_on_score
 
 
 def test_the_reward_is_the_step_score():

@@ -1,7 +1,7 @@
 """Rounds against continuous training with a timed teacher: the table and figure of
 ``docs/results/continuous`` (issue 24).
 
-    python -m groupwise.study.continuous_table RUN_DIR [RUN_DIR ...] [--figure PNG]
+    python -m groupwise.study.case_studies.continuous_table RUN_DIR [RUN_DIR ...] [--figure PNG]
 
 Each RUN_DIR is a ``groupwise case-study … --teacher-pace S`` run (`--training rounds` or
 `continuous`). Its rounds carry the teacher's virtual clock (``clock_s`` in ``rounds.csv``:

@@ -1,6 +1,6 @@
 """The walker's posture under a case-study run's greedy policy: why a split is not held.
 
-    python -m groupwise.study.splits_posture RUN_DIR [RUN_DIR ...] [--round R]
+    python -m groupwise.study.case_studies.splits_posture RUN_DIR [RUN_DIR ...] [--round R]
 
 For each ``groupwise case-study --target walker-splits`` run directory: the policy of its
 last round (or round R) replays the case study's evaluation episodes (the same reset

@@ -7,7 +7,7 @@ would at best give at that budget: where it does not reach the target's threshol
 feedback will, and the budget is what stands in the way. After every `every` steps the
 greedy policy is scored on the target as the case study scores it (`evaluate_target`).
 
-    python -m groupwise.study.target_reference --target walker-splits --steps 204800 \\
+    python -m groupwise.study.case_studies.target_reference --target walker-splits --steps 204800 \\
         --every 40960 --seeds 0 1 2 [--ppo study|mujoco] --out OUT
 """
 

@@ -4,7 +4,7 @@ from pathlib import Path
 
 import numpy as np
 
-from groupwise.study.clustering_runner import METHODS, ClusteringStudyResult
+from groupwise.study.clustering.runner import METHODS, ClusteringStudyResult
 
 
 def plot_variances(result: ClusteringStudyResult, path: Path) -> None:

@@ -4,7 +4,7 @@ import dataclasses
 
 import numpy as np
 
-from groupwise.study.clustering_runner import METHODS, ClusteringStudyResult
+from groupwise.study.clustering.runner import METHODS, ClusteringStudyResult
 from groupwise.types import FloatArray, IntArray
 
 METHOD_NAMES: dict[str, str] = {

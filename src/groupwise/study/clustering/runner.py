@@ -21,7 +21,7 @@ from tqdm.auto import tqdm
 
 from groupwise.behaviour import TreeConfig, build_tree, dtw_matrix, pool_features
 from groupwise.rl.policy import Policy
-from groupwise.study.clustering_methods import (
+from groupwise.study.clustering.methods import (
     Clustering,
     classical_mds,
     dbscan_near_target,
@@ -29,7 +29,7 @@ from groupwise.study.clustering_methods import (
     intra_cluster_variance,
     tsne_embedding,
 )
-from groupwise.study.policy_mix import sample_mixed
+from groupwise.study.clustering.policy_mix import sample_mixed
 from groupwise.types import FloatArray, IntArray
 
 METHODS: tuple[str, ...] = ("HC", "PCA", "t-SNE")

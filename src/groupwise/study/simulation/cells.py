@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from groupwise.study.ablations import ABLATIONS
+from groupwise.study.simulation.ablations import ABLATIONS
 from groupwise.types import FloatArray, IntArray
 
 Condition = str

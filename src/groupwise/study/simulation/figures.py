@@ -13,7 +13,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from groupwise.study.statistics import Interval
+from groupwise.study.simulation.statistics import Interval
 from groupwise.types import FloatArray
 
 DPI = 120

@@ -31,7 +31,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from groupwise.config import LoopConfig, PPOConfig, RewardConfig, RunConfig
-from groupwise.study.ablations import ablate
+from groupwise.study.simulation.ablations import ablate
 
 
 @dataclass(frozen=True)

@@ -15,11 +15,11 @@ from pathlib import Path
 
 import numpy as np
 
-from groupwise.study import figures, paper
-from groupwise.study.ablations import ABLATIONS
-from groupwise.study.cells import MAIN
-from groupwise.study.figures import Band
-from groupwise.study.report_tables import (
+from groupwise.study.simulation import figures, paper
+from groupwise.study.simulation.ablations import ABLATIONS
+from groupwise.study.simulation.cells import MAIN
+from groupwise.study.simulation.figures import Band
+from groupwise.study.simulation.report_tables import (
     DASH,
     finite_column,
     fmt_num,
@@ -28,8 +28,8 @@ from groupwise.study.report_tables import (
     pooled_mean,
     tests_table,
 )
-from groupwise.study.results import Grid, StudyResults, load_results, merge_results
-from groupwise.study.statistics import (
+from groupwise.study.simulation.results import Grid, StudyResults, load_results, merge_results
+from groupwise.study.simulation.statistics import (
     confidence_band,
     iqm,
     iqr_normalise,

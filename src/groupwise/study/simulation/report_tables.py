@@ -6,9 +6,9 @@ from collections.abc import Mapping
 
 import numpy as np
 
-from groupwise.study import paper
-from groupwise.study.results import Grid
-from groupwise.study.statistics import mean_sd, relative_difference, welch_t_test
+from groupwise.study.simulation import paper
+from groupwise.study.simulation.results import Grid
+from groupwise.study.simulation.statistics import mean_sd, relative_difference, welch_t_test
 
 DASH = "–"
 ALL_PAIRS_UP_TO = 6

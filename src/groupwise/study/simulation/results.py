@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
-from groupwise.study.ablations import ABLATIONS
-from groupwise.study.cells import (
+from groupwise.study.simulation.ablations import ABLATIONS
+from groupwise.study.simulation.cells import (
     MAIN,
     Cell,
     CellRecord,

@@ -29,9 +29,9 @@ from typing import Literal
 from tqdm.auto import tqdm
 
 from groupwise.config import RunConfig
-from groupwise.study.ablations import ABLATIONS
-from groupwise.study.cells import MAIN, Cell, is_done, mark_done, read_plan, write_plan
-from groupwise.study.profiles import StudyProfile
+from groupwise.study.simulation.ablations import ABLATIONS
+from groupwise.study.simulation.cells import MAIN, Cell, is_done, mark_done, read_plan, write_plan
+from groupwise.study.simulation.profiles import StudyProfile
 
 log = logging.getLogger(__name__)
 
