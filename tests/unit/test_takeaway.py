@@ -6,12 +6,12 @@ from collections.abc import Sequence
 import numpy as np
 import pytest
 
+from groupwise.behaviour.pool import BehaviourPool
+from groupwise.episodes.fragments import Trajectory
 from groupwise.oracles.base import Teacher
 from groupwise.oracles.calibration import CalibratedTeacher
 from groupwise.oracles.group_decision import Perception, SimulatedTeacher
 from groupwise.oracles.pairwise import PairwiseTeacher
-from groupwise.behaviour.pool import BehaviourPool
-from groupwise.episodes.fragments import Trajectory
 from groupwise.preferences.judgement import Judgement
 from groupwise.query.strategies import Query
 from groupwise.run.takeaway import (

@@ -24,8 +24,8 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.special import ndtr
 
-from groupwise.oracles.base import Teacher
 from groupwise.behaviour.pool import BehaviourPool
+from groupwise.oracles.base import Teacher
 from groupwise.preferences.judgement import Judgement
 from groupwise.query.strategies import Query
 from groupwise.types import FloatArray

@@ -5,8 +5,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from groupwise.oracles.noise import perceived_returns, preference
 from groupwise.behaviour.pool import BehaviourPool
+from groupwise.oracles.noise import perceived_returns, preference
 from groupwise.preferences.judgement import Judgement, Source
 from groupwise.query.strategies import Query
 

@@ -34,10 +34,10 @@ from typing import Any
 import numpy as np
 
 from groupwise.behaviour import BehaviourTree, TreeNode, to_json
+from groupwise.behaviour.pool import BehaviourPool
 from groupwise.clips.replay import episode_arrays
 from groupwise.clips.store import ClipStore
 from groupwise.clips.timing import ClipTiming
-from groupwise.behaviour.pool import BehaviourPool
 from groupwise.episodes.fragments import Fragment
 from groupwise.episodes.ids import behaviour_id
 from groupwise.types import FloatArray

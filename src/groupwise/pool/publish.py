@@ -35,6 +35,7 @@ from groupwise.behaviour import (
     group_candidates,
     medoids,
 )
+from groupwise.behaviour.pool import BehaviourPool
 from groupwise.clips.render import RenderPool
 from groupwise.clips.render_jobs import ClipJob, PosterJob, plan_jobs, plan_poster_jobs
 from groupwise.clips.replay import FrameSettings, make_render_env
@@ -42,7 +43,6 @@ from groupwise.clips.store import ClipStore
 from groupwise.clips.timing import clip_timing, step_seconds
 from groupwise.clips.video import VideoConfig
 from groupwise.envs import make_env
-from groupwise.behaviour.pool import BehaviourPool
 from groupwise.pool.files import (
     FORMAT,
     PoolTimings,

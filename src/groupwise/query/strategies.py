@@ -20,8 +20,8 @@ from typing import Literal, Protocol
 import numpy as np
 
 from groupwise.behaviour import group_candidates
-from groupwise.config import TreeConfig
 from groupwise.behaviour.pool import BehaviourPool
+from groupwise.config import TreeConfig
 from groupwise.preferences.judgement import MAX_GROUP
 from groupwise.query.groups import (
     GroupCandidate,

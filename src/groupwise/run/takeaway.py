@@ -29,9 +29,9 @@ from typing import Any, Literal
 
 import numpy as np
 
-from groupwise.oracles.base import Teacher
 from groupwise.behaviour.pool import BehaviourPool
 from groupwise.episodes.fragments import Fragment, Trajectory
+from groupwise.oracles.base import Teacher
 from groupwise.query.strategies import Query
 
 TAKEAWAY_FILE = "takeaway.json"

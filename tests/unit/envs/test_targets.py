@@ -8,6 +8,7 @@ import gymnasium as gym
 import numpy as np
 import pytest
 
+from groupwise.behaviour.pool import BehaviourPool
 from groupwise.clips.timing import default_clip_seconds
 from groupwise.envs import (
     ENVS,
@@ -23,9 +24,8 @@ from groupwise.envs import (
     resolve_id,
 )
 from groupwise.envs.scorers import upness, wrap_angle
-from groupwise.oracles import Feedback, PairwiseTeacher, Perception, SimulatedTeacher
-from groupwise.behaviour.pool import BehaviourPool
 from groupwise.episodes.fragments import Trajectory, tile_fragments
+from groupwise.oracles import Feedback, PairwiseTeacher, Perception, SimulatedTeacher
 from groupwise.query.strategies import GroupSuggestions, InteractiveWalk, PairwiseQueries, Query
 from groupwise.rl.policy import RandomPolicy
 from groupwise.rl.rollout import sample_trajectories

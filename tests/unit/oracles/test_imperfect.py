@@ -1,7 +1,9 @@
 import numpy as np
 import pytest
 
+from groupwise.behaviour.pool import BehaviourPool
 from groupwise.config import RunConfig
+from groupwise.episodes.fragments import Fragment
 from groupwise.oracles import ORACLES, Feedback
 from groupwise.oracles.group_decision import Perception, SimulatedTeacher, decide
 from groupwise.oracles.imperfect import (
@@ -11,8 +13,6 @@ from groupwise.oracles.imperfect import (
     Mistake,
     SkipWhenBothBelow,
 )
-from groupwise.behaviour.pool import BehaviourPool
-from groupwise.episodes.fragments import Fragment
 from groupwise.preferences.dataset import wrong_labels
 from groupwise.preferences.judgement import EQUAL, LEFT_BETTER, RIGHT_BETTER, Judgement
 from groupwise.preferences.pairs import covering_pairs

@@ -1,9 +1,9 @@
 import numpy as np
 
-from groupwise.oracles import Feedback, PairwiseTeacher
-from groupwise.oracles.noise import perceived_returns, preference
 from groupwise.behaviour.pool import BehaviourPool
 from groupwise.episodes.fragments import Fragment
+from groupwise.oracles import Feedback, PairwiseTeacher
+from groupwise.oracles.noise import perceived_returns, preference
 from groupwise.query.strategies import PairwiseQueries
 
 
