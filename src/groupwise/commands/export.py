@@ -1,5 +1,7 @@
 """`groupwise export` and `groupwise import`: a session's judgements and pairs to a file
-(JSONL or Parquet, docs/export.md) and a file to a new session of another data directory.
+(JSONL or Parquet, docs/export.md) and a file to a new session of another data directory;
+``--format ipl-npz | pt-indices`` writes the pairs for offline preference learners instead
+(`groupwise.storage.export_offline`).
 
 ``groupwise export SESSION --data DIR --states -o feedback.parquet`` writes the judgements
 with the compared behaviours' observations, actions and true rewards (read from the
@@ -11,10 +13,17 @@ finished session in OTHER whose pairs train a reward model there without those p
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from groupwise.commands.arguments import UsageError, writable_dir
 
-FORMATS = ("jsonl", "parquet")
+if TYPE_CHECKING:
+    from groupwise.storage.export_format import SessionExport
+
+FORMATS = ("jsonl", "parquet", "ipl-npz", "pt-indices")
+OFFLINE_FORMATS = ("ipl-npz", "pt-indices")
+"""Formats for offline preference learners (`groupwise.storage.export_offline`): always with
+the compared behaviours' states."""
 
 
 def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:
@@ -24,12 +33,18 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
     export.add_argument("session", nargs="?", help="session id (default: the newest session)")
     _add_database(export)
     export.add_argument(
-        "-o", "--output", type=Path, help="file to write (default: SESSION.FORMAT here)"
+        "-o",
+        "--output",
+        type=Path,
+        help="file to write (default: SESSION.FORMAT here; pt-indices: a directory, SESSION-pt)",
     )
     export.add_argument(
         "--format",
         choices=FORMATS,
-        help="jsonl or parquet (default: from the output's suffix, else jsonl)",
+        help="jsonl or parquet (default: from the output's suffix, .npz: ipl-npz, else "
+        "jsonl); ipl-npz: the pairs as IPL's and CPL's comparison .npz; pt-indices: as "
+        "Preference Transformer's and Uni-RLHF's index pickles over a dataset.npz "
+        "(docs/export.md)",
     )
     export.add_argument(
         "--states",
@@ -61,7 +76,9 @@ def _format_of(args: argparse.Namespace) -> str:
     if args.format:
         return str(args.format)
     suffix = args.output.suffix.lstrip(".").lower() if args.output else ""
-    return suffix if suffix in FORMATS else "jsonl"
+    if suffix == "npz":
+        return "ipl-npz"
+    return suffix if suffix in ("jsonl", "parquet") else "jsonl"
 
 
 def _judgements_text(total: int, undone: int) -> str:
@@ -89,12 +106,15 @@ def run_export(args: argparse.Namespace) -> int:
                 if not newest:
                     raise UsageError("the database holds no session")
                 session_id = newest[0].id
-            states = StatesExport(data, args.true_rewards) if args.states else None
+            with_states = args.states or fmt in OFFLINE_FORMATS
+            states = StatesExport(data, args.true_rewards) if with_states else None
             export = export_session(s, session_id, states)
     except StorageError as error:
         raise UsageError(str(error)) from None
     finally:
         db.dispose()
+    if fmt in OFFLINE_FORMATS:
+        return _write_offline(export, fmt, args.output, session_id)
     body = to_parquet(export) if fmt == "parquet" else to_jsonl(export)
     output = args.output or Path(f"{session_id}.{fmt}")
     writable_dir(output.resolve().parent)
@@ -103,6 +123,34 @@ def run_export(args: argparse.Namespace) -> int:
     if args.states:
         what += f", {sum(len(b.names) for b in export.behaviours)} behaviours' states"
     print(f"groupwise: wrote {output} ({what})", file=sys.stderr)
+    return 0
+
+
+def _write_offline(export: "SessionExport", fmt: str, output: Path | None, session_id: str) -> int:
+    """Write an export's pairs as `fmt` (`OFFLINE_FORMATS`) for offline learners."""
+    from groupwise.storage import StorageError
+    from groupwise.storage.export_offline import offline_pairs, to_ipl_npz, write_pt_indices
+
+    try:
+        pairs = offline_pairs(export)
+        if fmt == "ipl-npz":
+            target = output or Path(f"{session_id}.npz")
+            writable_dir(target.resolve().parent)
+            target.write_bytes(to_ipl_npz(pairs))
+        else:
+            target = output or Path(f"{session_id}-pt")
+            writable_dir(target.resolve().parent)
+            write_pt_indices(pairs, target)
+    except StorageError as error:
+        raise UsageError(str(error)) from None
+    except OSError as error:
+        raise UsageError(f"cannot write {target}: {error.strerror or error}") from None
+    rewards = "" if pairs.reward_1 is not None else ", without true rewards"
+    print(
+        f"groupwise: wrote {target} ({len(pairs)} pairs of {pairs.length}-step behaviours"
+        f"{rewards})",
+        file=sys.stderr,
+    )
     return 0
 
 
