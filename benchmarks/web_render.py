@@ -9,7 +9,11 @@ app's left column at 1366 × 768:
   (median and 95th percentile of 40), and the mean frame interval when one selection
   changes every frame (16.7 ms means every update fits in its frame);
 - hover: the edges of the hovered leaf highlighted (a small canvas redraw; the others dim
-  through CSS opacity), and the frame interval with one hover per frame.
+  through CSS opacity), and the frame interval with one hover per frame;
+- zoom (issue 40): a wheel step of d3-zoom on the chart (the drawn layers' CSS transform,
+  script plus style and layout; median and 95th percentile of 60), the mean frame interval
+  with one wheel step per frame, in to ×5.5 and back out, and the time from the gesture's
+  end to the frame with the arcs and edges drawn afresh at its zoom.
 Targets: first render < 100 ms and updates < 16 ms at 200 leaves; 1000 leaves usable.
 
 Then the whole app on the same fake server (`bench.html?demo=groupwise`'s), issue 22 item 6:
@@ -64,6 +68,13 @@ COLUMNS = [
     ("frameMs", "frame, 1 update/frame", "{:.1f}"),
     ("hoverMedianMs", "hover", "{:.2f}"),
     ("hoverFrameMs", "frame, 1 hover/frame", "{:.1f}"),
+]
+ZOOM_COLUMNS = [
+    ("leaves", "leaves", "{:d}"),
+    ("zoomStepMedianMs", "zoom step (median)", "{:.2f}"),
+    ("zoomStepP95Ms", "zoom step (p95)", "{:.2f}"),
+    ("zoomFrameMs", "frame, 1 zoom step/frame", "{:.1f}"),
+    ("zoomSettleMs", "redrawn after the gesture", "{:.1f}"),
 ]
 APP_COLUMNS = [
     ("leaves", "leaves", "{:d}"),
@@ -189,7 +200,7 @@ def run(
                 result["posterRequests"] = requests[".jpg"]
                 result["clipRequests"] = requests[".mp4"]
                 app.append(result)
-            rows.append(_medians(results, COLUMNS))
+            rows.append(_medians(results, COLUMNS + ZOOM_COLUMNS[1:]))
             app_rows.append(_medians(app, APP_COLUMNS))
         browser.close()
     return rows, app_rows
@@ -228,6 +239,9 @@ def main(argv: list[str] | None = None) -> None:
     )
     print(table(rows))
     print("targets: first render < 100 ms and update < 16 ms at 200 leaves")
+    print("\nZooming the chart (wheel steps of d3-zoom; arcs and edges redrawn at the end); ms:")
+    print(table(rows, ZOOM_COLUMNS))
+    print("target (issue 40): a zoom step within its frame (16.7 ms) at 1,000 leaves")
     print("\nThe whole app on the fake server (posters; clips only when asked for); ms:")
     print(table(app_rows, APP_COLUMNS))
     print("target (issue 22): click and hover ≤ 16 ms median at 1,000 leaves")

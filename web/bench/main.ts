@@ -50,6 +50,16 @@ export interface BenchResult {
   frameMs: number;
   /** The same with one hover (edge highlight) per frame. */
   hoverFrameMs: number;
+  /** A wheel event's zoom step (d3-zoom's transform onto the layers' CSS transform) plus
+   * style/layout, median and 95th percentile (ms). */
+  zoomStepMedianMs: number;
+  zoomStepP95Ms: number;
+  /** Mean interval between frames with one wheel step per frame, zooming in to ×5.5 and
+   * back out (ms): the drawn layers move under a CSS transform. */
+  zoomFrameMs: number;
+  /** From the gesture's end to the frame with the arcs and edges drawn afresh at its zoom
+   * painted (ms; mean of the zoom in and the zoom out). */
+  zoomSettleMs: number;
 }
 
 async function run(n: number, suggestions = 100, history = 400, updates = 40): Promise<BenchResult> {
@@ -133,6 +143,40 @@ async function run(n: number, suggestions = 100, history = 400, updates = 40): P
     hoverStamps.push(await frame());
   }
   const hoverFrameMs = (hoverStamps[hoverStamps.length - 1]! - hoverStamps[0]!) / (hoverStamps.length - 1);
+  data = { ...data, hover: { id: null, from: null } };
+  renderExploration(element, data, handlers);
+  await frame();
+  // Zoom (issue 40): one wheel step per frame on the chart, in towards the top of the ring
+  // and back out, as a person's wheel or pinch sends them.
+  const svg = element.querySelector<SVGSVGElement>(".chart-svg")!;
+  const box = svg.getBoundingClientRect();
+  const at = { clientX: box.x + box.width / 2, clientY: box.y + box.height * 0.2 };
+  const wheel = (deltaY: number) =>
+    svg.dispatchEvent(new WheelEvent("wheel", { ...at, deltaY, deltaMode: 0, bubbles: true, cancelable: true }));
+  const wrap = element.querySelector<HTMLElement>(".chart-wrap")!;
+  const zoomSteps: number[] = [];
+  const zoomFrames: number[] = [];
+  const settles: number[] = [];
+  for (const deltaY of [-40, 40]) {
+    const stamps = [await frame()];
+    for (let i = 0; i < 30; i++) {
+      const t = performance.now();
+      wheel(deltaY);
+      flush();
+      zoomSteps.push(performance.now() - t);
+      stamps.push(await frame());
+    }
+    zoomFrames.push((stamps[stamps.length - 1]! - stamps[0]!) / (stamps.length - 1));
+    // d3-zoom ends a wheel gesture 150 ms after its last step; then arcs and edges are
+    // drawn afresh at the new zoom.
+    const before = wrap.dataset.settledAt;
+    while (wrap.dataset.settledAt === before) await frame();
+    const settledAt = Number(wrap.dataset.settledAt);
+    while (Number(canvas.dataset.drawnAt) < settledAt) await frame();
+    await afterPaint();
+    settles.push(performance.now() - settledAt);
+  }
+  const zoomFrameMs = (zoomFrames[0]! + zoomFrames[1]!) / 2;
   return {
     leaves: n,
     arcs: element.querySelectorAll(".arc").length,
@@ -146,6 +190,10 @@ async function run(n: number, suggestions = 100, history = 400, updates = 40): P
     hoverMedianMs: quantile(hovers, 0.5),
     frameMs,
     hoverFrameMs,
+    zoomStepMedianMs: quantile(zoomSteps, 0.5),
+    zoomStepP95Ms: quantile(zoomSteps, 0.95),
+    zoomFrameMs,
+    zoomSettleMs: (settles[0]! + settles[1]!) / 2,
   };
 }
 

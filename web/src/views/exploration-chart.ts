@@ -53,7 +53,9 @@ export type CallHandler = <K extends keyof ExplorationHandlers>(
 export interface Chart {
   svg: SVGSVGElement;
   edges: EdgeCanvas;
-  box: HTMLElement;
+  box: HTMLDivElement;
+  /** The canvases and the SVG, moved by a CSS transform during a zoom gesture. */
+  layers: HTMLElement;
   wrap: HTMLElement;
   empty: HTMLElement;
   /** Holds the arcs, labels, marks and outline; d3-zoom's transform applies to it. */
@@ -67,9 +69,11 @@ export interface Chart {
   /** The breadcrumb back out of a centred chart, and the zoom's reset. */
   crumbs: HTMLElement;
   resetZoom: HTMLButtonElement;
-  zoom: ZoomBehavior<SVGSVGElement, unknown>;
-  /** The zoom drawn now (identity: none). */
+  zoom: ZoomBehavior<HTMLDivElement, unknown>;
+  /** d3-zoom's transform now, in CSS pixels of the square (identity: none). */
   transform: ZoomTransform;
+  /** The transform the arcs and edges were drawn at (the gesture's last end). */
+  drawn: ZoomTransform;
   targetButtons: Record<GroupId, HTMLButtonElement>;
   legend: Legend;
   preview: Preview;

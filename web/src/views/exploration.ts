@@ -52,7 +52,7 @@ export function renderExploration(
     const hadFocus = chart.svg.contains(document.activeElement);
     const newRound = data.round?.sid !== chart.round?.sid || data.round?.round !== chart.round?.round;
     buildArcs(chart, data.round, data.centre, newRound ? undefined : (chart.centre ?? undefined));
-    if (chart.transform !== zoomIdentity) select(chart.svg).call(chart.zoom.transform, zoomIdentity);
+    if (chart.transform !== zoomIdentity) select(chart.box).call(chart.zoom.transform, zoomIdentity);
     updateCrumbs(chart);
     if (hadFocus && chart.focusId) chart.arcEls.get(chart.focusId)?.focus();
   }
@@ -133,7 +133,9 @@ function build(element: HTMLElement): Chart {
   svg.append(defs, zoomLayer);
   const canvas = h("canvas", { class: "chart-canvas chart-edges", "aria-hidden": "true" });
   const highlight = h("canvas", { class: "chart-canvas chart-highlight", "aria-hidden": "true" });
-  const box = h("div", { class: "chart-box" }, canvas, highlight, svg);
+  // The layers move together under a CSS transform while a zoom gesture lasts.
+  const layers = h("div", { class: "chart-layers" }, canvas, highlight, svg);
+  const box = h("div", { class: "chart-box" }, layers);
   const empty = h("div", { class: "chart-empty", role: "status" });
   const crumbList = h("nav", { class: "chart-crumbs", "aria-label": "Chart centre", hidden: true });
   const resetZoom = h(
@@ -164,6 +166,7 @@ function build(element: HTMLElement): Chart {
     svg,
     edges: new EdgeCanvas(canvas, highlight),
     box,
+    layers,
     wrap,
     empty,
     zoomLayer,
@@ -174,8 +177,9 @@ function build(element: HTMLElement): Chart {
     subtitle,
     crumbs: crumbList,
     resetZoom,
-    zoom: zoom<SVGSVGElement, unknown>(),
+    zoom: zoom<HTMLDivElement, unknown>(),
     transform: zoomIdentity,
+    drawn: zoomIdentity,
     targetButtons,
     legend,
     // Inside the chart's area: beside it lie the answer buttons and the legend's controls.
@@ -197,15 +201,13 @@ function build(element: HTMLElement): Chart {
   const call: CallHandler = (name, ...args) =>
     (chart.handlers![name] as (...a: typeof args) => void)(...args);
 
-  const half = VIEWBOX / 2;
   chart.zoom
     .scaleExtent([1, MAX_ZOOM])
-    .extent([[-half, -half], [half, half]])
-    .translateExtent([[-half, -half], [half, half]])
-    .on("zoom", (e: { transform: ZoomTransform }) => applyZoom(chart, e.transform));
+    .on("zoom", (e: { transform: ZoomTransform }) => moveZoom(chart, e.transform))
+    .on("end", () => settleZoom(chart));
   // Double-clicks stay clicks (two fills), not a zoom.
-  select(svg).call(chart.zoom).on("dblclick.zoom", null);
-  resetZoom.addEventListener("click", () => select(svg).call(chart.zoom.transform, zoomIdentity));
+  select(box).call(chart.zoom).on("dblclick.zoom", null);
+  resetZoom.addEventListener("click", () => select(box).call(chart.zoom.transform, zoomIdentity));
   crumbList.addEventListener("click", (e) => {
     const id = (e.target as Element).closest<HTMLElement>("[data-centre]")?.dataset.centre;
     if (id !== undefined) call("centre", id === "" ? null : id);
@@ -220,14 +222,41 @@ function build(element: HTMLElement): Chart {
   return chart;
 }
 
-/** d3-zoom moved: the arcs' layer takes the transform, the edges are redrawn under it. */
-function applyZoom(chart: Chart, t: ZoomTransform): void {
+/**
+ * A step of a zoom gesture (d3-zoom's transform `t`, in CSS pixels of the chart's square):
+ * the drawn layers move under a CSS transform from the zoom they were drawn at, which the
+ * compositor applies without repainting a path (benchmarks/web_render.py: a repaint of the
+ * arcs and edges per step took ~30 ms at 1,000 behaviours).
+ */
+function moveZoom(chart: Chart, t: ZoomTransform): void {
   chart.transform = t;
-  chart.zoomLayer.setAttribute("transform", t.k === 1 && t.x === 0 && t.y === 0 ? "" : t.toString());
+  const d = chart.drawn;
+  const r = t.k / d.k;
+  const moved = t.k !== d.k || t.x !== d.x || t.y !== d.y;
+  chart.layers.style.transform = moved ? `translate(${t.x - r * d.x}px, ${t.y - r * d.y}px) scale(${r})` : "";
   chart.wrap.dataset.zoom = t.k.toFixed(2);
   chart.resetZoom.hidden = t.k === 1;
   chart.preview.hide();
+}
+
+/** The gesture ended: the arcs and edges are drawn afresh at its zoom, sharp. */
+function settleZoom(chart: Chart): void {
+  chart.drawn = chart.transform;
+  const z = viewBoxZoom(chart);
+  const identity = z.k === 1 && z.x === 0 && z.y === 0;
+  chart.zoomLayer.setAttribute("transform", identity ? "" : `translate(${z.x},${z.y}) scale(${z.k})`);
+  chart.layers.style.transform = "";
+  chart.wrap.dataset.settledAt = String(performance.now());
   drawEdges(chart);
+}
+
+/** The drawn zoom in viewBox units: a point p of the layout is drawn at k · p + (x, y). */
+function viewBoxZoom(chart: Chart): { k: number; x: number; y: number } {
+  const d = chart.drawn;
+  const scale = chart.size / VIEWBOX;
+  if (scale <= 0) return { k: 1, x: 0, y: 0 };
+  const c = chart.size / 2;
+  return { k: d.k, x: (d.x + (d.k - 1) * c) / scale, y: (d.y + (d.k - 1) * c) / scale };
 }
 
 /** The breadcrumb of a centred chart: the whole round, the clusters on the way, the centre. */
@@ -260,6 +289,12 @@ function resize(chart: Chart): void {
   chart.size = size;
   chart.box.style.width = `${size}px`;
   chart.box.style.height = `${size}px`;
+  // The zoom is in pixels of the old size: the chart starts unzoomed at the new one.
+  chart.zoom.translateExtent([
+    [0, 0],
+    [size, size],
+  ]);
+  if (chart.transform !== zoomIdentity) select(chart.box).call(chart.zoom.transform, zoomIdentity);
   drawEdges(chart);
 }
 
@@ -282,7 +317,7 @@ function drawEdges(chart: Chart): void {
           showHistory: data.view.showHistory,
           beta: data.view.beta,
           hover: data.hover.id,
-          zoom: chart.transform,
+          zoom: viewBoxZoom(chart),
         }
       : null,
   );
