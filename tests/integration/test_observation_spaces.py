@@ -25,7 +25,7 @@ def test_a_dict_observation_env_trains_a_round(tmp_path) -> None:
     )
 
 
-@pytest.mark.parametrize("command", ["train", "serve"])
+@pytest.mark.parametrize("command", ["train", "serve", "study"])
 @pytest.mark.parametrize(
     ("gym_id", "reason"), [("ImageObs-v0", "is an image"), ("TextObs-v0", "is Text")]
 )
@@ -34,13 +34,16 @@ def test_an_observation_that_cannot_be_taught_is_one_line_and_exit_code_2(
 ) -> None:
     if command == "train":
         code = _train(tmp_path, env_name(gym_id))
-    else:
+    elif command == "serve":
         code = main(["serve", "--data", str(tmp_path / "data"), "--env", env_name(gym_id)])
+    else:
+        code = main(["study", "--envs", env_name(gym_id), "--out", str(tmp_path / "study")])
     err = capsys.readouterr().err.strip()
     assert code == 2
     assert len(err.splitlines()) == 1 and "Traceback" not in err
     assert f"env {env_name(gym_id)} cannot be taught here: its observation {reason}" in err
     assert not (tmp_path / "data" / "groupwise.db").exists()
+    assert not (tmp_path / "study").exists()
 
 
 def test_a_dmc_id_trains_one_short_round(tmp_path) -> None:

@@ -68,7 +68,7 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
 
 
 def run(args: argparse.Namespace) -> int:
-    from groupwise.envs import resolve_id
+    from groupwise.envs import make_env
     from groupwise.oracles import ORACLES
     from groupwise.study.simulation.cells import CONDITIONS
     from groupwise.study.simulation.profiles import PROFILES
@@ -84,8 +84,8 @@ def run(args: argparse.Namespace) -> int:
     envs = tuple(args.envs or profile.envs)
     dms = tuple(args.dms or (dm for dm in profile.dms if dm in ORACLES))
     for env in envs:
-        try:
-            resolve_id(env)
+        try:  # made once here: an unknown id or an observation it cannot teach (issue 42)
+            make_env(env).close()
         except ValueError as error:
             raise UsageError(str(error)) from None
     if not dms:
