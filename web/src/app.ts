@@ -68,7 +68,7 @@ export interface AppOptions {
 const KEYS_HINT = {
   groupwise:
     "Keys: ← A better · → B better · ↑ equal · N next suggestion · U undo · G switch group · " +
-    "Shift + arrows move through the chart · Enter selects · ? guide",
+    "Shift + arrows move through the chart · Enter selects · C centres · Esc out · ? guide",
   pairwise: "Keys: ← left better · → right better · ↑ equal · ↓ skip · U undo · ? guide",
 } as const;
 

@@ -86,11 +86,13 @@ function build(element: HTMLElement): Chart {
     "Switch",
     kbd("G"),
   );
+  const crumbList = h("nav", { class: "chart-crumbs", "aria-label": "Chart centre", hidden: true });
   const head = h(
     "header",
     { class: "panel-head" },
     h("h2", { id: "exploration-title" }, "Behaviours"),
     subtitle,
+    crumbList,
     h(
       "div",
       { class: "target-switch", role: "group", "aria-label": "Group that clicks fill" },
@@ -137,13 +139,12 @@ function build(element: HTMLElement): Chart {
   const layers = h("div", { class: "chart-layers" }, canvas, highlight, svg);
   const box = h("div", { class: "chart-box" }, layers);
   const empty = h("div", { class: "chart-empty", role: "status" });
-  const crumbList = h("nav", { class: "chart-crumbs", "aria-label": "Chart centre", hidden: true });
   const resetZoom = h(
     "button",
-    { type: "button", class: "small reset-zoom", hidden: true, title: "Back to the whole chart (0)" },
+    { type: "button", class: "small reset-zoom", hidden: true, title: "Back to the unzoomed chart" },
     "Zoom 1×",
   );
-  const wrap = h("div", { class: "chart-wrap" }, box, empty, h("div", { class: "chart-tools" }, crumbList, resetZoom));
+  const wrap = h("div", { class: "chart-wrap" }, box, empty, resetZoom);
   const help = h(
     "p",
     { id: "chart-help", class: "sr-only" },
@@ -259,18 +260,20 @@ function viewBoxZoom(chart: Chart): { k: number; x: number; y: number } {
   return { k: d.k, x: (d.x + (d.k - 1) * c) / scale, y: (d.y + (d.k - 1) * c) / scale };
 }
 
-/** The breadcrumb of a centred chart: the whole round, the clusters on the way, the centre. */
+/** The breadcrumb of a centred chart, in the panel's head in place of the round's line: the
+ * whole round, the clusters on the way, the centre. */
 function updateCrumbs(chart: Chart): void {
   const round = chart.round;
   const path = round ? crumbs(round.tree, chart.centre) : [];
   chart.crumbs.hidden = path.length < 2;
+  chart.subtitle.hidden = !chart.crumbs.hidden;
   if (chart.crumbs.hidden || !round) {
     chart.crumbs.replaceChildren();
     return;
   }
   const items = path.map((node, i) => {
     const n = node.leaves.length;
-    const name = i === 0 ? `All ${n}` : `${n} behaviours`;
+    const name = i === 0 ? `All ${n}` : i === path.length - 1 ? `${n} behaviours` : String(n);
     if (i === path.length - 1) return h("li", {}, h("span", { "aria-current": "location" }, name));
     const label = i === 0 ? `Back to all ${n} behaviours` : `Back out to the cluster of ${n} behaviours`;
     return h(

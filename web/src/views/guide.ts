@@ -30,6 +30,9 @@ const views = new WeakMap<Element, View>();
 
 type Line = Array<Node | string>;
 
+/** A key named in a sentence (read out, unlike the hints' `kbd`). */
+const key = (name: string): HTMLElement => h("span", { class: "keys" }, h("kbd", {}, name));
+
 /** The guide's lines per mode: what the page shows and what each interaction does. */
 function lines(mode: GuideMode): Line[] {
   if (mode === "pairwise") {
@@ -43,7 +46,7 @@ function lines(mode: GuideMode): Line[] {
   return [
     [
       "Each arc of the chart is a behaviour of the agent (inner ring) or a cluster of similar " +
-        "behaviours (outer rings). Hover an arc to watch it.",
+        "behaviours (outer rings, its size on it). Hover an arc to watch it.",
     ],
     [
       h("strong", {}, "Click"),
@@ -54,6 +57,31 @@ function lines(mode: GuideMode): Line[] {
       " (or Alt-click) to fill group B. ",
       kbd("G"),
       " switches the group that clicks fill.",
+    ],
+    [
+      h("strong", {}, "Click a cluster of more than 8"),
+      " to make it the chart's centre: its behaviours get the whole ring. The breadcrumb over " +
+        "the chart or ",
+      key("Esc"),
+      " goes back out; the wheel or a pinch zooms.",
+    ],
+    [
+      "To take one behaviour out of its group, ",
+      h("strong", {}, "Shift-click"),
+      " it or press × on its clip. Clicking what a group holds already changes nothing.",
+    ],
+    [
+      "By keyboard: Tab into the chart, ",
+      key("Shift"),
+      " + arrows move between arcs, ",
+      key("Enter"),
+      " fills the group, ",
+      key("Alt"),
+      " + ",
+      key("Enter"),
+      " the other, ",
+      key("C"),
+      " centres on a cluster.",
     ],
     [kbd("N"), " shows the next suggested comparison instead of choosing groups yourself."],
     [h("strong", {}, question("group"))],

@@ -1,5 +1,5 @@
 /**
- * The people of a shared session (issue 21), under the behaviours (under the pair in
+ * The people of a shared session (issue 21), under the comparison (under the pair in
  * pairwise mode): each person's comparisons, preference pairs and time, their agreement with
  * the others (Cohen's κ and the share alike, on the n behaviour pairs both judged) and with
  * the reward model; and under them the round's comparisons newest first, each with its

@@ -1,7 +1,7 @@
 /**
  * The agent learning (docs/app.md): a small chart of the greedy policy's true return over
  * the session's time, PPO steps so far, the last refit (pairs, held-out accuracy) and the
- * shown pool's age in PPO steps. The open page shows it under the behaviours while a
+ * shown pool's age in PPO steps. The open page shows it under the comparison while a
  * continuous session trains (`renderTraining`); the finished page draws the same chart
  * (`drawCurve`). Geometry and words come from `lib/training.ts`.
  */
