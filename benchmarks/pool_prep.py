@@ -6,7 +6,7 @@ Hopper steps) and each pool size, the app's round 0 (`SessionSettings` defaults,
 policy, a fresh reward ensemble): `sample_pool` (2 N windows, at most 1,000 or N:
 `LoopConfig.pool_windows_max`; the ensemble's most uncertain kept), DTW in the tree
 config's band, the tree, the Groupwise-DM's suggestions
-(`worker.jobs.session_strategy`, 2× the comparison budget), then `publish_pool` — with clips
+(`worker.job.session_strategy`, 2× the comparison budget), then `publish_pool` — with clips
 on demand (the app's default) a poster per behaviour and each clip's recipe; with
 ``--clips eager`` every clip as before — and the round's rows (`worker.offers`). The
 render workers are started and the DTW kernels compiled before the clock starts, as in the
@@ -62,8 +62,9 @@ from groupwise.reward import RewardEnsemble
 from groupwise.rl.batch_envs import free_cores
 from groupwise.rl.policy_files import load_policy
 from groupwise.storage import SessionSettings
-from groupwise.worker.jobs import offered_queries, publish_config, session_strategy
+from groupwise.worker.job import offered_queries, session_strategy
 from groupwise.worker.offers import prepared_round
+from groupwise.worker.publishing import publish_config
 
 GOALS = {200: 8.0, 1000: 30.0}
 """Wall seconds to a round on screen on 2 cores, by pool size (issue 22)."""

@@ -45,7 +45,6 @@ from sqlalchemy.engine import make_url
 from sqlalchemy.orm import Session as DbSession
 from sqlalchemy.orm import sessionmaker
 
-from groupwise.storage import staging  # noqa: F401 (its table is part of the schema)
 from groupwise.storage.models import Base
 
 DATABASE_FILE = "groupwise.db"

@@ -43,7 +43,7 @@ def finish_now(s: DbSession, session_id: str, now: datetime | None = None) -> Se
     r = session.round
     if session.phase == READY:
         _set_rounds(session, r + 1)
-        close_round(s, session, "user", now, open_next=False)
+        close_round(s, session, "user", now)
     elif session.phase == TRAINING:
         _set_rounds(session, r + 1)  # `finish_training` then starts the final phase
         touch(session, now)

@@ -57,18 +57,13 @@ def close_round(
     session: SessionRow,
     reason: str,
     now: datetime | None = None,
-    *,
-    open_next: bool = True,
 ) -> RoundRow:
-    """End the open round (`reason`: "user", "comparisons" or "time"); phase ``training``,
-    or, with `open_next` and the next round prepared ahead (continuous training,
-    `storage.staging`), that round open at once (phase ``ready``) while the worker records
-    this one's training.
+    """End the open round (`reason`: "user", "comparisons" or "time"): phase ``training``,
+    for the worker to train (rounds) or to open the next round from the latest rollouts and
+    commit this one (continuous, `worker.jobs.open_fresh`).
 
     Raises ConflictError unless the session is ready.
     """
-    from groupwise.storage.staging import open_staged  # staging stores rounds: a cycle
-
     now = now or utcnow()
     require_ready(session, "end the round")
     row = get_round(s, session.id, session.round)
@@ -79,8 +74,6 @@ def close_round(
     session.phase = TRAINING
     write_progress(session, "queued", 0.0, "waiting for the training worker")
     touch(session, now)
-    if open_next:
-        open_staged(s, session.id, row.index)
     return row
 
 
@@ -123,8 +116,8 @@ def finish_training(
 
 def advance_before_commit(s: DbSession, session_id: str, round_index: int) -> bool:
     """Queue round `round_index + 1` before round `round_index`'s training is recorded
-    (continuous training with the next round prepared ahead: the person compares again
-    while the worker commits the round, `record_training`). False (nothing written) when
+    (continuous training opens the next round first: the person compares again while the
+    worker commits the round, `record_training`). False (nothing written) when
     the session is no longer training that round or it was the last round."""
     session = get_session(s, session_id, lock=True)
     if session.phase != TRAINING or session.round != round_index:

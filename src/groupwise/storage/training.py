@@ -86,13 +86,16 @@ def round_point(
     now: datetime | None = None,
 ) -> TrainingPoint:
     """Store the point of round `round_index`'s committed training from its record's
-    `stats` (`RoundRecord.stats`); its pool was sampled by the policy round
-    `round_index` − 1 left (its stats' ``env_steps``, 0 before the first round)."""
+    `stats` (`RoundRecord.stats`); its pool position is the stats' ``pool_steps`` when the
+    worker put it there (the PPO steps of the policy that played the round's pool: a
+    continuous round's is not the round before's), else the policy round `round_index` − 1
+    left (its stats' ``env_steps``, 0 before the first round)."""
     before = s.scalar(
         select(RoundRow.stats).where(
             RoundRow.session_id == session_id, RoundRow.index == round_index - 1
         )
     )
+    pool = stats.get("pool_steps", (before or {}).get("env_steps"))
     return add_point(
         s,
         session_id,
@@ -101,7 +104,7 @@ def round_point(
         true_return=_float(stats.get("true_return_mean")),
         pairs=_int(stats.get("pairs_total")),
         reward_val_accuracy=_float(stats.get("reward_val_accuracy")),
-        pool_steps=_int((before or {}).get("env_steps")),
+        pool_steps=_int(pool),
         now=now,
     )
 

@@ -1,63 +1,31 @@
-"""The next round of a continuous session, prepared in a process of its own (issue 24).
+"""The worker's background processes: one "spawn" process each beside the worker, at a
+lower priority, for work PPO must not wait for (the learning curve's evaluations,
+`curve.Evaluator`).
 
-Preparing a round — sampling the pool from the policy, DTW, the tree, the strategy's
-queries, rendering the clips — took 11–23 s of the worker's main thread per Hopper round of
-100 behaviours while PPO waited (a quarter of a 90-s round's PPO time under load). So the
-worker writes a snapshot of the policy and the reward ensemble (`Run.save_policy`) and a
-`Stager` process (one, "spawn", kept across rounds) samples, renders (in itself: one core
-for the next round, one for PPO on a 2-core machine), publishes and stages the round from it
-(`jobs.stage_next`, `jobs.publish_staged`), while PPO goes on in the worker. The snapshot is
-deleted once staged.
-
-The stager is a child of the worker and joins its process group, so ending the worker's
-group ends it too (`worker.process`). A stager killed mid-way stages nothing: the round's
-end then prepares the next round as in rounds mode.
+A background process is a child of the worker and joins its process group, so ending the
+worker's group ends it too (`worker.process`).
 """
 
 import logging
 import multiprocessing
 import os
-import shutil
 from collections.abc import Callable
 from concurrent.futures import Future, ProcessPoolExecutor
 from concurrent.futures.process import BrokenProcessPool
-from pathlib import Path
 from typing import TYPE_CHECKING, TypeVar
 
-from groupwise.worker.jobs import Job
-
 if TYPE_CHECKING:
-    from groupwise.clips.render import RenderPool
     from groupwise.storage import Database
 
 log = logging.getLogger(__name__)
 T = TypeVar("T")
 
-SNAPSHOT_DIR = "stage"
-"""``checkpoints/stage``: the policy snapshot the next round is sampled from."""
-
-
-class Stager:
-    """One process that prepares next rounds from policy snapshots (module docstring)."""
-
-    def __init__(self, database_url: str, data_dir: Path) -> None:
-        self.data_dir = data_dir
-        self._process = BackgroundProcess(database_url)
-
-    def submit(self, job: Job, snapshot: Path, ppo_steps: int) -> "Future[None]":
-        """Prepare and stage round `job.round + 1` from `snapshot` (`Run.save_policy`,
-        sampled after `ppo_steps` PPO steps)."""
-        return self._process.submit(_stage, job, self.data_dir, snapshot, ppo_steps)
-
-    def close(self) -> None:
-        self._process.close()
-
 
 class BackgroundProcess:
     """One "spawn" process beside the worker, set up as the worker is (`process_db`), at a
-    lower priority (`NICENESS`): the stager's, and the learning curve's evaluator
-    (`curve.Evaluator`). One that died (killed for memory, say) is started again by the
-    next `submit`; what it was doing fails with `BrokenProcessPool`."""
+    lower priority (`NICENESS`): the learning curve's evaluator (`curve.Evaluator`). One
+    that died (killed for memory, say) is started again by the next `submit`; what it was
+    doing fails with `BrokenProcessPool`."""
 
     def __init__(self, database_url: str) -> None:
         self.database_url = database_url
@@ -85,12 +53,10 @@ class BackgroundProcess:
 
 
 NICENESS = 5
-"""Added to the stager's and the evaluator's niceness: on a busy machine their work waits for
-PPO and the web server instead of taking turns with them (the next round is ready minutes
-ahead; a curve point may come a little later)."""
+"""Added to a background process's niceness: on a busy machine its work waits for PPO and
+the web server instead of taking turns with them (a curve point may come a little later)."""
 
 _db: "Database | None" = None
-_render: "RenderPool | None" = None
 
 
 def process_db() -> "Database":
@@ -117,20 +83,3 @@ def _start(database_url: str, log_level: int) -> None:
     )
     logging.getLogger("groupwise").setLevel(log_level)
     _db = Database(database_url, pool_size=1)
-
-
-def _stage(job: Job, data_dir: Path, snapshot: Path, ppo_steps: int) -> None:
-    from groupwise.clips.render import RenderPool
-    from groupwise.run.run import Run
-    from groupwise.worker.jobs import publish_staged, stage_next
-
-    global _render
-    db = process_db()
-    render = _render = _render or RenderPool(0)  # renders here (module docstring)
-    try:
-        with Run.create(job.settings.run_config(job.env)) as run:  # writes nothing
-            run.load_policy(snapshot)
-            offer = stage_next(job, run)
-        publish_staged(job, offer, db, data_dir, render, ppo_steps)
-    finally:
-        shutil.rmtree(snapshot, ignore_errors=True)

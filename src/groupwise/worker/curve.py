@@ -1,7 +1,7 @@
 """The learning curve of a continuous round, as the worker measures it.
 
 Every trained round adds a point from its record (`storage.training.round_point`); a
-continuous round also adds one after each refit (`worker.live`) and one for each
+continuous round also adds one after each refit (`worker.live_round`) and one for each
 evaluation of the greedy policy's true return. An evaluation takes a snapshot of the policy
 (`PPOAgent.snapshot`) between two PPO slices and runs in a process of its own (`Evaluator`),
 which stores the point as of the snapshot, while PPO trains on: evaluating in the worker
@@ -26,6 +26,7 @@ from groupwise.run.run import Run
 from groupwise.run.streams import eval_rng
 from groupwise.storage.models import utcnow
 from groupwise.storage.training import add_point
+from groupwise.worker.background import BackgroundProcess, process_db
 
 if TYPE_CHECKING:
     from groupwise.rl.ppo import PolicySnapshot
@@ -89,8 +90,6 @@ class Evaluator:
     """One process that evaluates curve points and stores them (module docstring)."""
 
     def __init__(self, database_url: str) -> None:
-        from groupwise.worker.staging import BackgroundProcess
-
         self._process = BackgroundProcess(database_url)
         self._process.submit(_warm_up)  # its start and imports now, not with the first point
 
@@ -108,7 +107,6 @@ def _warm_up() -> None:
 
 def _evaluate(point: CurvePoint) -> float:
     from groupwise.envs import make_env
-    from groupwise.worker.staging import process_db
 
     tick = time.perf_counter()
     value = true_return(lambda: make_env(point.env), point.policy, point.episodes, point.seed)

@@ -21,7 +21,7 @@ from groupwise.storage import Database
 from groupwise.storage.ending import frozen_rounds
 from groupwise.storage.lifecycle import finish_final
 from groupwise.storage.sessions import session_directory
-from groupwise.worker.jobs import Job, open_run
+from groupwise.worker.job import Job, open_run
 from groupwise.worker.progress import JobProgress
 
 log = logging.getLogger(__name__)

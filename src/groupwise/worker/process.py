@@ -38,7 +38,7 @@ from groupwise.worker.progress import JobProgress, ProgressReporter
 
 if TYPE_CHECKING:  # the server imports this module; only the worker process needs these
     from groupwise.clips.render import RenderPool
-    from groupwise.worker.jobs import Job
+    from groupwise.worker.job import Job
     from groupwise.worker.live import LiveSessions
 
 log = logging.getLogger(__name__)
@@ -162,12 +162,12 @@ class Worker:
 
     def run_next(self) -> bool:
         """Run the job of the longest-waiting session, if any; True when one ran."""
-        from groupwise.worker import jobs
+        from groupwise.worker.job import job_of
 
         with self.db.read() as s:
             waiting = [row.id for row in worker_sessions(s) if self.serves(row.id)]
         for session_id in waiting:
-            job = jobs.job_of(self.db, session_id)
+            job = job_of(self.db, session_id)
             if job is not None:
                 self.run_job(job)
                 return True
@@ -192,8 +192,9 @@ class Worker:
                 elif job.phase == "finishing":
                     finishing.finish(job, self.db, self.data_dir, progress)
                 elif job.settings.training == "continuous":
-                    live = self.live.take(job)
-                    jobs.train(job, self.db, self.data_dir, progress, live=live)
+                    live = self.live.take(job).live
+                    render = self._render_pool(job.settings.render_workers)
+                    jobs.train(job, self.db, self.data_dir, progress, live=live, render=render)
                 else:
                     jobs.train(job, self.db, self.data_dir, progress)
         except Exception as error:

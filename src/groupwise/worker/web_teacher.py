@@ -24,8 +24,8 @@ from typing import Any
 
 import numpy as np
 
-from groupwise.clips.render import RenderPool
 from groupwise.behaviour.pool import BehaviourPool
+from groupwise.clips.render import RenderPool
 from groupwise.preferences.judgement import Judgement
 from groupwise.query.strategies import Query
 from groupwise.storage import Database, SessionSettings, default_url
@@ -35,7 +35,7 @@ from groupwise.storage.phases import FAILED, FINISHED, PREPARING, READY, TRAININ
 from groupwise.storage.progress import set_progress
 from groupwise.storage.sessions import create_session, get_session
 from groupwise.storage.settings import LIBRARY
-from groupwise.worker.jobs import publish_offer
+from groupwise.worker.publishing import publish_offer
 
 log = logging.getLogger(__name__)
 

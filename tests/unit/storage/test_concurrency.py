@@ -17,7 +17,7 @@ from groupwise.preferences.judgement import Judgement
 from groupwise.preferences.pairs import judgement_pairs
 from groupwise.storage import ConflictError, Database, SessionSettings
 from groupwise.storage.judgements import LABELS, JudgementInput, add_judgement, undo_judgement
-from groupwise.storage.lifecycle import end_round
+from groupwise.storage.lifecycle import close_open_round
 from groupwise.storage.models import JudgementRow
 from groupwise.storage.sessions import get_session
 
@@ -101,7 +101,7 @@ def test_concurrent_judgements_keep_every_invariant(db, database_url, open_sessi
         start.wait()
         half_way.wait()
         with servers[1].write() as s:
-            close_revision.append(end_round(s, sid).revision)
+            close_revision.append(close_open_round(s, sid).revision)
         closed.set()
 
     errors: list[BaseException] = []

@@ -15,7 +15,7 @@ from groupwise.storage.judgements import (
     round_judgements,
     undo_judgement,
 )
-from groupwise.storage.lifecycle import end_round
+from groupwise.storage.lifecycle import close_open_round
 from groupwise.storage.models import JudgementRow, PairRow
 from groupwise.storage.phases import ROUND_CLOSED, TRAINING
 from groupwise.storage.sessions import get_round, get_session
@@ -135,7 +135,7 @@ def test_judgements_only_for_the_open_round(db, open_session):
             add_judgement(s, sid, judgement(round=1))
     with db.write() as s:
         record, _ = add_judgement(s, sid, judgement())
-        end_round(s, sid)
+        close_open_round(s, sid)
     with pytest.raises(ConflictError, match="training"), db.write() as s:
         add_judgement(s, sid, judgement("late"))
     with pytest.raises(ConflictError, match="closed"), db.write() as s:

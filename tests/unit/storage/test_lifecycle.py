@@ -3,7 +3,7 @@
 import pytest
 
 from groupwise.storage import ConflictError, SessionSettings
-from groupwise.storage.lifecycle import end_round, finish_training, mark_failed, retry
+from groupwise.storage.lifecycle import close_open_round, finish_training, mark_failed, retry
 from groupwise.storage.phases import PREPARING, ROUND_PREPARING
 from groupwise.storage.sessions import create_session, get_round, get_session
 
@@ -11,7 +11,7 @@ from groupwise.storage.sessions import create_session, get_round, get_session
 def test_training_moves_on_to_the_next_round_then_finishes(db, open_session):
     sid = open_session(rounds=2)
     with db.write() as s:
-        end_round(s, sid)
+        close_open_round(s, sid)
     with db.write() as s:
         assert finish_training(s, sid, 0, "sessions/x/checkpoints/round-0000", {"a": 1})
     with db.read() as s:

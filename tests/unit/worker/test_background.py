@@ -1,12 +1,12 @@
-"""The worker's background processes (the stager's, the curve's evaluator): a process that
-died is started again by the next submission, so continuous training keeps its curve and
-its staged rounds after, say, the kernel killed one for memory."""
+"""The worker's background process (the curve's evaluator): a process that died is started
+again by the next submission, so continuous training keeps its curve after, say, the kernel
+killed one for memory."""
 
 import os
 import signal
 from concurrent.futures.process import BrokenProcessPool
 
-from groupwise.worker.staging import NICENESS, BackgroundProcess
+from groupwise.worker.background import NICENESS, BackgroundProcess
 
 
 def _pid_and_niceness() -> tuple[int, int]:

@@ -2,20 +2,28 @@
 
 import json
 
+import pytest
 from tests.unit.server.conftest import context_of, new_session, run_worker_once
 
 from groupwise.clips.render import RenderPool
 from groupwise.worker import jobs
+from groupwise.worker.job import job_of
 from groupwise.worker.progress import JobProgress
 
 
-def test_a_round_without_judgements_still_trains(client):
-    sid = new_session(client)["id"]
+@pytest.mark.parametrize(
+    ("training", "next_phase"),
+    # continuous: the training job opens the next round from the latest rollouts (here none:
+    # it samples the policy) before it commits the round
+    [("rounds", "preparing"), ("continuous", "ready")],
+)
+def test_a_round_without_judgements_still_trains(client, training, next_phase):
+    sid = new_session(client, training=training)["id"]
     run_worker_once(client)
     assert client.post(f"/api/sessions/{sid}/end-round").json()["phase"] == "training"
     run_worker_once(client)
     state = client.get(f"/api/sessions/{sid}").json()
-    assert (state["phase"], state["round"], state["error"]) == ("preparing", 1, None)
+    assert (state["phase"], state["round"], state["error"]) == (next_phase, 1, None)
     data = context_of(client).data_dir
     checkpoint = data / "sessions" / sid / "checkpoints" / "round-0000"
     record = json.loads((checkpoint / "state.json").read_text())["records"][0]
@@ -59,7 +67,7 @@ def test_preparing_a_round_reports_sampling_distances_and_clips_as_they_go(clien
     """The bar moves through the whole pool phase (issue 23: it sat at 5 % for 17-28 s)."""
     sid = new_session(client, pool_size=40)["id"]
     context = context_of(client)
-    job = jobs.job_of(context.db, sid)
+    job = job_of(context.db, sid)
     assert job is not None
     recorded = _Reports()
     with RenderPool(0) as render:

@@ -7,7 +7,7 @@ import json
 import pytest
 from tests.unit.server.conftest import context_of, new_session, post_judgement, run_worker_once
 
-from groupwise.worker import live as live_module
+from groupwise.worker import live_round
 from groupwise.worker.process import Worker
 
 ROLLOUT = 32  # TINY's PPO: 1 env × 32 steps
@@ -37,9 +37,10 @@ def test_the_worker_trains_while_the_round_is_open_and_ends_it_on_that_run(clien
     assert training.run.agent.num_timesteps == 4 * ROLLOUT  # 3 new pairs: no refit yet
     assert client.post(f"/api/sessions/{sid}/end-round").json()["phase"] == "training"
     assert not worker.train_live()  # the round is no longer open
-    assert worker.run_next()  # the training job ends the round on the live run
+    assert worker.run_next()  # the training job ends the round on the live run …
     state = client.get(f"/api/sessions/{sid}").json()
-    assert (state["phase"], state["round"], state["error"]) == ("preparing", 1, None)
+    # … and opens the next one, cut from its rollouts: no preparing job
+    assert (state["phase"], state["round"], state["error"]) == ("ready", 1, None)
     checkpoint = context_of(client).data_dir / "sessions" / sid / "checkpoints" / "round-0000"
     record = json.loads((checkpoint / "state.json").read_text())["records"][0]
     # … and is in the round's dataset; PPO's steps are those of the open round, no more
@@ -48,7 +49,7 @@ def test_the_worker_trains_while_the_round_is_open_and_ends_it_on_that_run(clien
 
 
 def test_a_restarted_worker_resumes_the_round_from_its_live_checkpoint(client, monkeypatch):
-    monkeypatch.setattr(live_module, "CHECKPOINT_S", 0.0)
+    monkeypatch.setattr(live_round, "CHECKPOINT_S", 0.0)
     sid = new_session(client, training="continuous")["id"]
     run_worker_once(client)
     post_judgement(client, sid, ["b0", "b1"], ["b2"])

@@ -16,8 +16,8 @@ from sqlalchemy import select
 from tests.unit.server.conftest import TINY, context_of, new_session, run_worker_once
 
 from groupwise.config import RunConfig
-from groupwise.pool.files import load_fragments
 from groupwise.episodes.ids import behaviour_index
+from groupwise.pool.files import load_fragments
 from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.preferences.judgement import LEFT_BETTER, RIGHT_BETTER, Judgement
 from groupwise.run.round import begin_round, end_round
@@ -25,7 +25,7 @@ from groupwise.run.run import CONFIG_FILE, Run
 from groupwise.storage.models import PairQueueRow, RoundRow, SuggestionRow
 from groupwise.storage.sessions import round_directory
 from groupwise.storage.settings import SessionSettings
-from groupwise.worker.jobs import offered_queries, session_strategy
+from groupwise.worker.job import offered_queries, session_strategy
 
 # round → (left, right, label, undone) in the order given; the undone one keeps its key
 ANSWERS = {

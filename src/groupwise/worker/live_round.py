@@ -1,0 +1,183 @@
+"""One continuous round in the worker: its state (`LiveTraining`) and one slice of its
+training (`train_slice`), as `worker.live` schedules them.
+
+A slice reads the round's judgements from the database (`round_judgements`: undone ones
+left out, each keyed by its place in the round), refits the reward ensemble when due
+(`run.continuous.LiveRound`: 20 changed pairs or 60 s), then trains one PPO rollout on the
+latest fit — so the reward PPO sees changes only between rollouts. Every `CHECKPOINT_S`
+seconds the policy and the ensemble go to ``checkpoints/live`` (`Run.save_live`).
+
+The page sees the agent learn (`worker.curve`): each refit stores a point of the session's
+learning curve (PPO steps, pairs, validation accuracy), and so does each evaluation of the
+greedy policy's true return, the first before the round's first rollout, then whenever the
+last one has finished and the slices have trained long enough (`curve.EVAL_MIN_S`,
+`curve.EVAL_COST`); between them a point at most every `PROGRESS_S` seconds says how far PPO
+is (issue 39: the page's step counter moved only on a refit or an evaluation). Every
+`ACCOUNT_S` seconds a log line says where the worker's time went (PPO, refits, reads,
+checkpoints, ...).
+"""
+
+import dataclasses
+import logging
+import time
+from collections import defaultdict
+from collections.abc import Callable, Iterator
+from concurrent.futures import Future
+from contextlib import contextmanager
+from dataclasses import dataclass
+
+from groupwise.run.continuous import LiveRound
+from groupwise.run.run import Run
+from groupwise.storage import Database
+from groupwise.storage.judgements import round_judgements
+from groupwise.storage.training import add_point
+from groupwise.worker import curve
+
+log = logging.getLogger(__name__)
+
+CHECKPOINT_S = 30.0
+"""Seconds between a continuous round's live checkpoints."""
+ACCOUNT_S = 60.0
+"""Seconds between the log lines that say where a continuous round's worker time went."""
+PROGRESS_S = 1.0
+"""Least seconds between two points that only say how many PPO steps ran (one a rollout
+on a slow env; a tiny env's rollouts would write dozens a second)."""
+
+
+@dataclass
+class LiveTraining:
+    """One session's round being trained continuously in this worker."""
+
+    session_id: str
+    round: int
+    run: Run
+    live: LiveRound
+    checkpointed: float
+    """`time.monotonic()` of the last live checkpoint."""
+    pool_steps: int
+    """PPO steps of the policy that played the round's pool (its oldest behaviour)."""
+    trained_s: float = 0.0
+    """Seconds this worker's PPO slices of the round took."""
+    evaluated_s: float | None = None
+    """`trained_s` at the last evaluation; None before the first."""
+    eval_s: float = 0.0
+    """Seconds the last finished evaluation took."""
+    evaluating: "Future[float] | None" = None
+    """The evaluation in the evaluator process (`curve.Evaluator`), until it is seen done."""
+    pointed: float = 0.0
+    """`time.monotonic()` of the last point this worker wrote."""
+    spent: defaultdict[str, float] = dataclasses.field(default_factory=lambda: defaultdict(float))
+    """Worker seconds by activity since `accounted` (`timed`): what is not PPO is PPO's
+    loss, logged every `ACCOUNT_S` seconds."""
+    accounted: float = dataclasses.field(default_factory=time.monotonic)
+
+    @contextmanager
+    def timed(self, activity: str) -> Iterator[None]:
+        """Count the seconds of the block as `activity` in `spent`."""
+        tick = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.spent[activity] += time.perf_counter() - tick
+
+    def account(self) -> None:
+        """Log where the worker's time went since the last such line, once `ACCOUNT_S`
+        seconds have passed (the rest of the wall time: other sessions, jobs, waiting)."""
+        wall = time.monotonic() - self.accounted
+        if wall < ACCOUNT_S:
+            return
+        self.spent["other"] = wall - sum(self.spent.values())
+        parts = ", ".join(
+            f"{name} {seconds:.1f} s ({seconds / wall:.0%})"
+            for name, seconds in sorted(self.spent.items(), key=lambda item: -item[1])
+        )
+        log.info(
+            "session %s round %d, the last %.0f s: %s", self.session_id, self.round, wall, parts
+        )
+        self.spent.clear()
+        self.accounted = time.monotonic()
+
+
+def train_slice(
+    training: LiveTraining, db: Database, evaluator: Callable[[], curve.Evaluator]
+) -> bool:
+    """Refit when due and train one rollout (module docstring); False when the round has
+    no pairs yet. `evaluator` gives the process that evaluates the curve's points."""
+    with training.timed("reads"), db.read() as s:
+        keyed = round_judgements(s, training.session_id, training.round)
+    with training.timed("refits"):
+        refitted = training.live.update(keyed, time.monotonic())
+    run = training.run
+    if not len(run.dataset):  # PPO starts with the round's first pairs
+        training.spent.clear()  # waiting for them is no loss of PPO's: not accounted
+        training.accounted = time.monotonic()
+        return False
+    if refitted or training.evaluated_s is None:
+        _point(training, db, evaluator, refit=refitted, evaluate=training.evaluated_s is None)
+    tick = time.perf_counter()
+    with training.timed("PPO"):
+        training.live.learn(run.ppo.rollout_steps)
+    training.trained_s += time.perf_counter() - tick
+    if _evaluation_due(training):
+        _point(training, db, evaluator, refit=False, evaluate=True)
+    elif time.monotonic() - training.pointed >= PROGRESS_S:
+        _point(training, db, evaluator, refit=True, evaluate=False)
+    if time.monotonic() - training.checkpointed >= CHECKPOINT_S:
+        with training.timed("checkpoints"):
+            run.save_live(training.round)
+        training.checkpointed = time.monotonic()
+    training.account()
+    return True
+
+
+def _point(
+    training: LiveTraining,
+    db: Database,
+    evaluator: Callable[[], curve.Evaluator],
+    *,
+    refit: bool,
+    evaluate: bool,
+) -> None:
+    """Store a point of the learning curve: with `refit`, the steps and the fit now; then,
+    with `evaluate`, hand the point with a snapshot of the greedy policy to the evaluator
+    process, which stores it with the policy's true return when it has it
+    (`curve.Evaluator`)."""
+    run, report = training.run, training.live.report
+    accuracy = None if report is None else report.validation_accuracy
+    evaluating = evaluate and run.cfg.loop.eval_episodes > 0
+    if refit or not evaluating:
+        with training.timed("writes"), db.write() as s:
+            add_point(
+                s,
+                training.session_id,
+                round_index=training.round,
+                ppo_steps=run.agent.num_timesteps,
+                true_return=None,
+                pairs=len(run.dataset),
+                reward_val_accuracy=accuracy,
+                pool_steps=training.pool_steps,
+            )
+    training.pointed = time.monotonic()
+    if evaluate:
+        training.evaluated_s = training.trained_s
+    if evaluating:
+        with training.timed("snapshots"):
+            point = curve.snapshot(
+                training.session_id, training.round, run, accuracy, training.pool_steps
+            )
+        training.evaluating = evaluator().submit(point)
+
+
+def _evaluation_due(training: LiveTraining) -> bool:
+    """Whether to evaluate the policy again (`worker.curve`): the last evaluation has
+    finished and the slices have trained long enough since."""
+    if training.evaluating is not None:
+        if not training.evaluating.done():
+            return False
+        try:
+            training.eval_s = training.evaluating.result()
+        except Exception:
+            log.exception("session %s: evaluating the policy failed", training.session_id)
+        training.evaluating = None
+    since = training.trained_s - (training.evaluated_s or 0.0)
+    return since >= max(curve.EVAL_MIN_S, curve.EVAL_COST * training.eval_s)

@@ -1,0 +1,152 @@
+"""A continuous session's next round is cut from PPO's own latest rollouts when the round
+ends (issue 39: fresh pools, `jobs.open_fresh`), opened before the ended round is committed;
+the page's counter follows PPO rollout by rollout; Pause pauses PPO; a worker killed between
+opening and committing commits on resume."""
+
+import dataclasses
+
+from tests.unit.server.conftest import context_of, new_session, post_judgement, run_worker_once
+
+from groupwise.pool.files import load_fragments
+from groupwise.storage.sessions import get_round
+from groupwise.storage.training import list_points
+from groupwise.worker import jobs, live_round
+from groupwise.worker.job import checkpoint_of, job_of
+from groupwise.worker.process import Worker
+from groupwise.worker.publishing import sampled_at
+
+ROLLOUT = 32  # TINY's PPO: 1 env × 32 steps
+SLICES = 12  # 384 steps of one GridWorld episode: 38 windows of 10, the pool needs 32
+
+
+def _training_session(client, slices: int = SLICES, **settings) -> tuple[str, Worker]:
+    """A continuous session in round 0 with one judgement, trained `slices` rollouts."""
+    sid = new_session(client, training="continuous", **settings)["id"]
+    run_worker_once(client)  # round 0 ready
+    post_judgement(client, sid, ["b0", "b1"], ["b2"])
+    context = context_of(client)
+    worker = Worker(context.db, context.data_dir, poll_s=0.1)
+    for _ in range(slices):
+        assert worker.train_live()
+    return sid, worker
+
+
+def _pool_dir(client, sid: str, round_index: int):
+    context = context_of(client)
+    with context.db.read() as s:
+        return context.data_dir / str(get_round(s, sid, round_index).pool_dir)
+
+
+def _round_stats(client, sid: str, round_index: int) -> dict | None:
+    with context_of(client).db.read() as s:
+        return get_round(s, sid, round_index).stats
+
+
+def test_the_next_pool_is_cut_from_the_latest_rollouts_when_the_round_ends(client):
+    sid, worker = _training_session(client)
+    training = worker.live._live[sid]
+    recorded = training.live.recorder.recent(32)
+    assert [len(e.trajectory) for e in recorded] == [SLICES * ROLLOUT]  # the one episode
+    episode = recorded[0]
+    assert client.post(f"/api/sessions/{sid}/end-round").json()["phase"] == "training"
+    assert worker.run_next()  # the training job opens round 1, then commits round 0
+    state = client.get(f"/api/sessions/{sid}").json()
+    assert (state["phase"], state["round"], state["error"]) == ("ready", 1, None)
+    published = load_fragments(_pool_dir(client, sid, 1))
+    assert len(published) == 16
+    # every behaviour is a window of the episode PPO played, as it played it
+    for fragment in published:
+        assert fragment.reset_seed == episode.trajectory.reset_seed
+        window = slice(fragment.start, fragment.start + 10)
+        assert (fragment.obs == episode.trajectory.obs[window]).all()
+    # the pool's position: the policy of the oldest rollout a behaviour came from
+    oldest = min(episode.window_policy(f.start) for f in published)
+    assert sampled_at(_pool_dir(client, sid, 1)) == oldest
+    assert oldest >= 0 and max(episode.window_policy(f.start) for f in published) > oldest
+    stats = _round_stats(client, sid, 0)
+    assert stats is not None and stats["env_steps"] == SLICES * ROLLOUT  # nothing trained again
+    assert not worker.run_next()  # no preparing job was needed
+
+
+def test_each_point_carries_its_own_rounds_pool_position(client):
+    sid, worker = _training_session(client, rounds=3)
+    client.post(f"/api/sessions/{sid}/end-round")
+    worker.run_next()  # round 1 open from round 0's rollouts, round 0 committed
+    post_judgement(client, sid, ["b3"], ["b4", "b5"], round_index=1)
+    for _ in range(SLICES):
+        assert worker.train_live()
+    client.post(f"/api/sessions/{sid}/end-round")
+    worker.run_next()  # round 2 open from round 1's rollouts, round 1 committed
+    with context_of(client).db.read() as s:
+        points = list_points(s, sid)
+    positions = [sampled_at(_pool_dir(client, sid, r)) for r in (0, 1, 2)]
+    # round 1's rollouts began at round 0's end: round 2's pool is that much younger
+    assert positions[:2] == [0, 0] and positions[2] >= SLICES * ROLLOUT
+    for r in (0, 1, 2):
+        assert {p.pool_steps for p in points if p.round == r} == {positions[r]}, r
+    # round 1's commit comes after round 2 opened, with round 1's pool position (the
+    # policy round 0 left, 384 steps, was the position it used to carry)
+    assert (points[-1].round, points[-1].pool_steps) == (1, 0)
+
+
+def test_the_step_counter_moves_with_each_rollout_and_pause_stops_ppo(client, monkeypatch):
+    monkeypatch.setattr(live_round, "PROGRESS_S", 0.0)
+    sid, worker = _training_session(client, slices=2)
+    training = worker.live._live[sid]
+    with context_of(client).db.read() as s:
+        newest = list_points(s, sid)[-1]
+    assert newest.ppo_steps == training.run.agent.num_timesteps == 2 * ROLLOUT
+    assert client.post(f"/api/sessions/{sid}/pause").status_code == 200
+    assert not worker.train_live()  # paused: no PPO …
+    assert training.run.agent.num_timesteps == 2 * ROLLOUT
+    assert worker.live._live[sid] is training  # … and the run is kept for the resumption
+    assert client.post(f"/api/sessions/{sid}/resume").status_code == 200
+    assert worker.train_live()
+    assert training.run.agent.num_timesteps == 3 * ROLLOUT
+
+
+def test_a_worker_killed_between_opening_and_committing_commits_on_resume(client):
+    sid, worker = _training_session(client, slices=2)
+    client.post(f"/api/sessions/{sid}/end-round")
+    context = context_of(client)
+    job = job_of(context.db, sid)
+    assert job is not None
+    training = worker.live.take(job)
+    render = worker._render_pool(job.settings.render_workers)
+    try:
+        assert jobs.open_fresh(job, context.db, context.data_dir, training.live, render)
+    finally:
+        training.run.close()
+    worker.live.close()  # killed here: round 1 open, round 0 not committed
+    assert _round_stats(client, sid, 0) is None
+
+    resumed = Worker(context.db, context.data_dir, poll_s=0.1)
+    post_judgement(client, sid, ["b3"], ["b4", "b5"], round_index=1)
+    assert resumed.train_live()  # commits round 0 first, then trains round 1
+    stats = _round_stats(client, sid, 0)
+    assert stats is not None and stats["round"] == 0
+    assert (context.data_dir / checkpoint_of(sid, 0) / "state.json").is_file()
+    again = resumed.live._live[sid]
+    assert again.round == 1 and len(again.run.dataset) > stats["pairs_total"]
+
+
+def test_a_round_checkpointed_but_not_recorded_keeps_its_checkpoint_on_resume(client):
+    """Killed after `end_round` wrote round 0's checkpoint (and dropped the live one) but
+    before its record was stored: the resumed worker records it from the checkpoint instead
+    of training round 0 again from round −1 (which would lose its PPO steps)."""
+    sid, worker = _training_session(client, slices=2)
+    client.post(f"/api/sessions/{sid}/end-round")
+    context = context_of(client)
+    job = job_of(context.db, sid)
+    assert job is not None
+    training = worker.live.take(job)
+    render = worker._render_pool(job.settings.render_workers)
+    assert jobs.open_fresh(job, context.db, context.data_dir, training.live, render)
+    ended = dataclasses.replace(job, round=0, phase="training")
+    record = jobs.commit_round(ended, context.db, context.data_dir, None, training.live)
+    training.run.close()
+    assert record.env_steps > 0 and _round_stats(client, sid, 0) is None  # killed here
+
+    resumed = Worker(context.db, context.data_dir, poll_s=0.1)
+    assert resumed.train_live()
+    assert _round_stats(client, sid, 0) == {**record.stats(), "pool_steps": 0}
