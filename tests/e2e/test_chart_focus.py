@@ -59,10 +59,6 @@ class Tree:
         return out
 
 
-def _arc_count(page: Page) -> int:
-    return int(page.locator(".chart-svg .arc").count())
-
-
 def test_a_1000_round_centre_pick_single_behaviours_answer_and_export(
     own_server: Server, page: Page, ui: Any, shot: Any
 ) -> None:
@@ -133,8 +129,13 @@ def test_keyboard_alone_centres_and_fills_both_groups(
         page.keyboard.press("Tab")
         if page.evaluate("document.activeElement?.classList.contains('arc')"):
             break
-    focused = lambda: str(page.evaluate("document.activeElement.dataset.id"))  # noqa: E731
-    label = lambda: str(page.evaluate("document.activeElement.getAttribute('aria-label')"))  # noqa: E731
+
+    def focused() -> str:
+        return str(page.evaluate("document.activeElement.dataset.id"))
+
+    def label() -> str:
+        return str(page.evaluate("document.activeElement.getAttribute('aria-label')"))
+
     assert label().startswith("behaviour "), label()
 
     # Out to the first real cluster, then C centres the chart on it (its leaves alone drawn).
@@ -143,7 +144,9 @@ def test_keyboard_alone_centres_and_fills_both_groups(
         if label().startswith("cluster of"):
             break
     cluster = focused()
-    size = int(re.match(r"cluster of (\d+) behaviours", label()).group(1))  # type: ignore[union-attr]
+    match = re.match(r"cluster of (\d+) behaviours", label())
+    assert match, label()
+    size = int(match.group(1))
     page.keyboard.press("c")
     crumbs = page.get_by_role("navigation", name="Chart centre")
     expect(crumbs).to_be_visible()
