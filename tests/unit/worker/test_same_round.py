@@ -4,7 +4,9 @@ give the same pool, queries, pairs, dataset and reward model, bit for bit.
 The app's side runs as a user's page and the worker do: judgements (one undone) posted to
 the real HTTP routes on a real SQLite database, the worker's jobs picked up from it
 (`Worker.run_next`: prepare, train). The headless side is `begin_round` → the same
-judgements → `end_round` on a `Run` of the session's own config.
+judgements → `end_round` on a `Run` of the session's own config. In continuous training
+(issue 39) the worker trains the open round slice by slice and cuts the next pool from the
+run's latest rollouts; the headless side drives `run.continuous.LiveRound` alike.
 """
 
 import uuid
@@ -18,14 +20,19 @@ from tests.unit.server.conftest import TINY, context_of, new_session, run_worker
 from groupwise.config import RunConfig
 from groupwise.episodes.ids import behaviour_index
 from groupwise.pool.files import load_fragments
+from groupwise.pool.recent import fresh_sources
 from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.preferences.judgement import LEFT_BETTER, RIGHT_BETTER, Judgement
-from groupwise.run.round import begin_round, end_round
+from groupwise.run.continuous import LiveRound
+from groupwise.run.progress import RunCallback
+from groupwise.run.round import begin_round, end_round, finish_round
 from groupwise.run.run import CONFIG_FILE, Run
+from groupwise.run.streams import round_streams
 from groupwise.storage.models import PairQueueRow, RoundRow, SuggestionRow
 from groupwise.storage.sessions import round_directory
 from groupwise.storage.settings import SessionSettings
 from groupwise.worker.job import offered_queries, session_strategy
+from groupwise.worker.process import Worker
 
 # round → (left, right, label, undone) in the order given; the undone one keeps its key
 ANSWERS = {
@@ -141,3 +148,82 @@ def test_an_app_round_and_a_headless_round_are_the_same_round(client, tmp_path):
     # the pairs stored with each judgement are the pairs trained on
     listed = client.get(f"/api/sessions/{sid}/judgements").json()
     assert sum(len(j["pairs"]) for j in listed) == len(our_data)
+
+
+def _same_pool(published, pool) -> None:
+    assert len(published) == len(pool)
+    for ours, theirs in zip(pool.fragments, published, strict=True):
+        assert np.array_equal(ours.obs, theirs.obs)
+        assert np.array_equal(ours.acts, theirs.acts)
+
+
+def test_a_continuous_app_round_and_a_headless_continuous_round_are_the_same_round(
+    client, tmp_path
+):
+    """The continuous path (issue 39): the worker trains the open round slice by slice and,
+    when the round ends, cuts the next pool from its run's latest rollouts; the headless
+    continuous round (`run.continuous`: `LiveRound`, `pool.recent.fresh_sources`) does the
+    same with the same judgements and rollouts, and gets the same next pool, bit for bit."""
+    chosen = {"seed": 11, "training": "continuous"}
+    slices = 12  # 384 PPO steps: the next pool's 32 windows all from the recorded rollouts
+    sid = new_session(client, **chosen)["id"]
+    context = context_of(client)
+    app_dir = context.data_dir / "sessions" / sid
+    settings = SessionSettings.model_validate({**TINY, **chosen}).for_env("GridWorld")
+    run_worker_once(client)  # prepare round 0
+    for left, right, label, _ in ANSWERS[0]:
+        body = {"client_id": str(uuid.uuid4()), "round": 0, "left": list(left),
+                "right": list(right), "label": label, "source": "explored"}  # fmt: skip
+        assert client.post(f"/api/sessions/{sid}/judgements", json=body).status_code == 201
+    worker = Worker(context.db, context.data_dir, poll_s=0.1)
+    for _ in range(slices):
+        assert worker.train_live()
+    assert client.post(f"/api/sessions/{sid}/end-round").json()["phase"] == "training"
+    assert worker.run_next()  # round 1 cut from round 0's rollouts and opened; 0 committed
+    worker.live.close()
+    assert client.get(f"/api/sessions/{sid}").json()["round"] == 1
+    cfg = RunConfig.load(app_dir / CONFIG_FILE)
+    assert cfg == settings.run_config("GridWorld")
+
+    strategy = session_strategy(cfg, "groupwise")
+    queries = offered_queries(settings)
+    budget = settings.comparisons_per_round
+    with Run.create(cfg, tmp_path / "headless") as run:
+        offer = begin_round(
+            run, strategy, budget, n_queries=queries, sources=fresh_sources(cfg.loop)
+        )
+        _same_pool(load_fragments(context.data_dir / round_directory(sid, 0)), offer.pool)
+        judgements, keys = _kept(0)
+        live = LiveRound(run, offer, round_streams(cfg.loop.seed, 0), 0.0)
+        live.update(list(zip(keys, judgements, strict=True)), 0.0, final=True)
+        for _ in range(slices):
+            live.learn(run.ppo.rollout_steps)
+        finish_round(run, offer, judgements, live.report, live.timer, RunCallback(), asked=None)
+        following = begin_round(
+            run, strategy, budget, n_queries=queries, sources=fresh_sources(cfg.loop)
+        )
+        assert run.agent.num_timesteps == slices * run.ppo.rollout_steps
+    # the same round 0: dataset and reward model …
+    app_data, app_reward = _state(app_dir / "checkpoints" / "round-0000")
+    our_data, our_reward = _state(tmp_path / "headless" / "checkpoints" / "round-0000")
+    for name in ("obs", "acts", "true_returns", "pairs", "labels", "rounds"):
+        assert np.array_equal(getattr(app_data, name), getattr(our_data, name)), name
+    for name, tensor in app_reward.items():
+        assert torch.equal(tensor, our_reward[name]), name
+    # … and the same next pool, of the rollouts PPO played, and the same suggestions
+    published = load_fragments(context.data_dir / round_directory(sid, 1))
+    _same_pool(published, following.pool)
+    recorded = {e.reset_seed for e in following.pool.episodes if e.source == 0}
+    assert {f.reset_seed for f in published} <= recorded
+    with context.db.read() as s:
+        round_id = s.scalar(
+            select(RoundRow.id).where(RoundRow.session_id == sid, RoundRow.index == 1)
+        )
+        stored = s.scalars(
+            select(SuggestionRow)
+            .where(SuggestionRow.round_id == round_id)
+            .order_by(SuggestionRow.rank)
+        ).all()
+    assert [
+        (tuple(map(behaviour_index, q.left)), tuple(map(behaviour_index, q.right))) for q in stored
+    ] == [(q.left, q.right) for q in following.queries]
