@@ -98,10 +98,11 @@ def test_a_target_env_with_chosen_settings_is_created_as_shown(
     page.get_by_label("PPO steps per round").fill("4096")
     expect(page.get_by_label("Final steps")).to_have_value("8192")
     page.get_by_label("Pairwise baseline").check()
-    page.get_by_text("Advanced: the reward model, PPO and the rest").click()
-    expect(page.get_by_label("GAE lambda")).to_have_value("0.95")
-    page.get_by_label("Ensemble size").fill("2")
-    page.get_by_text("Advanced: the reward model, PPO and the rest").click()
+    page.get_by_label("Pool variants").fill("4")
+    page.get_by_label("PPO preset").select_option("mujoco")
+    page.get_by_text("Advanced: clips, the worker and shared sessions").click()
+    expect(page.get_by_label("Frame size")).to_have_value("240")
+    page.get_by_text("Advanced: clips, the worker and shared sessions").click()
     shown = page.evaluate(FORM_VALUES)
     page.evaluate("document.querySelector('.start').scrollTo(0, 0)")
     shot(page, "new-session")
@@ -114,9 +115,9 @@ def test_a_target_env_with_chosen_settings_is_created_as_shown(
     settings = state["settings"]
     assert (settings["clip_seconds"], settings["fragment_length"]) == (2.0, 250)
     assert (settings["ppo_steps_per_round"], settings["final_steps"]) == (4096, 8192)
-    assert settings["reward"]["ensemble_size"] == 2
+    assert (settings["pool_variants"], settings["ppo_preset"]) == (4, "mujoco")
     # exactly what the form showed, every field of it
     assert settings["driver"] == "app"
     differ = {key: (text, _at(settings, key)) for key, text in shown.items()}
     assert {k: v for k, v in differ.items() if not _shown(*v)} == {}
-    assert len(shown) >= 40
+    assert len(shown) >= 20

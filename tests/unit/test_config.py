@@ -7,6 +7,7 @@ import pytest
 from pydantic import TypeAdapter
 
 from groupwise.config import (
+    PPO_PRESETS,
     LoopConfig,
     PPOConfig,
     RewardConfig,
@@ -29,12 +30,14 @@ def test_configs_stored_before_use_actions_existed_keep_their_action_inputs():
     assert RunConfig.from_dict(stored).reward.use_actions
 
     settings = json.loads(SessionSettings().model_dump_json())
+    settings["reward"] = json.loads(RunConfig().to_json())["reward"]  # as stored before issue 38
     del settings["reward"]["use_actions"]
-    assert SessionSettings.model_validate(settings).reward.use_actions
+    assert SessionSettings.model_validate(settings).run_config("GridWorld").reward.use_actions
     # a request overriding other reward fields keeps the default inputs
-    assert SessionSettings.model_validate({"reward": {"ensemble_size": 2}}).reward.use_actions
-    observations = SessionSettings.model_validate({"reward": {"use_actions": False}})
-    assert not observations.reward.use_actions
+    research = SessionSettings.model_validate({"research": {"reward": {"ensemble_size": 2}}})
+    assert research.run_config("GridWorld").reward.use_actions
+    observations = SessionSettings.model_validate({"research": {"reward": {"use_actions": False}}})
+    assert not observations.run_config("GridWorld").reward.use_actions
 
 
 @pytest.mark.parametrize(
@@ -127,3 +130,41 @@ def test_a_partial_config_is_merged_over_the_defaults_section_by_section():
             base.merged(partial)
     with pytest.raises(ValueError, match="a config is a JSON object"):
         base.merged([("loop", {})])  # type: ignore[arg-type]  # what a JSON list would be
+
+
+def test_sessions_stored_with_the_whole_ppo_and_reward_configs_keep_running_as_they_did(caplog):
+    """Settings stored before issue 38 held `PPOConfig` and `RewardConfig` whole (with the
+    fields of removed mechanisms); they load, and make the run config they made then."""
+    ppo = PPOConfig(n_envs=1, n_steps=32, batch_size=16, n_epochs=1)
+    stored = json.loads(SessionSettings(pool_size=30, seed=4).model_dump_json())
+    del stored["research"]
+    stored["ppo"] = dataclasses.asdict(ppo)
+    stored["reward"] = dataclasses.asdict(RewardConfig(ensemble_size=2)) | {
+        "exploration_bonus": 0.0,
+        "pessimism": 0.0,
+        "exploration_decay": 0.5,
+    }
+    stored["reward"]["lr"] = None  # older still: None meant "the default"
+    settings = SessionSettings.model_validate(stored)
+    cfg = settings.run_config("GridWorld")
+    assert cfg.ppo == ppo and cfg.reward == RewardConfig(ensemble_size=2)
+    assert (cfg.loop.pool_size, cfg.loop.seed) == (30, 4) and not caplog.records
+    again = SessionSettings.model_validate_json(settings.model_dump_json())
+    assert again.run_config("GridWorld") == cfg  # and so does what it stores now
+
+
+def test_the_session_settings_are_product_settings_with_one_line_help():
+    assert set(SessionSettings.model_fields) >= {"pool_variants", "ppo_preset", "pretrain_steps"}
+    assert not set(SessionSettings.model_fields) & {"ppo", "reward"}
+    presets = SessionSettings.model_fields["ppo_preset"].annotation
+    assert set(presets.__args__) == set(PPO_PRESETS)  # type: ignore[union-attr]  # a Literal
+    schema = SessionSettings.model_json_schema()["properties"]
+    for name, field in schema.items():
+        help_ = field.get("description", "")
+        assert 0 < len(help_) <= 120 and "\n" not in help_, name
+    mujoco = SessionSettings(ppo_preset="mujoco", pretrain_steps=500, pool_variants=3)
+    cfg = mujoco.run_config("GridWorld")
+    assert cfg.ppo == PPO_PRESETS["mujoco"] and cfg.training.pretrain_steps == 500
+    assert cfg.loop.pool_variants == 3
+    with pytest.raises(ValueError, match="ensemble_sise"):
+        SessionSettings(research={"reward": {"ensemble_sise": 2}})

@@ -151,6 +151,9 @@ export function fakeApi(
     annotator: "",
     settings: {
       pool_size: round.leaves.length,
+      pool_variants: 0,
+      ppo_preset: "study",
+      pretrain_steps: 0,
       fragment_length: 30,
       round_seconds: 600,
       comparisons_per_round: 20,

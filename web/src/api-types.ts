@@ -1169,108 +1169,6 @@ export interface components {
              */
             share: number | null;
         };
-        /**
-         * PPOConfig
-         * @description Stable-Baselines3 PPO, the study's defaults (SPEC §3).
-         */
-        PPOConfig: {
-            /**
-             * Batch Size
-             * @description Steps per PPO minibatch; at most a rollout (n_envs × n_steps).
-             * @default 64
-             */
-            batch_size: number;
-            /**
-             * Clip Range
-             * @description PPO's clip ε: how far one update may move the policy's probability ratio from 1.
-             * @default 0.1
-             */
-            clip_range: number;
-            /**
-             * Ent Coef
-             * @description Weight of the entropy bonus in the loss (keeps the policy exploring).
-             * @default 0.01
-             */
-            ent_coef: number;
-            /**
-             * Gae Lambda
-             * @description λ of generalised advantage estimation: 0 one-step TD, 1 Monte Carlo returns.
-             * @default 0.95
-             */
-            gae_lambda: number;
-            /**
-             * Gamma
-             * @description Discount of the returns PPO maximises (and of the reward normaliser's running return).
-             * @default 0.97
-             */
-            gamma: number;
-            /**
-             * Learning Rate
-             * @description Adam learning rate of the policy and value networks (constant).
-             * @default 0.002
-             */
-            learning_rate: number;
-            /**
-             * N Envs
-             * @description Copies of the env stepped together, in one process; a rollout is n_envs × n_steps.
-             * @default 8
-             */
-            n_envs: number;
-            /**
-             * N Epochs
-             * @description Passes over each rollout's minibatches.
-             * @default 10
-             */
-            n_epochs: number;
-            /**
-             * N Steps
-             * @description Steps per env per rollout.
-             * @default 256
-             */
-            n_steps: number;
-            /**
-             * Net Arch
-             * @description Hidden layer widths of the policy network and, separately, of the value network.
-             * @default [
-             *       32,
-             *       32
-             *     ]
-             */
-            net_arch: number[];
-            /**
-             * Normalize Obs
-             * @description Running observation normalisation (VecNormalize).
-             * @default true
-             */
-            normalize_obs: boolean;
-            /**
-             * Normalize Reward
-             * @description Scale rewards by a running return std: the learned reward's scale drifts per round.
-             * @default true
-             */
-            normalize_reward: boolean;
-            /**
-             * Reset Reward Norm
-             * @description Forget the running return std at the start of every round's training (the reward
-             *     function changed with the fit before it).
-             * @default false
-             */
-            reset_reward_norm: boolean;
-            /**
-             * Standardise Reward
-             * @description Centre and scale the learned reward per step by its running mean and sd over PPO's
-             *     rollouts before PPO sees it (imitation's `NormalizedRewardNet`); `normalize_reward` then
-             *     scales the result by the return std as before.
-             * @default false
-             */
-            standardise_reward: boolean;
-            /**
-             * Tensorboard
-             * @description Write TensorBoard logs under the run directory.
-             * @default true
-             */
-            tensorboard: boolean;
-        };
         /** PairOut */
         PairOut: {
             /** A */
@@ -1330,182 +1228,6 @@ export interface components {
              */
             phase: string;
         };
-        /**
-         * RewardConfig
-         * @description The reward-model ensemble and its Bradley–Terry training (SPEC §3).
-         */
-        RewardConfig: {
-            /**
-             * Action Term
-             * @description How the action enters each member's reward (with `use_actions`): "cost" (default),
-             *     f(obs) − Σ_i c_i (a_i / rms_i)², a learned control cost c_i ≥ 0; "additive", f(obs) +
-             *     g(act), two MLPs summed; "joint", one MLP over [obs ; act] (SPEC §3). A joint reward
-             *     learnt from 30-step sums credits the torque that keeps a pendulum near the top (braking,
-             *     0.5 sd of the reward, where the true cost is 0.001 sd) and PPO, braking everywhere, cannot
-             *     swing up; a cost has the form of every SPEC env's true reward and cannot pay an action
-             *     only in some states. Pendulum-v1 at SPEC noise, 5 seeds: −166 ± 68 against −564 ± 290
-             *     for "joint" (docs/results/peer).
-             * @default cost
-             * @enum {string}
-             */
-            action_term: "joint" | "additive" | "cost";
-            /**
-             * Activation
-             * @description Hidden-layer nonlinearity, a key of `groupwise.reward.network.ACTIVATIONS`.
-             * @default relu
-             */
-            activation: string;
-            /**
-             * Batch Size
-             * @description Preference pairs per minibatch.
-             * @default 4
-             */
-            batch_size: number;
-            /**
-             * Bootstrap
-             * @description Each member trains on its own resample with replacement of the training pairs.
-             * @default true
-             */
-            bootstrap: boolean;
-            /**
-             * Ensemble Size
-             * @description K, the number of independently bootstrapped members.
-             * @default 3
-             */
-            ensemble_size: number;
-            /**
-             * Epochs
-             * @description Passes over the (bootstrapped) dataset per fit after round 0. On a simulated 5-round
-             *     session (warm-started ensemble) 3 beat 1 and matched 5 and 10 within seed noise.
-             * @default 3
-             */
-            epochs: number;
-            /**
-             * Exploration Bonus
-             * @description β: PPO's reward adds β_r times the members' sd, their disagreement, to their mean
-             *     (RUNE, Liang et al. 2022: the policy seeks out states the reward model is unsure of, so
-             *     the next pools hold behaviour the teacher has not yet judged). The members are then
-             *     standardised after each fit (as with `standardise_output`) so that their sd compares
-             *     rewards, not offsets. 0 (default) trains on the mean alone.
-             * @default 0
-             */
-            exploration_bonus: number;
-            /**
-             * Exploration Decay
-             * @description β_r = β · decay^r after a fit whose newest pairs are round r's: the bonus fades as
-             *     the reward model learns.
-             * @default 0.5
-             */
-            exploration_decay: number;
-            /**
-             * Hidden Sizes
-             * @description Hidden layer widths of each member's MLP.
-             * @default [
-             *       64,
-             *       64
-             *     ]
-             */
-            hidden_sizes: number[];
-            /**
-             * Initial Epoch Multiplier
-             * @description Round 0 trains this many times more epochs (its dataset is small and the net fresh):
-             *     with 10 pairs, 30 epochs lifted the round-0 reward's correlation with the truth from
-             *     0.35 (3 epochs) to 0.49, and PPO trains on that reward for a whole round.
-             * @default 10
-             */
-            initial_epoch_multiplier: number;
-            /**
-             * Initial L2
-             * @description Starting weight of the L2 penalty; adapted during training (see `bradley_terry`).
-             * @default 0.0001
-             */
-            initial_l2: number;
-            /**
-             * L2 Bounds
-             * @description Validation/training loss ratio band the adaptive L2 weight aims for (Christiano et al.).
-             * @default [
-             *       1.1,
-             *       1.5
-             *     ]
-             */
-            l2_bounds: [
-                number,
-                number
-            ];
-            /**
-             * L2 Factor
-             * @description After each epoch with a validation split, the L2 weight is multiplied by this when the
-             *     loss ratio is above `l2_bounds` and divided by it when below.
-             * @default 1.2
-             */
-            l2_factor: number;
-            /**
-             * L2 Range
-             * @description The adaptive L2 weight stays inside this range. Above ~0.1 the penalty (about 4 for a
-             *     fresh 64-64 member) swamps the cross-entropy and can kill every ReLU for good: the
-             *     reward becomes a constant (seen on small validation splits, `bradley_terry`).
-             * @default [
-             *       1e-8,
-             *       0.1
-             *     ]
-             */
-            l2_range: [
-                number,
-                number
-            ];
-            /**
-             * Lr
-             * @description AdamW learning rate.
-             * @default 0.001
-             */
-            lr: number;
-            /**
-             * Min Pairs For Validation
-             * @description Below this many pairs there is no held-out split (tiny datasets must not crash).
-             * @default 10
-             */
-            min_pairs_for_validation: number;
-            /**
-             * Pessimism
-             * @description κ: PPO's reward subtracts κ times the members' sd from their mean, every round (a
-             *     conservative reward: PPO is paid less where the members disagree, off what the teacher
-             *     judged; issue 20: a walker's greedy stance, never judged, was paid more than the splits
-             *     the teacher preferred). The members are standardised as for the bonus, which it
-             *     offsets. 0 (default): none.
-             * @default 0
-             */
-            pessimism: number;
-            /**
-             * Standardise Output
-             * @description After each fit, centre and scale every member's reward to mean 0, sd 1 over the
-             *     dataset's steps in the reward PPO sees (`RewardEnsemble.standardise_output`).
-             * @default false
-             */
-            standardise_output: boolean;
-            /**
-             * Use Actions
-             * @description The members see [obs ; act] (SPEC §3); off, the observation alone. Neither wins on
-             *     every env (ARCHITECTURE.md, "Reward inputs"): observation-only members stopped Pendulum-v1
-             *     seeds from learning to spin (-127 ± 12 vs -233 ± 198) and did better on GridWorld, but
-             *     cannot see a control cost: on the study's Reacher (1,000 steps) the groupwise DM's agents
-             *     collapsed to -865 ± 546 against -199 ± 70 with [obs ; act].
-             * @default true
-             */
-            use_actions: boolean;
-            /**
-             * Validation Fraction
-             * @description Share of pairs held out for validation, only when there are `min_pairs_for_validation`.
-             * @default 0.2
-             */
-            validation_fraction: number;
-            /**
-             * Warm Start
-             * @description Each fit continues from the last one's weights; off, every fit starts from fresh
-             *     weights (and the initial L2 weight).
-             * @default true
-             */
-            warm_start: boolean;
-        };
         /** RoundTree */
         RoundTree: {
             /** @description the pool's clip timing (null: a pool from before it) */
@@ -1558,60 +1280,11 @@ export interface components {
              *       "pair_derivation": "cover",
              *       "pair_oversample": 1,
              *       "pool_size": 100,
-             *       "ppo": {
-             *         "batch_size": 64,
-             *         "clip_range": 0.1,
-             *         "ent_coef": 0.01,
-             *         "gae_lambda": 0.95,
-             *         "gamma": 0.97,
-             *         "learning_rate": 0.002,
-             *         "n_envs": 8,
-             *         "n_epochs": 10,
-             *         "n_steps": 256,
-             *         "net_arch": [
-             *           32,
-             *           32
-             *         ],
-             *         "normalize_obs": true,
-             *         "normalize_reward": true,
-             *         "reset_reward_norm": false,
-             *         "standardise_reward": false,
-             *         "tensorboard": true
-             *       },
+             *       "pool_variants": 0,
+             *       "ppo_preset": "study",
              *       "ppo_steps_per_round": 20000,
+             *       "pretrain_steps": 0,
              *       "render_workers": 2,
-             *       "reward": {
-             *         "action_term": "cost",
-             *         "activation": "relu",
-             *         "batch_size": 4,
-             *         "bootstrap": true,
-             *         "ensemble_size": 3,
-             *         "epochs": 3,
-             *         "exploration_bonus": 0,
-             *         "exploration_decay": 0.5,
-             *         "hidden_sizes": [
-             *           64,
-             *           64
-             *         ],
-             *         "initial_epoch_multiplier": 10,
-             *         "initial_l2": 0.0001,
-             *         "l2_bounds": [
-             *           1.1,
-             *           1.5
-             *         ],
-             *         "l2_factor": 1.2,
-             *         "l2_range": [
-             *           1e-8,
-             *           0.1
-             *         ],
-             *         "lr": 0.001,
-             *         "min_pairs_for_validation": 10,
-             *         "pessimism": 0,
-             *         "standardise_output": false,
-             *         "use_actions": true,
-             *         "validation_fraction": 0.2,
-             *         "warm_start": true
-             *       },
              *       "round_seconds": 600,
              *       "rounds": 5,
              *       "seed": 0,
@@ -1629,7 +1302,7 @@ export interface components {
         SessionSettings: {
             /**
              * Clip Seconds
-             * @description simulated seconds a behaviour covers, played at real speed (null: the env's default, e.g. 1.5 s for Hopper; with fragment_length too, they must agree)
+             * @description simulated seconds a behaviour covers, played at real speed (null: the env's default; must agree with fragment_length)
              */
             clip_seconds?: number | null;
             /**
@@ -1659,7 +1332,7 @@ export interface components {
             exploration_fraction: number;
             /**
              * Final Steps
-             * @description PPO env steps on the frozen learned reward after the last round (null: 2 × ppo_steps_per_round, at most 10,000,000)
+             * @description PPO env steps on the learned reward after the last round (null: 2 × ppo_steps_per_round)
              */
             final_steps?: number | null;
             /**
@@ -1669,19 +1342,19 @@ export interface components {
             fragment_length?: number | null;
             /**
              * Frame Size
-             * @description clip width, height
+             * @description clip width and height in pixels
              * @default 240
              */
             frame_size: number;
             /**
              * Lease S
-             * @description a shared session (docs/teams.md): seconds a group suggestion or pair is offered to one annotator alone, so two people do not answer the same one at once (0: everyone gets the same)
+             * @description a shared session: seconds a suggestion is offered to one annotator alone (0: everyone gets the same)
              * @default 60
              */
             lease_s: number;
             /**
              * Overlap Share
-             * @description a shared session: share of answered suggestions offered once more, to another annotator, to measure how well the annotators agree (0: none)
+             * @description a shared session: share of answered suggestions asked again of another annotator, to measure agreement
              * @default 0.1
              */
             overlap_share: number;
@@ -1709,8 +1382,19 @@ export interface components {
              * @default 100
              */
             pool_size: number;
-            /** @description PPO (SPEC §3) */
-            ppo?: components["schemas"]["PPOConfig"];
+            /**
+             * Pool Variants
+             * @description half of each pool comes from this many copies of the agent, each pushed one way, to show rarer behaviours (0: none)
+             * @default 0
+             */
+            pool_variants: number;
+            /**
+             * Ppo Preset
+             * @description PPO settings: study (small, fast nets) or mujoco (PPO's own, for long walking and jumping episodes)
+             * @default study
+             * @enum {string}
+             */
+            ppo_preset: "study" | "mujoco";
             /**
              * Ppo Steps Per Round
              * @description PPO env steps after each round
@@ -1718,13 +1402,24 @@ export interface components {
              */
             ppo_steps_per_round: number;
             /**
+             * Pretrain Steps
+             * @description PPO steps the agent first explores, seeking new states, so the first behaviours differ more (0: none)
+             * @default 0
+             */
+            pretrain_steps: number;
+            /**
              * Render Workers
              * @description clip render processes (0: inline)
              * @default 2
              */
             render_workers: number;
-            /** @description reward model */
-            reward?: components["schemas"]["RewardConfig"];
+            /**
+             * Research
+             * @description research settings: a partial run config merged over these (e.g. {"reward": {"ensemble_size": 5}}; groupwise.config)
+             */
+            research?: {
+                [key: string]: unknown;
+            } | null;
             /**
              * Round Seconds
              * @description round time budget in seconds (0 = no limit)
@@ -1733,7 +1428,7 @@ export interface components {
             round_seconds: number;
             /**
              * Rounds
-             * @description rounds in the session (the final phase's round follows the last)
+             * @description rounds of feedback in the session (the final phase follows the last)
              * @default 5
              */
             rounds: number;
@@ -1745,19 +1440,19 @@ export interface components {
             seed: number;
             /**
              * Stage After S
-             * @description continuous training: seconds into a round when the next round's pool is sampled from the policy as it is then and prepared ahead, so End round opens it at once (later: a younger policy's behaviours; a round ended sooner waits for its pool)
+             * @description continuous training: seconds into a round when the next round is prepared, so End round opens it at once
              * @default 60
              */
             stage_after_s: number;
             /**
              * Suggestions
-             * @description top-k pairwise suggestion edges precomputed
+             * @description pairwise suggestions precomputed per round
              * @default 100
              */
             suggestions: number;
             /**
              * Training
-             * @description continuous: PPO trains while you compare, the reward model refitting as your answers arrive, and the next round is prepared ahead; rounds: PPO trains after each round (the simulation study's protocol, SPEC §8)
+             * @description continuous: the agent trains while you compare; rounds: it trains after each round ends
              * @default continuous
              * @enum {string}
              */

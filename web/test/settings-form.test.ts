@@ -18,13 +18,34 @@ const fields = settingFields(schemas);
 const byKey = new Map(fields.map((f) => [f.key, f]));
 const field = (key: string) => byKey.get(key)!;
 
+/** The server's schema with a nested config, as the settings once held PPO's whole config:
+ * the form offers any nested config's fields, in a section of Advanced. */
+const nestedSchemas = structuredClone(schemas);
+nestedSchemas.SessionSettings!.properties!.ppo = { $ref: "#/components/schemas/PPOConfig" };
+nestedSchemas.PPOConfig = {
+  title: "PPOConfig",
+  properties: {
+    learning_rate: { type: "number", title: "Learning Rate", exclusiveMinimum: 0 },
+    batch_size: { type: "integer", title: "Batch Size", minimum: 2 },
+    gae_lambda: { type: "number", title: "Gae Lambda" },
+    net_arch: { type: "array", title: "Net Arch", items: { type: "integer" } },
+    l2_range: { type: "array", title: "L2 Range", prefixItems: [{ type: "number" }, { type: "number" }] },
+    normalize_obs: { type: "boolean", title: "Normalize Obs" },
+  },
+};
+const nested = settingFields(nestedSchemas);
+const nestedField = (key: string) => nested.find((f) => f.key === key)!;
+
 describe("settingFields", () => {
-  it("offers every SessionSettings field but the driver, and every PPO and reward field", () => {
-    const top = Object.keys(schemas.SessionSettings!.properties!).filter((k) => !["driver", "ppo", "reward"].includes(k));
+  it("offers every SessionSettings field but the driver and research, each with a one-line help", () => {
+    const top = Object.keys(schemas.SessionSettings!.properties!).filter((k) => !["driver", "research"].includes(k));
     for (const key of top) expect(byKey.has(key), key).toBe(true);
-    for (const key of Object.keys(schemas.PPOConfig!.properties!)) expect(byKey.has(`ppo.${key}`), key).toBe(true);
-    for (const key of Object.keys(schemas.RewardConfig!.properties!)) expect(byKey.has(`reward.${key}`), key).toBe(true);
-    expect(byKey.has("driver")).toBe(false);
+    expect(fields.map((f) => f.key).sort()).toEqual([...top].sort());
+    for (const f of fields) {
+      expect(f.help.length, f.key).toBeGreaterThan(0);
+      expect(f.help.length, f.key).toBeLessThanOrEqual(120);
+      expect(f.help, f.key).not.toMatch(/SPEC|issue \d/);
+    }
   });
 
   it("groups them: Feedback and Training in the page's order, the rest Advanced", () => {
@@ -34,16 +55,33 @@ describe("settingFields", () => {
       "rounds",
       "round_seconds",
       "pool_size",
+      "pool_variants",
       "clip_seconds",
       "fragment_length",
       "pair_derivation",
     ]);
-    expect(keys("training")).toEqual(["ppo_steps_per_round", "final_steps", "seed", "eval_episodes"]);
-    expect(new Set(fields.filter((f) => f.group === "advanced").map((f) => f.section))).toEqual(
-      new Set(["Session", "PPO", "Reward model"]),
-    );
-    expect(field("ppo.gamma").section).toBe("PPO");
+    expect(keys("training")).toEqual([
+      "ppo_steps_per_round",
+      "final_steps",
+      "ppo_preset",
+      "pretrain_steps",
+      "seed",
+      "eval_episodes",
+    ]);
+    expect(new Set(fields.filter((f) => f.group === "advanced").map((f) => f.section))).toEqual(new Set(["Session"]));
     expect(field("frame_size").section).toBe("Session");
+  });
+
+  it("puts a nested config's fields in its own section of Advanced", () => {
+    expect(nestedField("ppo.gae_lambda")).toMatchObject({ group: "advanced", section: "PPO", label: "GAE lambda" });
+    expect(nested.slice(-6).map((f) => f.key)).toEqual([
+      "ppo.learning_rate",
+      "ppo.batch_size",
+      "ppo.gae_lambda",
+      "ppo.net_arch",
+      "ppo.l2_range",
+      "ppo.normalize_obs",
+    ]);
   });
 
   it("puts a setting the server adds in Advanced, without page changes", () => {
@@ -59,15 +97,17 @@ describe("settingFields", () => {
     expect(field("final_steps")).toMatchObject({ kind: "integer", min: 0, max: 10_000_000, nullable: true });
     expect(field("frame_size").step).toBe(2);
     expect(field("pair_derivation")).toMatchObject({ kind: "choice", choices: ["cover", "cartesian"] });
-    expect(field("ppo.net_arch")).toMatchObject({ kind: "list", integerItems: true });
-    expect(field("reward.l2_range")).toMatchObject({ kind: "list", integerItems: false });
-    expect(field("ppo.normalize_obs").kind).toBe("boolean");
+    expect(field("ppo_preset")).toMatchObject({ kind: "choice", choices: ["study", "mujoco"] });
+    expect(field("pool_variants")).toMatchObject({ kind: "integer", min: 0, max: 32, nullable: false });
+    expect(nestedField("ppo.net_arch")).toMatchObject({ kind: "list", integerItems: true });
+    expect(nestedField("ppo.l2_range")).toMatchObject({ kind: "list", integerItems: false });
+    expect(nestedField("ppo.normalize_obs").kind).toBe("boolean");
   });
 
   it("labels from the titles, help from the descriptions", () => {
     expect(field("ppo_steps_per_round").label).toBe("PPO steps per round");
     expect(field("clip_seconds").label).toBe("Clip seconds");
-    expect(field("ppo.gae_lambda").label).toBe("GAE lambda");
+    expect(field("pretrain_steps").label).toBe("Pretrain steps");
     expect(field("pool_size").help).toBe("behaviours per round");
     expect(field("final_steps").help).toContain("(empty: 2 × ppo steps per round");
   });
@@ -93,9 +133,9 @@ describe("values", () => {
     expect(parseInput(field("clip_seconds"), "")).toEqual({ ok: true, value: null });
     expect(parseInput(field("clip_seconds"), "2.5")).toEqual({ ok: true, value: 2.5 });
     expect(parseInput(field("clip_seconds"), "abc").ok).toBe(false);
-    expect(parseInput(field("ppo.net_arch"), "16, 16 8")).toEqual({ ok: true, value: [16, 16, 8] });
-    expect(parseInput(field("ppo.net_arch"), "16, 1.5").ok).toBe(false);
-    expect(parseInput(field("ppo.normalize_obs"), "false")).toEqual({ ok: true, value: false });
+    expect(parseInput(nestedField("ppo.net_arch"), "16, 16 8")).toEqual({ ok: true, value: [16, 16, 8] });
+    expect(parseInput(nestedField("ppo.net_arch"), "16, 1.5").ok).toBe(false);
+    expect(parseInput(nestedField("ppo.normalize_obs"), "false")).toEqual({ ok: true, value: false });
     expect(parseInput(field("pair_derivation"), "cartesian")).toEqual({ ok: true, value: "cartesian" });
   });
 });
@@ -104,7 +144,7 @@ describe("chosenSettings", () => {
   it("sends only the touched fields, nested as the server takes them", () => {
     const inputs = { clip_seconds: "2", pool_size: "100", "ppo.learning_rate": "0.0005", "ppo.net_arch": "16" };
     const touched = new Set(["clip_seconds", "ppo.learning_rate", "ppo.net_arch"]);
-    expect(chosenSettings(fields, inputs, touched)).toEqual({
+    expect(chosenSettings(nested, inputs, touched)).toEqual({
       settings: { clip_seconds: 2, ppo: { learning_rate: 0.0005, net_arch: [16] } },
       errors: [],
     });
@@ -129,7 +169,7 @@ describe("refusalText", () => {
     expect(refusalText("settings.pool_size: Input should be less than or equal to 1000", fields)).toBe(
       "Pool size: Input should be less than or equal to 1000",
     );
-    expect(refusalText("settings.ppo.batch_size: Input should be greater than or equal to 2", fields)).toBe(
+    expect(refusalText("settings.ppo.batch_size: Input should be greater than or equal to 2", nested)).toBe(
       "Batch size (PPO): Input should be greater than or equal to 2",
     );
     expect(
@@ -141,7 +181,7 @@ describe("refusalText", () => {
   });
 
   it("names a nested config by its section and leaves other sentences alone", () => {
-    expect(refusalText("settings.ppo: Value error, ppo batch_size 4096 is larger than a rollout", fields)).toBe(
+    expect(refusalText("settings.ppo: Value error, ppo batch_size 4096 is larger than a rollout", nested)).toBe(
       "PPO: ppo batch_size 4096 is larger than a rollout",
     );
     const plain = "fragment_length 7 and clip_seconds 1.0 (30 steps of GridWorld) disagree: give one of them";

@@ -1,11 +1,14 @@
 """The settings of an interactive session (docs/app.md, "Settings"), validated on creation.
 
 A pydantic model (frozen, unknown fields rejected) because it is both the request schema of
-`POST /api/sessions` and the JSON stored with the session. It is a view of the core's one
-config (`groupwise.config`), not a mirror: PPO and the reward model are the core's own
-`PPOConfig` and `RewardConfig`, the loop's fields reuse the core's field types, and
-`run_config` is the session as a `RunConfig` (written beside its checkpoints). What only the
-app has (per-round budgets, the round timer, suggestions, clip size) lives here alone.
+`POST /api/sessions` and the JSON stored with the session. It is a whitelist of product
+settings, each with a one-line help a person understands (the New-session page shows it):
+`run_config` makes the core's `RunConfig` from them (written beside its checkpoints). The
+core's other fields (the reward model, PPO beyond its preset, the research knobs) are not
+settings of their own: a program or a test gives them as `research`, a partial `RunConfig`
+merged over the session's (`RunConfig.merged`), and their meaning is in `groupwise.config`.
+Sessions stored when the settings held the whole `PPOConfig` and `RewardConfig` (their
+"ppo" and "reward" objects) load with those as their `research`.
 
 A behaviour covers `clip_seconds` of simulated time (the env's default when null), played at
 real speed (`groupwise.clips.timing`); a new session stores its L in steps (`for_env`), and
@@ -21,13 +24,12 @@ from pydantic import BaseModel, ConfigDict, Field, model_validator
 
 from groupwise.clips.timing import ClipTiming, default_clip_seconds, env_clip_timing
 from groupwise.config import (
+    PPO_PRESETS,
     ExplorationFraction,
     LoopConfig,
     PairCap,
     PairDerivation,
     PairOversample,
-    PPOConfig,
-    RewardConfig,
     RunConfig,
     Seed,
     TrainingConfig,
@@ -50,8 +52,13 @@ MAX_ROUNDS = 100
 """Most rounds of a session (round indices 0 … 99, rounds without feedback included)."""
 MAX_PPO_STEPS = 10_000_000
 """Most PPO env steps of one training phase in the app."""
+MAX_POOL_VARIANTS = 32
+"""Most pool variants (`LoopConfig.pool_variants`) a session asks for."""
 FINAL_STEPS_FACTOR = 2
 """The final phase trains this many rounds' worth of PPO steps unless `final_steps` says."""
+
+LEGACY_SECTIONS = frozenset({"ppo", "reward"})
+"""Settings stored before issue 38 held these core configs whole; they are `research` now."""
 
 HUMAN = "human"
 """`LoopConfig.oracle` of a session a person answers (through the page)."""
@@ -66,6 +73,13 @@ class SessionSettings(BaseModel):
     model_config = ConfigDict(frozen=True, extra="forbid")
 
     pool_size: int = Field(default=100, ge=8, le=1000, description="behaviours per round")
+    pool_variants: int = Field(
+        default=0,
+        ge=0,
+        le=MAX_POOL_VARIANTS,
+        description="half of each pool comes from this many copies of the agent, each pushed one "
+        "way, to show rarer behaviours (0: none)",
+    )
     fragment_length: int | None = Field(
         default=None,
         ge=MIN_FRAGMENT_LENGTH,
@@ -77,7 +91,7 @@ class SessionSettings(BaseModel):
         gt=0,
         le=20,
         description="simulated seconds a behaviour covers, played at real speed (null: the "
-        "env's default, e.g. 1.5 s for Hopper; with fragment_length too, they must agree)",
+        "env's default; must agree with fragment_length)",
     )
     round_seconds: float = Field(
         default=600, ge=0, le=86_400, description="round time budget in seconds (0 = no limit)"
@@ -95,17 +109,17 @@ class SessionSettings(BaseModel):
         default=5,
         ge=1,
         le=MAX_ROUNDS,
-        description="rounds in the session (the final phase's round follows the last)",
+        description="rounds of feedback in the session (the final phase follows the last)",
     )
     final_steps: int | None = Field(
         default=None,
         ge=0,
         le=MAX_PPO_STEPS,
-        description="PPO env steps on the frozen learned reward after the last round (null: "
-        f"{FINAL_STEPS_FACTOR} × ppo_steps_per_round, at most {MAX_PPO_STEPS:,})",
+        description="PPO env steps on the learned reward after the last round (null: "
+        f"{FINAL_STEPS_FACTOR} × ppo_steps_per_round)",
     )
     suggestions: int = Field(
-        default=100, ge=0, le=2000, description="top-k pairwise suggestion edges precomputed"
+        default=100, ge=0, le=2000, description="pairwise suggestions precomputed per round"
     )
     seed: Seed = 0
     pair_derivation: PairDerivation = "cover"
@@ -113,9 +127,20 @@ class SessionSettings(BaseModel):
     pair_oversample: PairOversample = 1.0
     training: Literal["rounds", "continuous"] = Field(
         default="continuous",
-        description="continuous: PPO trains while you compare, the reward model refitting as "
-        "your answers arrive, and the next round is prepared ahead; rounds: PPO trains after "
-        "each round (the simulation study's protocol, SPEC §8)",
+        description="continuous: the agent trains while you compare; rounds: it trains after "
+        "each round ends",
+    )
+    ppo_preset: Literal["study", "mujoco"] = Field(
+        default="study",
+        description="PPO settings: study (small, fast nets) or mujoco (PPO's own, for long "
+        "walking and jumping episodes)",
+    )
+    pretrain_steps: int = Field(
+        default=0,
+        ge=0,
+        le=MAX_PPO_STEPS,
+        description="PPO steps the agent first explores, seeking new states, so the first "
+        "behaviours differ more (0: none)",
     )
     # -- advanced knobs (the New-session page's "Advanced") ------------------------------
     driver: Literal["app", "library"] = Field(
@@ -124,7 +149,7 @@ class SessionSettings(BaseModel):
         "using groupwise.WebTeacher",
     )
     frame_size: int = Field(
-        default=240, ge=16, le=480, multiple_of=2, description="clip width, height"
+        default=240, ge=16, le=480, multiple_of=2, description="clip width and height in pixels"
     )
     render_workers: int = Field(
         default=2, ge=0, le=8, description="clip render processes (0: inline)"
@@ -133,42 +158,56 @@ class SessionSettings(BaseModel):
         default=60,
         ge=0,
         le=3600,
-        description="continuous training: seconds into a round when the next round's pool is "
-        "sampled from the policy as it is then and prepared ahead, so End round opens it at "
-        "once (later: a younger policy's behaviours; a round ended sooner waits for its pool)",
+        description="continuous training: seconds into a round when the next round is "
+        "prepared, so End round opens it at once",
     )
     lease_s: float = Field(
         default=60,
         ge=0,
         le=3600,
-        description="a shared session (docs/teams.md): seconds a group suggestion or pair is "
-        "offered to one annotator alone, so two people do not answer the same one at once "
+        description="a shared session: seconds a suggestion is offered to one annotator alone "
         "(0: everyone gets the same)",
     )
     overlap_share: float = Field(
         default=0.1,
         ge=0,
         le=1,
-        description="a shared session: share of answered suggestions offered once more, to "
-        "another annotator, to measure how well the annotators agree (0: none)",
+        description="a shared session: share of answered suggestions asked again of another "
+        "annotator, to measure agreement",
     )
     exploration_fraction: ExplorationFraction = 0.25
     eval_episodes: int = Field(
         default=5, ge=0, le=100, description="episodes measuring the true return after training"
     )
-    ppo: PPOConfig = Field(default_factory=PPOConfig, description="PPO (SPEC §3)")
-    reward: RewardConfig = Field(default_factory=RewardConfig, description="reward model")
+    research: dict[str, Any] | None = Field(
+        default=None,
+        description="research settings: a partial run config merged over these "
+        '(e.g. {"reward": {"ensemble_size": 5}}; groupwise.config)',
+    )
 
     @model_validator(mode="before")
     @classmethod
     def _legacy_overrides(cls, data: Any) -> Any:
-        """Sessions stored before the settings took the core's models kept PPO and reward
-        overrides with None for "the default": drop those Nones."""
-        if isinstance(data, dict):
-            for key in ("ppo", "reward"):
-                if isinstance(data.get(key), dict):
-                    data = {**data, key: {k: v for k, v in data[key].items() if v is not None}}
-        return data
+        """Sessions stored when the settings held the core's whole `PPOConfig` and
+        `RewardConfig` ("ppo", "reward"; before that with None for "the default") read
+        them as `research`."""
+        if not isinstance(data, dict) or not data.keys() & LEGACY_SECTIONS:
+            return data
+        research = dict(data.get("research") or {})
+        for key in LEGACY_SECTIONS & data.keys():
+            if isinstance(data[key], dict):
+                given = {k: v for k, v in data[key].items() if v is not None}
+                research[key] = {**given, **research.get(key, {})}
+            else:
+                research[key] = data[key]  # validation names the bad value
+        rest = {k: v for k, v in data.items() if k not in LEGACY_SECTIONS}
+        return {**rest, "research": research}
+
+    @model_validator(mode="after")
+    def _research_is_a_config(self) -> "SessionSettings":
+        if self.research:
+            RunConfig().merged(self.research)  # raises ValueError naming the field
+        return self
 
     def clip_timing(self, env: str) -> ClipTiming:
         """L and how a clip of `env` plays it (`clips.timing`): `fragment_length` steps if
@@ -240,7 +279,9 @@ class SessionSettings(BaseModel):
             pair_cap=self.pair_cap,
             pair_oversample=self.pair_oversample,
             pool_size=self.pool_size,
+            pool_variants=self.pool_variants,
             seed=self.seed,
         )
-        training = TrainingConfig(mode=self.training)
-        return RunConfig(loop=loop, reward=self.reward, ppo=self.ppo, training=training)
+        training = TrainingConfig(mode=self.training, pretrain_steps=self.pretrain_steps)
+        cfg = RunConfig(loop=loop, ppo=PPO_PRESETS[self.ppo_preset], training=training)
+        return cfg.merged(self.research) if self.research else cfg

@@ -41,7 +41,8 @@ def test_resolve_gives_the_envs_defaults_with_l_in_steps(client):
     # 1.5 s of 0.008 s steps; the final phase trains two rounds' worth of PPO steps
     assert (hopper["clip_seconds"], hopper["fragment_length"]) == (1.5, 188)
     assert hopper["final_steps"] == 2 * hopper["ppo_steps_per_round"] == 40_000
-    assert hopper["pool_size"] == 100 and hopper["ppo"]["n_envs"] == 8
+    assert hopper["pool_size"] == 100 and hopper["ppo_preset"] == "study"
+    assert hopper["research"] is None and "ppo" not in hopper  # the core's configs are not settings
     grid = client.post("/api/settings/resolve", json={"env": "GridWorld"}).json()
     assert (grid["clip_seconds"], grid["fragment_length"]) == (1.0, 30)
     assert client.get("/api/sessions").json() == []  # nothing was created
@@ -91,8 +92,10 @@ def test_a_session_stores_exactly_the_chosen_settings(client):
         "seed": 7,
         "rounds": 3,
         "pair_derivation": "cartesian",
-        "ppo": {"learning_rate": 0.0005, "net_arch": [16]},
-        "reward": {"ensemble_size": 2},
+        "pool_variants": 4,
+        "pretrain_steps": 2048,
+        "ppo_preset": "mujoco",
+        "research": {"ppo": {"net_arch": [16]}, "reward": {"ensemble_size": 2}},
     }
     body = {"env": "Hopper-backflip", "mode": "pairwise", "settings": chosen}
     resolved = client.post("/api/settings/resolve", json=body).json()
@@ -102,8 +105,8 @@ def test_a_session_stores_exactly_the_chosen_settings(client):
     assert (state["env"], state["mode"], state["rounds"]) == ("Hopper-backflip", "pairwise", 3)
     assert state["settings"] == resolved
     assert state["settings"]["fragment_length"] == 250
-    assert state["settings"]["ppo"]["net_arch"] == [16]
-    assert state["settings"]["reward"]["ensemble_size"] == 2
+    assert state["settings"]["research"]["ppo"]["net_arch"] == [16]
+    assert state["settings"]["pool_variants"] == 4
     assert client.get(f"/api/sessions/{state['id']}").json()["settings"] == resolved
 
 

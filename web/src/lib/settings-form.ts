@@ -62,16 +62,18 @@ export const GROUPS: Readonly<Record<Exclude<GroupId, "advanced">, readonly stri
     "rounds",
     "round_seconds",
     "pool_size",
+    "pool_variants",
     "clip_seconds",
     "fragment_length",
     "pair_derivation",
   ],
-  training: ["ppo_steps_per_round", "final_steps", "seed", "eval_episodes"],
+  training: ["ppo_steps_per_round", "final_steps", "ppo_preset", "pretrain_steps", "seed", "eval_episodes"],
 };
 
 /** Settings the page never offers: a session made here is driven by the app's worker
- * (`driver: "library"` is for a program's `groupwise.WebTeacher`). */
-export const HIDDEN: ReadonlySet<string> = new Set(["driver"]);
+ * (`driver: "library"` is for a program's `groupwise.WebTeacher`), and `research` (a
+ * partial run config) is for programs and tests. */
+export const HIDDEN: ReadonlySet<string> = new Set(["driver", "research"]);
 
 /** Pairs of settings that say the same thing two ways: choosing one lets the server derive
  * the other (L in steps from simulated seconds, or the reverse). */

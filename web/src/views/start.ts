@@ -272,7 +272,7 @@ function build(element: HTMLElement): View {
       h("fieldset", { class: "setting-group" }, h("legend", {}, "Feedback"), mode, feedback),
       h("fieldset", { class: "setting-group" }, h("legend", {}, "Training"), training),
     ),
-    h("details", { class: "advanced" }, h("summary", {}, "Advanced: the reward model, PPO and the rest"), advanced),
+    h("details", { class: "advanced" }, h("summary", {}, "Advanced: clips, the worker and shared sessions"), advanced),
   );
   const list = h("ul", { class: "session-list" });
   const listBox = h("section", { class: "sessions", "aria-labelledby": "sessions-title" }, h("h2", { id: "sessions-title" }, "Sessions"), list);
