@@ -1,5 +1,6 @@
 """The `groupwise` command line: errors are one line and exit code 2; a real run works."""
 
+import json
 import os
 import subprocess
 import sys
@@ -7,6 +8,7 @@ import sys
 import pytest
 
 from groupwise.cli import main
+from groupwise.config import RunConfig
 
 
 def _run(*args: str) -> subprocess.CompletedProcess:
@@ -78,3 +80,30 @@ def test_a_negative_count_is_refused(tmp_path, capsys, command, option):
         main([command, *first, option, "-1", "--out", str(tmp_path), "-q"])
     assert exit_.value.code == 2
     assert ">= 0" in capsys.readouterr().err
+
+
+def test_train_takes_research_settings_from_a_partial_config(tmp_path, capsys):
+    """--config FILE: a partial JSON config merged over the defaults, the options given on
+    the command line over it; an old run's config.json (removed fields and all) as well."""
+    partial = tmp_path / "research.json"
+    partial.write_text(json.dumps({"reward": {"ensemble_size": 2}, "loop": {"rounds": 3}}))
+    out = tmp_path / "run"
+    args = ["--comparisons", "4", "--steps", "0", "--seed", "1", "--pool-variants", "2", "-q"]
+    assert main(["train", "--env", "GridWorld", "--config", str(partial), "--rounds", "1",
+                 "--out", str(out), *args]) == 0  # fmt: skip
+    cfg = RunConfig.load(out / "config.json")
+    assert (cfg.reward.ensemble_size, cfg.loop.rounds, cfg.loop.pool_variants) == (2, 1, 2)
+    assert cfg.ppo == RunConfig().ppo  # what the file leaves out keeps its default
+    old = json.loads(cfg.to_json())
+    old["loop"]["suggestion_rank"] = "variance"  # a config.json written before issue 38
+    old["reward"]["exploration_bonus"] = 0.0
+    (tmp_path / "old.json").write_text(json.dumps(old))
+    again = tmp_path / "again"
+    assert main(["train", "--env", "GridWorld", "--config", str(tmp_path / "old.json"),
+                 "--out", str(again), *args]) == 0  # fmt: skip
+    assert RunConfig.load(again / "config.json") == cfg
+    (tmp_path / "bad.json").write_text(json.dumps({"reward": {"ensemble_size": 0}}))
+    assert main(["train", "--env", "GridWorld", "--config", str(tmp_path / "bad.json"),
+                 "--out", str(tmp_path / "bad"), *args]) == 2  # fmt: skip
+    err = capsys.readouterr().err.strip()
+    assert "reward.ensemble_size" in err and len(err.splitlines()) == 1
