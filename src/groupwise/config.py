@@ -103,6 +103,18 @@ class RewardConfig:
     swing up; a cost has the form of every SPEC env's true reward and cannot pay an action
     only in some states. Pendulum-v1 at SPEC noise, 5 seeds: −166 ± 68 against −564 ± 290
     for "joint" (docs/results/peer)."""
+    crops: Annotated[int, Field(ge=0, le=100)] = 0
+    """Research (issue 41): score each labelled pair on this many temporal crops of both
+    fragments per minibatch (QPA's 20; `reward.augment.TemporalCrops`); 0: the whole pairs."""
+    pseudo_labels: Annotated[float, Field(ge=0.5, le=1)] | None = None
+    """Research (issue 41): add pairs of the round's pool pseudo-labelled where a member is
+    at least this sure (SURF's 0.95; `reward.augment.PseudoLabels`); None: none."""
+    reset_every: Annotated[int, Field(ge=1)] | None = None
+    """Research (issue 41): fresh member weights, refitted on the whole dataset, before the
+    fit of every round r ≥ 1 divisible by this (PoLiCER; `reward.reset`); None: never."""
+    reset_margin: float | None = None
+    """Research (issue 41): ... or whenever the reward pays the round's pool more than the
+    preferred behaviours by this many sds of its per-step value (`reward.reset`); None: never."""
 
 
 @dataclass(frozen=True, config=_STRICT)
@@ -218,6 +230,10 @@ class LoopConfig:
     pool_variant_scale: Annotated[float, Field(ge=0, le=1)] = 0.5
     """... and how far each pushes the actions: a fixed offset per action dimension of up
     to this share of half its range."""
+    coverage_share: Annotated[float, Field(ge=0, le=1)] = 0.0
+    """Research (issue 41): share of a round's queries chosen by how far their behaviours
+    are from every judged one, half the least and half the most covered (PPE;
+    `query.coverage`); 0: the strategy's own order."""
     candidate_pairs: PositiveInt = 10
     """Pairwise active learning: random candidate pairs scored per query."""
     eval_episodes: Annotated[int, Field(ge=0)] = 5

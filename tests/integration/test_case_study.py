@@ -45,6 +45,10 @@ COLUMNS = [
     "ppo_s",
     "eval_s",
     "wall_s",
+    "reward_rank_rho",
+    "reward_split",
+    "reward_nonsplit",
+    "reward_stance",
 ]
 
 
@@ -107,6 +111,8 @@ def test_backflip_case_study_writes_rounds_video_and_strip(tmp_path, capsys):
         spread, best = float(row["pool_score_sd"]), float(row["pool_score_max"])
         assert 0.0 <= spread <= 1e3 and math.isfinite(best)
         assert all(float(row[f"{phase}_s"]) > 0 for phase in ("sample", "reward", "ppo", "eval"))
+        assert -1.0 <= float(row["reward_rank_rho"]) <= 1.0  # issue 41's diagnostic
+        assert math.isnan(float(row["reward_split"]))  # the walker's postures only
     assert float(rows[1]["wall_s"]) > float(rows[0]["wall_s"])
 
     config = json.loads((out / CONFIG_FILE).read_text())["loop"]
@@ -150,7 +156,11 @@ def test_backflip_case_study_writes_rounds_video_and_strip(tmp_path, capsys):
 def test_other_targets_and_decision_makers_run(tmp_path, target, dm, seconds):
     out = tmp_path / target
     research = tmp_path / "research.json"  # a partial config: research settings
-    research.write_text(json.dumps({"reward": {"use_actions": True}, "ppo": {"n_epochs": 3}}))
+    settings = {"reward": {"use_actions": True}, "ppo": {"n_epochs": 3}}
+    if target == "walker-splits":  # issue 41's remedies, all at once
+        settings["reward"] |= {"crops": 4, "pseudo_labels": 0.95, "reset_every": 1}
+        settings["loop"] = {"coverage_share": 0.5}
+    research.write_text(json.dumps(settings))
     args = ("--no-video", "--config", str(research), "--ppo", "mujoco", "--pairs", "24")
     assert _case_study(out, target, dm, seconds, *args) == 0
     config = json.loads((out / CONFIG_FILE).read_text())
@@ -164,6 +174,9 @@ def test_other_targets_and_decision_makers_run(tmp_path, target, dm, seconds):
     assert int(rows[0]["pairs_total"]) <= 2 and int(rows[1]["pairs_total"]) <= 2 + 21
     assert not (out / VIDEO_FILE).exists()
     if target == "walker-splits":  # its last round's posture, over the evaluation episodes
+        assert config["reward"]["crops"] == 4 and config["loop"]["coverage_share"] == 0.5
+        for row in rows:  # the learned reward on the policy's own postures (issue 41)
+            assert math.isfinite(float(row["reward_nonsplit"]))
         chosen, shares = replay_posture(out)
         assert chosen == 1 and shares["steps"] == 2 * horizon("Walker2d-splits")
         assert 0.0 <= shares["all"] <= min(shares["split"], shares["upright"], shares["feet_2"])

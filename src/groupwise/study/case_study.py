@@ -39,6 +39,12 @@ from groupwise.run.run import Run
 from groupwise.run.streams import eval_rng
 from groupwise.run.takeaway import TakeawayChoice, TakeawayConfig
 from groupwise.study.case_studies.film import Film, film_episode, write_film
+from groupwise.study.case_studies.reward_rank import (
+    POSTURES,
+    RewardRank,
+    rank_rng,
+    reward_rank,
+)
 from groupwise.types import FloatArray
 
 CASE_FILE = "case-study.csv"
@@ -182,6 +188,17 @@ class CaseRecord:
     """The target evaluation (the loop's own evaluation is off: ``eval_episodes`` = 0)."""
     wall_s: float
     """Wall time since the study started, evaluations included."""
+    reward_rank_rho: float = math.nan
+    """Spearman ρ between the learned reward and the target's step score over the steps of
+    fresh greedy and stochastic episodes of the policy (issue 41,
+    `study.case_studies.reward_rank`) ..."""
+    reward_split: float = math.nan
+    """... and, for walker-splits, the learned reward's mean per step on held-split steps ..."""
+    reward_nonsplit: float = math.nan
+    """... on every other step ..."""
+    reward_stance: float = math.nan
+    """... and on the wide, tilted stance among them (thighs ≥ 90° apart, both feet down,
+    torso past 60°)."""
 
     @classmethod
     def of(
@@ -194,8 +211,10 @@ class CaseRecord:
         eval_s: float,
         wall_s: float,
         behaviour_scores: FloatArray | None = None,
+        rank: RewardRank | None = None,
     ) -> "CaseRecord":
-        """The row of `record`; `behaviour_scores`: its pool's (`pool_scores`; None: none)."""
+        """The row of `record`; `behaviour_scores`: its pool's (`pool_scores`; None: none);
+        `rank`: the learned reward's ranking of the policy's steps (None: not measured)."""
         scores = np.full(1, np.nan)  # no pool scored, or an empty one
         if behaviour_scores is not None and len(behaviour_scores):
             scores = behaviour_scores
@@ -218,7 +237,22 @@ class CaseRecord:
             ppo_s=record.ppo_s,
             eval_s=eval_s,
             wall_s=wall_s,
+            **_rank_columns(rank),
         )
+
+
+def _rank_columns(rank: RewardRank | None) -> dict[str, float]:
+    if rank is None:
+        return {}
+    posture = rank.by_posture
+    return {
+        "reward_rank_rho": rank.rho,
+        **{
+            f"reward_{name}": posture[name]
+            for name in ("split", "nonsplit", "stance")
+            if name in posture
+        },
+    }
 
 
 @dataclass(frozen=True)
@@ -265,6 +299,7 @@ def run_case_study(
     rows: list[CaseRecord] = []
     evaluations: list[TargetEvaluation] = []
     with Run.create(cfg, out) as run:
+        postures = POSTURES[target.name](run.make_env) if target.name in POSTURES else None
 
         def scored(record: RoundRecord) -> None:
             begin = time.perf_counter()
@@ -273,6 +308,14 @@ def run_case_study(
                 run.agent.policy(deterministic=True),
                 eval_episodes,
                 eval_rng(cfg.loop.seed),
+            )
+            rank = reward_rank(  # issue 41: the learned reward on the policy's own steps
+                run.make_env,
+                run.agent,
+                run.ensemble.mean_reward,
+                eval_episodes,
+                rank_rng(cfg.loop.seed, record.round),
+                postures,
             )
             now = time.perf_counter()
             previous = rows[-1] if rows else None
@@ -286,6 +329,7 @@ def run_case_study(
                     now - begin,
                     now - started,
                     recorder.scores.get(record.round),
+                    rank,
                 )
             )
             evaluations.append(evaluation)
