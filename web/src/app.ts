@@ -229,7 +229,8 @@ export function startApp(root: HTMLElement, options: AppOptions = {}): { store: 
       }
       const retry = { retry: () => void controller.control("retry") };
       const points = st.training?.sid === s.id ? st.training.points : [];
-      renderTraining(mode === "groupwise" ? trainingA : trainingB, { session: s, points });
+      const target = st.envs.find((e) => e.name === s.env)?.target ?? null;
+      renderTraining(mode === "groupwise" ? trainingA : trainingB, { session: s, points, target });
       if (mode) {
         renderPeople(mode === "groupwise" ? peopleA : peopleB, {
           shared: shared && results.hidden,

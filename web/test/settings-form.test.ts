@@ -1,8 +1,12 @@
 import { describe, expect, it } from "vitest";
 import openapi from "../openapi.json";
 import {
+  GROUPS,
+  MODE_HELP,
   type Schemas,
+  type SettingField,
   chosenSettings,
+  helpIn,
   helpOf,
   inputText,
   labelOf,
@@ -61,6 +65,7 @@ describe("settingFields", () => {
       "pair_derivation",
     ]);
     expect(keys("training")).toEqual([
+      "training",
       "ppo_steps_per_round",
       "final_steps",
       "ppo_preset",
@@ -203,5 +208,25 @@ describe("labelOf and helpOf", () => {
     expect(helpOf("Passes over the dataset per fit.\nOn a simulated session 3 beat 1.")).toBe(
       "Passes over the dataset per fit.",
     );
+  });
+});
+
+describe("the Training section says what each setting does in the chosen mode (issue 39)", () => {
+  it("holds the training mode, with help that is not cut at a colon", () => {
+    expect(GROUPS.training[0]).toBe("training");
+    expect(helpOf("continuous: the agent trains while you compare; rounds: it trains after each round ends")).toBe(
+      "continuous: the agent trains while you compare; rounds: it trains after each round ends",
+    );
+  });
+
+  it("tells what PPO steps per round do in each mode", () => {
+    const f = { key: "ppo_steps_per_round", help: "PPO env steps after each round" } as SettingField;
+    expect(helpIn(f, "continuous")).toMatch(/^Not used in continuous training/);
+    expect(helpIn(f, "rounds")).toMatch(/^PPO env steps after each round/);
+    const other = { key: "seed", help: "the random seed" } as SettingField;
+    expect(helpIn(other, "continuous")).toBe("the random seed");
+    for (const [key, byMode] of Object.entries(MODE_HELP)) {
+      for (const words of Object.values(byMode)) expect(words.length, key).toBeLessThan(160);
+    }
   });
 });

@@ -1,7 +1,15 @@
 import { describe, expect, it } from "vitest";
 import type { TrainingPoint } from "../src/api";
 import { createStore } from "../src/state";
-import { clockLabel, curveGeometry, mergePoints, summaryLines, trainingSummary } from "../src/lib/training";
+import {
+  axisTitles,
+  clockLabel,
+  curveGeometry,
+  mergePoints,
+  summaryLines,
+  timeTicks,
+  trainingSummary,
+} from "../src/lib/training";
 
 const T0 = Date.parse("2030-01-01T12:00:00Z");
 
@@ -48,6 +56,20 @@ describe("the learning curve's geometry", () => {
     expect([none.points, none.path, none.yTicks, none.xTicks]).toEqual([[], "", [], []]);
   });
 
+  it("labels a curve of under a few seconds once per whole second (not 0:00 0:00 0:00 0:00)", () => {
+    expect(timeTicks(0)).toEqual([0]);
+    expect(timeTicks(0.4)).toEqual([0]);
+    expect(timeTicks(2.5)).toEqual([0, 1, 2]);
+    const labels = curveGeometry([point(0, 0, 1), point(0.6, 64, 2)], 100, 50, NONE).xTicks;
+    expect(labels.map((t) => t.label)).toEqual(["0:00"]);
+  });
+
+  it("titles its axes with their units: the true return, or a target's per-step score", () => {
+    expect(curveGeometry([point(0, 0, 3)], 100, 50).titles).toEqual({ x: "session time (m:ss)", y: "true return" });
+    expect(axisTitles({ unit: "s", step_unit: "rad/s" }).y).toBe("per-step score sum (rad/s)");
+    expect(axisTitles({ unit: "s" }).y).toBe("per-step score sum");
+  });
+
   it("writes session time as m:ss or h:mm:ss", () => {
     expect([clockLabel(0), clockLabel(75), clockLabel(3725)]).toEqual(["0:00", "1:15", "1:02:05"]);
   });
@@ -75,6 +97,16 @@ describe("the learning in words", () => {
       pool: "Pool sampled 1 PPO step ago",
     });
     expect(trainingSummary([])).toBeNull();
+  });
+
+  it("tells the shown round's pool age, though the ended round's record comes after it", () => {
+    const points = [
+      point(0, 4096, null, { round: 1, pool_steps: 2048 }),
+      point(1, 6144, null, { round: 2, pool_steps: 6000 }), // round 2 opened
+      point(2, 6144, 5, { round: 1, pool_steps: 2048 }), // round 1 committed after
+    ];
+    const summary = trainingSummary(points)!;
+    expect([summary.round, summary.ppoSteps, summary.poolAge, summary.trueReturn]).toEqual([2, 6144, 144, 5]);
   });
 });
 

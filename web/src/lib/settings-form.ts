@@ -67,7 +67,7 @@ export const GROUPS: Readonly<Record<Exclude<GroupId, "advanced">, readonly stri
     "fragment_length",
     "pair_derivation",
   ],
-  training: ["ppo_steps_per_round", "final_steps", "ppo_preset", "pretrain_steps", "seed", "eval_episodes"],
+  training: ["training", "ppo_steps_per_round", "final_steps", "ppo_preset", "pretrain_steps", "seed", "eval_episodes"],
 };
 
 /** Settings the page never offers: a session made here is driven by the app's worker
@@ -91,12 +91,47 @@ export function labelOf(title: string): string {
 
 /**
  * A description as the page says it: its first sentence (the config's docstrings go on with
- * the reasons, for developers), "null" is an empty field, names are words.
+ * the reasons, for developers), "null" is an empty field, names are words. A colon does not
+ * end it (issue 39: "continuous: the agent trains while you compare; …" read "continuous:").
  */
 export function helpOf(description: string | undefined): string {
   const text = (description ?? "").replace(/\s+/g, " ").trim();
-  const first = text.match(/^.*?[.;:](?=\s+[A-Z(]|$)/)?.[0] ?? text;
+  const first = text.match(/^.*?[.;](?=\s+[A-Z(]|$)/)?.[0] ?? text;
   return first.replace(/\bnull\b/g, "empty").replace(/([a-z])_(?=[a-z])/g, "$1 ");
+}
+
+/** The two training modes (`SessionSettings.training`). */
+export type TrainingMode = "rounds" | "continuous";
+
+/**
+ * What a setting whose effect depends on the training mode does in each (issue 39: "PPO
+ * steps per round" said "PPO env steps after each round" while continuous training, which
+ * trains for as long as a round lasts, does not read it). The form shows the chosen mode's.
+ */
+export const MODE_HELP: Readonly<Record<string, Readonly<Record<TrainingMode, string>>>> = {
+  training: {
+    continuous:
+      "Continuous: PPO trains while you compare, and each new round shows what the agent does at its end (cut from PPO's latest episodes).",
+    rounds: "Rounds: PPO trains after each round ends, for PPO steps per round, while you wait; then the next round is sampled.",
+  },
+  ppo_steps_per_round: {
+    continuous: "Not used in continuous training: PPO trains for as long as a round lasts (pause the round to pause it).",
+    rounds: "PPO env steps after each round, on the reward fitted to all answers so far; you wait while they run.",
+  },
+  final_steps: {
+    continuous: "PPO env steps on the learned reward after the last round, before the agent is filmed (empty: 2 × PPO steps per round).",
+    rounds: "PPO env steps on the learned reward after the last round, before the agent is filmed (empty: 2 × PPO steps per round).",
+  },
+  eval_episodes: {
+    continuous: "Episodes of the greedy policy per point of the learning chart, measured every few seconds of training beside PPO.",
+    rounds: "Episodes of the greedy policy measuring its true return after each round's training.",
+  },
+};
+
+/** The help `f` shows when the form's training mode is `mode`. */
+export function helpIn(f: SettingField, mode: string): string {
+  const byMode = MODE_HELP[f.key];
+  return byMode && (mode === "rounds" || mode === "continuous") ? byMode[mode] : f.help;
 }
 
 function refName(schema: JsonSchema): string | null {

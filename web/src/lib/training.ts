@@ -26,6 +26,20 @@ export interface CurveGeometry {
   xTicks: Array<{ seconds: number; x: number; label: string }>;
   /** The plotting area, inside the margins. */
   area: { left: number; top: number; right: number; bottom: number };
+  /** The axes' titles, with their units (`axisTitles`). */
+  titles: AxisTitles;
+}
+
+export interface AxisTitles {
+  x: string;
+  y: string;
+}
+
+/** What a target env scores, as far as the chart's units go (`AgentTarget` has the
+ * per-step score's unit; `GET /api/envs`' `TargetOut` only the episode score's). */
+export interface ScoreUnit {
+  unit?: string;
+  step_unit?: string;
 }
 
 export interface TrainingSummary {
@@ -40,7 +54,16 @@ export interface TrainingSummary {
   trueReturn: number | null;
 }
 
-export const CURVE_MARGIN: Margin = { top: 8, right: 10, bottom: 20, left: 44 };
+export const CURVE_MARGIN: Margin = { top: 8, right: 10, bottom: 32, left: 56 };
+
+/** The axes' titles: session time, and the greedy policy's true return, which in a target
+ * env is the sum of the target's per-step scores, in their unit. */
+export function axisTitles(target: ScoreUnit | null = null): AxisTitles {
+  return {
+    x: "session time (m:ss)",
+    y: !target ? "true return" : target.step_unit ? `per-step score sum (${target.step_unit})` : "per-step score sum",
+  };
+}
 
 const time = (p: TrainingPoint) => Date.parse(p.at);
 const same = (a: TrainingPoint, b: TrainingPoint) =>
@@ -54,17 +77,21 @@ export function mergePoints(points: readonly TrainingPoint[], more: readonly Tra
   return out.sort((a, b) => time(a) - time(b));
 }
 
-/** The newest point's steps, fit and pool age, with the newest evaluated return. */
+/** The newest round's newest point: its fit and its pool (a round's points carry its own
+ * pool's position; the ended round's record may come after the next round's first point),
+ * the most PPO steps any point has, and the newest evaluated return. */
 export function trainingSummary(points: readonly TrainingPoint[]): TrainingSummary | null {
-  const last = points[points.length - 1];
-  if (!last) return null;
+  if (!points.length) return null;
+  const round = Math.max(...points.map((p) => p.round));
+  const last = points.filter((p) => p.round === round).pop()!;
+  const ppoSteps = Math.max(...points.map((p) => p.ppo_steps));
   const evaluated = points.filter((p) => p.true_return !== null);
   return {
-    round: last.round,
-    ppoSteps: last.ppo_steps,
+    round,
+    ppoSteps,
     pairs: last.pairs,
     valAccuracy: last.reward_val_accuracy,
-    poolAge: last.ppo_steps - last.pool_steps,
+    poolAge: Math.max(0, ppoSteps - last.pool_steps),
     trueReturn: evaluated[evaluated.length - 1]?.true_return ?? null,
   };
 }
@@ -92,13 +119,29 @@ export function clockLabel(seconds: number): string {
   return h ? `${h}:${String(m).padStart(2, "0")}:${ss}` : `${m}:${ss}`;
 }
 
+/** Ticks of the session-time axis up to `end` seconds: whole seconds only, each label once
+ * (a curve a second long used to read "0:00 0:00 0:00 0:00"). */
+export function timeTicks(end: number): number[] {
+  if (!(end >= 1)) return [0];
+  const ticks = niceTicks(0, end, 4).filter((t) => Number.isInteger(t) && t <= end * 1.0001);
+  const seen = new Set<string>();
+  return ticks.filter((t) => {
+    const label = clockLabel(t);
+    if (seen.has(label)) return false;
+    seen.add(label);
+    return true;
+  });
+}
+
 /** Where every evaluated point goes in a `width` × `height` chart: x the seconds since the
- * session's first point (refits included), y the true return on nice ticks. */
+ * session's first point (refits included), y the true return on nice ticks; `target` names
+ * the y axis's unit (`axisTitles`). */
 export function curveGeometry(
   points: readonly TrainingPoint[],
   width: number,
   height: number,
   margin: Margin = CURVE_MARGIN,
+  target: ScoreUnit | null = null,
 ): CurveGeometry {
   const area = {
     left: margin.left,
@@ -117,7 +160,7 @@ export function curveGeometry(
   const hi = yTicks[yTicks.length - 1] ?? 1;
   const y = (v: number) => area.bottom - ((v - lo) / (hi - lo || 1)) * (area.bottom - area.top);
   const end = evaluated[evaluated.length - 1]?.seconds ?? 0;
-  const xTicks = end > 0 ? niceTicks(0, end, 4).filter((t) => t <= end * 1.0001) : [0];
+  const xTicks = timeTicks(end);
   const x = (sec: number) =>
     end > 0 ? area.left + (sec / end) * (area.right - area.left) : (area.left + area.right) / 2;
   const placed = evaluated.map((e) => ({ ...e, x: x(e.seconds), y: y(e.point.true_return) }));
@@ -131,5 +174,6 @@ export function curveGeometry(
     yTicks: yTicks.map((value) => ({ value, y: y(value), label: formatValue(value) })),
     xTicks: evaluated.length ? xTicks.map((sec) => ({ seconds: sec, x: x(sec), label: clockLabel(sec) })) : [],
     area,
+    titles: axisTitles(target),
   };
 }

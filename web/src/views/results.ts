@@ -111,7 +111,7 @@ export function renderResults(element: HTMLElement, data: ResultsData, handlers:
   text(view.learning.querySelector(".learning-title")!, `${capitalise(agent.measure)} over the session`);
   if (!view.learning.hidden && view.learned !== data.training) {
     view.learned = data.training;
-    drawCurve(view.learningChart, data.training, LEARNING_CHART);
+    drawCurve(view.learningChart, data.training, LEARNING_CHART, agent.target ?? null);
   }
   const c = st.counts;
   const frozen = agent.rounds.filter((r) => !r.feedback);

@@ -10,9 +10,11 @@
 import type { EnvInfo, SessionCreate, SessionState, Settings } from "../api";
 import { OTHER_ENV, envAbout, envOptionText } from "../lib/env-choice";
 import {
+  MODE_HELP,
   type Schemas,
   type SettingField,
   chosenSettings,
+  helpIn,
   inputText,
   refusalText,
   settingFields,
@@ -156,7 +158,7 @@ function fieldRow(view: View, f: SettingField): HTMLElement {
     if (f.kind === "list") control.placeholder = "e.g. 64, 64";
   }
   view.controls.set(f.key, control);
-  const help = f.help ? h("small", { class: "help", id: `${id}-help` }, f.help) : null;
+  const help = f.help || MODE_HELP[f.key] ? h("small", { class: "help", id: `${id}-help` }, helpIn(f, modeOf(view))) : null;
   if (help) control.setAttribute("aria-describedby", help.id);
   const edited = (now: boolean) => {
     view.touched = touch(view.touched, f.key);
@@ -165,6 +167,22 @@ function fieldRow(view: View, f: SettingField): HTMLElement {
   control.addEventListener("input", () => edited(false));
   control.addEventListener("change", () => edited(true));
   return h("div", { class: `setting ${f.kind}` }, h("label", { for: id }, f.label), control, help);
+}
+
+/** The training mode the form holds now ("continuous", the default, before it is known). */
+function modeOf(view: View): string {
+  const control = view.controls.get("training");
+  return control?.value || "continuous";
+}
+
+/** Each mode-dependent setting's help for the mode chosen now (`MODE_HELP`). */
+function showModeHelp(view: View): void {
+  const mode = modeOf(view);
+  for (const f of view.fields) {
+    if (!MODE_HELP[f.key]) continue;
+    const help = view.form.querySelector(`#setting-${f.key.replace(/\W/g, "-")}-help`);
+    if (help) text(help as HTMLElement, helpIn(f, mode));
+  }
 }
 
 function controlText(control: Control): string {
@@ -179,7 +197,7 @@ function showResolved(view: View, resolved: Settings): void {
     const value = valueAt(resolved, f.path);
     if (control instanceof HTMLInputElement && control.type === "checkbox") control.checked = value === true;
     else if (control.value !== inputText(value)) control.value = inputText(value);
-  }
+  }  showModeHelp(view);
 }
 
 /** The body the form means now (env, mode, the touched settings); notes inputs that mean no value. */
@@ -196,6 +214,7 @@ function body(view: View): SessionCreate {
 
 /** Ask the server what the form means, now or after a pause in typing. */
 function check(view: View, now = true): void {
+  showModeHelp(view);
   if (view.timer) clearTimeout(view.timer);
   view.timer = null;
   const run = () => {

@@ -7,12 +7,21 @@
  */
 import type { SessionState, TrainingPoint } from "../api";
 import { formatValue } from "../lib/results";
-import { type CurveGeometry, curveGeometry, summaryLines, trainingSummary } from "../lib/training";
+import {
+  CURVE_MARGIN,
+  type CurveGeometry,
+  type ScoreUnit,
+  curveGeometry,
+  summaryLines,
+  trainingSummary,
+} from "../lib/training";
 import { h, memo, s, text } from "./dom";
 
 export interface TrainingData {
   session: SessionState | null;
   points: readonly TrainingPoint[];
+  /** The session's target, when its env is one: the chart's unit (`GET /api/envs`). */
+  target?: ScoreUnit | null;
 }
 
 interface View {
@@ -25,7 +34,7 @@ interface View {
 
 const views = new WeakMap<Element, View>();
 /** The open page's chart, in SVG units (before the page knows its width). */
-export const PANEL_CHART = { width: 360, height: 92 };
+export const PANEL_CHART = { width: 360, height: 110 };
 
 const SHOWN: ReadonlySet<SessionState["phase"]> = new Set(["ready", "training", "preparing"]);
 
@@ -45,18 +54,30 @@ export function renderTraining(element: HTMLElement, data: TrainingData): void {
   }
   // Drawn at the width it is shown (the panel is wider in pairwise mode), text unscaled.
   const shown = Math.round(view.chart.getBoundingClientRect().width);
-  drawCurve(view.chart, data.points, { ...PANEL_CHART, width: shown > 0 ? shown : PANEL_CHART.width });
+  const size = { ...PANEL_CHART, width: shown > 0 ? shown : PANEL_CHART.width };
+  drawCurve(view.chart, data.points, size, data.target ?? null);
 }
 
-/** Draw the true return over session time into `svg` (`width` × `height` SVG units). */
+/** Draw the true return over session time into `svg` (`width` × `height` SVG units), its
+ * axes titled with their units (`target`: a target env's score unit). */
 export function drawCurve(
   svg: SVGSVGElement,
   points: readonly TrainingPoint[],
   size: { width: number; height: number },
+  target: ScoreUnit | null = null,
 ): CurveGeometry {
-  const g = curveGeometry(points, size.width, size.height);
+  const g = curveGeometry(points, size.width, size.height, CURVE_MARGIN, target);
   const a = g.area;
   const children: SVGElement[] = [];
+  const middle = (a.top + a.bottom) / 2;
+  children.push(
+    s("text", { class: "axis-label x", x: (a.left + a.right) / 2, y: size.height - 3 }, g.titles.x),
+    s(
+      "text",
+      { class: "axis-label y", x: 11, y: middle, transform: `rotate(-90 11 ${middle})` },
+      g.titles.y,
+    ),
+  );
   for (const t of g.yTicks) {
     children.push(s("line", { class: "grid", x1: a.left, x2: a.right, y1: t.y, y2: t.y }));
     children.push(s("text", { class: "tick y", x: a.left - 6, y: t.y, dy: "0.32em" }, t.label));
@@ -69,7 +90,7 @@ export function drawCurve(
   for (const p of g.points) {
     const label =
       `${p.point.ppo_steps.toLocaleString("en")} PPO steps (round ${p.point.round}): ` +
-      `true return ${formatValue(p.point.true_return ?? 0)}`;
+      `${g.titles.y} ${formatValue(p.point.true_return ?? 0)}`;
     children.push(
       s("circle", { class: "curve-point", cx: p.x, cy: p.y, r: 3, "data-steps": p.point.ppo_steps }, s("title", {}, label)),
     );
@@ -79,13 +100,15 @@ export function drawCurve(
   svg.setAttribute(
     "aria-label",
     g.points.length
-      ? `True return over session time: ${g.points
+      ? `${capitalise(g.titles.y)} over session time: ${g.points
           .map((p) => `${formatValue(p.point.true_return ?? 0)} at ${p.point.ppo_steps.toLocaleString("en")} PPO steps`)
           .join(", ")}`
-      : "True return over session time: not measured yet",
+      : `${capitalise(g.titles.y)} over session time: not measured yet`,
   );
   return g;
 }
+
+const capitalise = (words: string) => words.charAt(0).toUpperCase() + words.slice(1);
 
 function build(element: HTMLElement): View {
   element.classList.add("panel", "training-panel");
