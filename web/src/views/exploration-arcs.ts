@@ -62,7 +62,7 @@ export function buildArcs(chart: Chart, round: RoundData | null, centre: string 
     chart.arcEls.set(node.id, el);
   }
   chart.arcsG.replaceChildren(frag);
-  chart.sizes.replaceChildren(sizeLabels(layout.arcs));
+  drawSizes(chart);
   for (const leaf of round.tree.leaves) {
     chart.ancestorIds.set(leaf.id, ancestors(leaf).map((n) => n.id));
   }
@@ -72,22 +72,27 @@ export function buildArcs(chart: Chart, round: RoundData | null, centre: string 
   text(chart.subtitle, `round ${round.round} · ${n} behaviours`);
 }
 
-/** The number of behaviours on every cluster's arc wide and deep enough for it. */
-function sizeLabels(arcs: readonly Arc[]): DocumentFragment {
+/**
+ * Writes the number of behaviours on every cluster's arc wide and deep enough for it at the
+ * drawn zoom (the text keeps its size on screen; zoomed in, more of them fit).
+ */
+export function drawSizes(chart: Chart): void {
+  const k = chart.drawn.k;
+  const font = SIZE_FONT / k;
   const frag = document.createDocumentFragment();
-  for (const a of arcs) {
+  for (const a of chart.layout?.arcs ?? []) {
     const n = a.node.leaves.length;
     if (a.node.isLeaf || n < 2) continue;
     const label = String(n);
     const mid = (a.r0 + a.r1) / 2;
-    const along = (a.a1 - a.a0) * mid;
-    if (along < label.length * SIZE_FONT * 0.62 + 10 || a.r1 - a.r0 < SIZE_FONT * 1.1) continue;
+    const along = (a.a1 - a.a0) * mid * k;
+    if (along < label.length * SIZE_FONT * 0.62 + 10 || (a.r1 - a.r0) * k < SIZE_FONT * 1.1) continue;
     const [x, y] = polar(midAngle(a), mid);
-    const t = s("text", { x: x.toFixed(1), y: y.toFixed(1), "font-size": SIZE_FONT, "data-for": a.node.id });
+    const t = s("text", { x: x.toFixed(1), y: y.toFixed(1), "font-size": font.toFixed(2), "data-for": a.node.id });
     t.textContent = label;
     frag.append(t);
   }
-  return frag;
+  chart.sizes.replaceChildren(frag);
 }
 
 /** The one arc reached by Tab (a roving tabindex). */
@@ -151,16 +156,19 @@ export function updateMarks(chart: Chart, compared: ReadonlySet<string>): void {
     chart.marks.removeAttribute("d");
     return;
   }
-  const n = chart.round.tree.leaves.length;
+  const n = layout.rings[0]?.length ?? 0;
   const r = layout.discRadius - 7;
-  const dot = Math.max(1, Math.min(3.2, ((Math.PI * r) / Math.max(1, n)) * 0.55));
+  // Sized for the leaves' width on screen (the marks' layer is zoomed).
+  const k = chart.drawn.k;
+  const dot = Math.max(1, Math.min(3.2, ((Math.PI * r) / Math.max(1, n)) * 0.55 * k)) / k;
   let d = "";
+  const f = (v: number) => v.toFixed(k > 4 ? 2 : 1);
   for (const leaf of chart.round.tree.leaves) {
     if (compared.has(leaf.id)) continue;
     const arc = layout.byId.get(leaf.id);
     if (!arc) continue;
     const [x, y] = polar(midAngle(arc), r);
-    d += `M${(x - dot).toFixed(1)},${y.toFixed(1)}a${dot},${dot} 0 1,0 ${2 * dot},0a${dot},${dot} 0 1,0 ${-2 * dot},0`;
+    d += `M${f(x - dot)},${f(y)}a${f(dot)},${f(dot)} 0 1,0 ${f(2 * dot)},0a${f(dot)},${f(dot)} 0 1,0 ${f(-2 * dot)},0`;
   }
   chart.marks.setAttribute("d", d);
 }

@@ -8,8 +8,9 @@
  * benchmarks/web_render.py); pointer, keys and the preview are `exploration-events.ts`.
  *
  * Issue 40: the chart centres on a cluster (the store's `centre`, with a breadcrumb back
- * out) and zooms with the wheel or a pinch (d3-zoom: its transform moves the arcs' layer and
- * redraws the edges, so the bundles stay); a new centre or round starts unzoomed.
+ * out) and zooms with the wheel or a pinch (d3-zoom on the chart's box: during a gesture the
+ * drawn arcs and edges move as one picture, at its end both are drawn afresh under the zoom,
+ * so the bundles stay); a new centre, round or size starts unzoomed.
  */
 import { select } from "d3-selection";
 import { type ZoomTransform, zoom, zoomIdentity } from "d3-zoom";
@@ -17,7 +18,7 @@ import { crumbs } from "../lib/centre";
 import { GROUP_COLOURS } from "../lib/colour";
 import { attr, h, kbd, memo, s, text } from "./dom";
 import { EdgeCanvas } from "./edge-canvas";
-import { buildArcs, updateMarks, updateOutline, updateTints } from "./exploration-arcs";
+import { buildArcs, drawSizes, updateMarks, updateOutline, updateTints } from "./exploration-arcs";
 import {
   type CallHandler,
   type Chart,
@@ -247,6 +248,8 @@ function settleZoom(chart: Chart): void {
   const identity = z.k === 1 && z.x === 0 && z.y === 0;
   chart.zoomLayer.setAttribute("transform", identity ? "" : `translate(${z.x},${z.y}) scale(${z.k})`);
   chart.layers.style.transform = "";
+  drawSizes(chart);
+  if (chart.data) updateMarks(chart, chart.data.compared);
   chart.wrap.dataset.settledAt = String(performance.now());
   drawEdges(chart);
 }
