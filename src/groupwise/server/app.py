@@ -87,6 +87,10 @@ def create_app(config: AppConfig) -> FastAPI:
                 with contextlib.suppress(asyncio.CancelledError):
                     await task
             await asyncio.to_thread(context.supervisor.stop)
+            # the clip render processes: a pool left open leaks its semaphores (issue 40)
+            renderer = getattr(app.state, "clip_renderer", None)
+            if renderer is not None:
+                await asyncio.to_thread(renderer.close)
             context.db.dispose()
 
     app = FastAPI(

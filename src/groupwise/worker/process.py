@@ -150,6 +150,11 @@ class Worker:
                 if not self.work_once():
                     time.sleep(self.poll_s)
         finally:
+            # stopping: end the render and evaluation processes rather than wait for their
+            # work (one may still be starting), so this process exits, and unlinks its
+            # semaphores, before the supervisor's kill would leak them (issue 40)
+            for child in multiprocessing.active_children():
+                child.terminate()
             self._close_render_pools()
             if self._live is not None:
                 self._live.close()

@@ -33,8 +33,8 @@ _MAKING = threading.Lock()
 
 
 def renderer(request: Request, context: Context) -> OnDemandClips:
-    """The app's on-demand renderer, made on first use and kept in ``app.state``; stopped
-    with the process. A served app makes it at startup (`start_renderer`)."""
+    """The app's on-demand renderer, made on first use and kept in ``app.state``; closed
+    when the app stops (its lifespan). A served app makes it at startup (`start_renderer`)."""
     return app_renderer(request.app.state, context)
 
 
