@@ -82,7 +82,8 @@ export function drawSizes(chart: Chart): void {
   const frag = document.createDocumentFragment();
   for (const a of chart.layout?.arcs ?? []) {
     const n = a.node.leaves.length;
-    if (a.node.isLeaf || n < 2) continue;
+    // A padding node repeats its one child's behaviours: the child's arc has the number.
+    if (a.node.isLeaf || n < 2 || a.node.children.length < 2) continue;
     const label = String(n);
     const mid = (a.r0 + a.r1) / 2;
     const along = (a.a1 - a.a0) * mid * k;
