@@ -6,14 +6,16 @@ one comparison every `--pace` seconds for `--minutes` minutes a round, then "End
 for `--rounds` rounds. Meanwhile it reads the worker's live checkpoint
 (``checkpoints/live/state.json``: PPO steps, written every 30 s) to measure PPO steps per
 minute of session time, and times each judgement's answer and each wait from "End round"
-until the next round is open (the person's wait: the worker's stager prepares the next
-round ahead `--stage-after` seconds into the round, so a round should last longer than that
-and the staging; a person's round lasts minutes, the app's default `stage_after_s` is 60).
-It measures PPO's single-core throughput the same way as `ppo_throughput` (CPU time,
-learned reward) and prints a Markdown table.
+until the next round is open (the person's wait: the worker cuts the next pool from PPO's
+latest rollouts when the round ends, issue 39). It reports the opened pools' ages (PPO
+steps from the policy that played each behaviour to the policy when the round opened, from
+each ``pool.json``), beside the ages the earlier stage-ahead design gave (a pool sampled
+from a snapshot `--stage-after` seconds into the round before, read off the session's
+learning-curve points). It measures PPO's single-core throughput the same way as
+`ppo_throughput` (CPU time, learned reward) and prints a Markdown table.
 
     python -m benchmarks.continuous [--env Hopper] [--rounds 10] [--minutes 1.5] [--pace 5]
-                                    [--stage-after 30] [--log FILE]
+                                    [--stage-after 60] [--log FILE]
 
 Measured on this 2-core machine, Hopper, defaults (`--rounds 10 --minutes 1.5`): End round →
 next round open, median / p95 (max); PPO steps per minute of session time against one core's
@@ -47,6 +49,7 @@ import torch
 
 from benchmarks.ppo_throughput import steps_per_second
 from benchmarks.submit_latency import start_server, wait_for
+from groupwise.storage.sessions import round_directory
 
 SETTINGS = {
     "pool_size": 100,
@@ -88,9 +91,9 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument(
         "--stage-after",
         type=float,
-        default=30.0,
-        help="the session's stage_after_s: seconds into a round when the next one is prepared "
-        "(a person's round lasts minutes; these rounds last --minutes)",
+        default=60.0,
+        help="for the comparison only: seconds into a round when the earlier design sampled "
+        "the next pool (the app's stage_after_s was 60)",
     )
     parser.add_argument("--log", type=Path, help="write the server's and worker's log here")
     args = parser.parse_args([] if argv is None else list(argv))
@@ -98,21 +101,21 @@ def main(argv: Sequence[str] | None = None) -> None:
     latencies: list[float] = []
     samples: list[tuple[float, int]] = []
     waits: list[float] = []
+    ended: list[float] = []  # wall clock of each End round
+    opened: list[float] = [time.time()]  # of each round's opening (round 0: the start)
+    points: list[dict] = []
     with tempfile.TemporaryDirectory() as tmp:
         data = Path(tmp) / "data"
         process, url, first = start_server(data, args.env, None, args.log)
         try:
             with httpx.Client(base_url=url, timeout=60) as http:
                 wait_for(http, first, "ready")  # the server is up (its CLI session ready)
-                settings = {
-                    **SETTINGS,
-                    "rounds": args.rounds + 1,
-                    "stage_after_s": args.stage_after,
-                }
+                settings = {**SETTINGS, "rounds": args.rounds + 1}
                 session = http.post(
                     "/api/sessions", json={"env": args.env, "settings": settings}
                 ).json()["id"]
                 wait_for(http, session, "ready")
+                opened[0] = time.time()
                 pool = SETTINGS["pool_size"]
                 done = threading.Event()
 
@@ -142,9 +145,11 @@ def main(argv: Sequence[str] | None = None) -> None:
                         answer.raise_for_status()
                         time.sleep(args.pace)
                     tick = time.perf_counter()
+                    ended.append(time.time())
                     http.post(f"/api/sessions/{session}/end-round").raise_for_status()
                     _wait_open(http, session, round_index + 1)
                     waits.append(time.perf_counter() - tick)
+                    opened.append(time.time())
                     print(
                         f"{time.strftime('%H:%M:%S')} round {round_index + 1} open "
                         f"{waits[-1]:.2f} s after End round",
@@ -152,9 +157,12 @@ def main(argv: Sequence[str] | None = None) -> None:
                     )
                 done.set()
                 watcher.join()
+                points = http.get(f"/api/sessions/{session}/training").json()["points"]
+            ages = [_pool_ages(data, session, r) for r in range(1, args.rounds + 1)]
         finally:
             process.terminate()
             process.wait(timeout=30)
+    before = _stage_ahead_ages(points, opened, ended, args.stage_after)
     torch.set_num_threads(1)
     single = steps_per_second(args.env, learned=True)
     if len(samples) >= 2:
@@ -164,7 +172,7 @@ def main(argv: Sequence[str] | None = None) -> None:
         per_minute = float("nan")
     print(
         f"{args.env}, one continuous session, a comparison every {args.pace:g} s for "
-        f"{args.minutes:g} min a round, next round staged {args.stage_after:g} s into it, "
+        f"{args.minutes:g} min a round, next pool cut from the latest rollouts at its end, "
         f"{args.rounds} rounds, {os.cpu_count()} CPUs, "
         f"load average {os.getloadavg()[0]:.1f}\n"
     )
@@ -180,9 +188,58 @@ def main(argv: Sequence[str] | None = None) -> None:
         f"| End round → next round open, median / p95 (s, n={len(waits)}) | {w50:.1f} / {w95:.1f} |"
     )
     print(f"| End round → next round open, max (s) | {max(waits):.1f} |")
+    fresh = np.concatenate([a for a in ages if len(a)]) if any(len(a) for a in ages) else []
+    for name, values in (
+        ("pool age at opening, fresh pools: min / median / p90 / max (PPO steps)", fresh),
+        (f"the same, a pool staged {args.stage_after:g} s into the round before", before),
+    ):
+        if len(values):
+            q = np.percentile(values, [0, 50, 90, 100])
+            print(f"| {name} | {' / '.join(f'{v:,.0f}' for v in q)} |")
     print(
         f"\n{len(samples)} live checkpoints read; {statistics.mean(latencies) * 1000:.0f} ms mean"
     )
+    for r, a in enumerate(ages, start=1):
+        if len(a):
+            print(
+                f"round {r}: {len(a)} behaviours, ages {min(a):,}–{max(a):,} "
+                f"(median {int(np.median(a)):,})"
+            )
+
+
+def _pool_ages(data: Path, session: str, round_index: int) -> np.ndarray:
+    """The ages (PPO steps) of round `round_index`'s behaviours when it opened, from its
+    ``pool.json`` (empty when it does not say)."""
+    path = data / round_directory(session, round_index) / "pool.json"
+    try:
+        return np.asarray(json.loads(path.read_text())["metadata"]["ages"], dtype=np.int64)
+    except (OSError, ValueError, KeyError):
+        return np.zeros(0, dtype=np.int64)
+
+
+def _steps_at(points: list[dict], when: float) -> float:
+    """PPO steps as of wall-clock `when`, from the learning-curve points (the last before)."""
+    steps = [p["ppo_steps"] for p in points if _seconds(p["at"]) <= when]
+    return float(max(steps)) if steps else float("nan")
+
+
+def _seconds(at: str) -> float:
+    from datetime import datetime
+
+    return datetime.fromisoformat(at.replace("Z", "+00:00")).timestamp()
+
+
+def _stage_ahead_ages(
+    points: list[dict], opened: list[float], ended: list[float], stage_after: float
+) -> np.ndarray:
+    """The age each opened round's pool would have had in the earlier design: PPO steps from
+    a snapshot `stage_after` s into the round before to that round's end (a round shorter
+    than that had its pool sampled at its end: age 0)."""
+    ages = []
+    for start, end in zip(opened, ended, strict=False):
+        staged = start + stage_after
+        ages.append(0.0 if staged >= end else _steps_at(points, end) - _steps_at(points, staged))
+    return np.asarray(ages)
 
 
 if __name__ == "__main__":

@@ -165,7 +165,7 @@ def open_fresh(
     oldest = now - int(ages.max(initial=0))
     prepared = published_round(
         data_dir, job.session_id, job.env, settings, offer.pool, offer.queries, render,
-        progress, offer.sample_s, oldest,
+        progress, offer.sample_s, oldest, ages.tolist(),
     )  # fmt: skip
     accuracy = None if live.report is None else live.report.validation_accuracy
     with db.write() as s:

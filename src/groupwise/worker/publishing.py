@@ -68,10 +68,13 @@ def published_round(
     progress: JobProgress | None = None,
     sample_s: float = 0.0,
     ppo_steps: int | None = None,
+    ages: Sequence[int] | None = None,
 ) -> PreparedRound:
     """`pool` published as round `pool.round` (clips, tree, candidates in its directory)
     and what the database stores to open it; `ppo_steps`, the PPO steps of the policy that
-    sampled it, goes into ``pool.json``'s metadata (`sampled_at`)."""
+    sampled it (its oldest behaviour), goes into ``pool.json``'s metadata (`sampled_at`),
+    and so do `ages`, each behaviour's age in PPO steps when the round opens (fresh pools,
+    `pool.recent.pool_ages`)."""
     if progress is not None:
         progress.on_phase("clips", 0, len(pool))
     run_config = settings.run_config(env)
@@ -85,7 +88,12 @@ def published_round(
         exploration_fraction=loop.exploration_fraction,
         store=ClipStore(data_dir / "clips"),
         render_pool=render,
-        metadata={"session": session_id, "round": pool.round, "ppo_steps": ppo_steps},
+        metadata={
+            "session": session_id,
+            "round": pool.round,
+            "ppo_steps": ppo_steps,
+            **({} if ages is None else {"ages": [int(a) for a in ages]}),
+        },
         show_progress=False,
         sample_s=sample_s,
         progress=None if progress is None else partial(progress.on_phase, "clips"),
