@@ -25,8 +25,10 @@ TRAINING = {
     "ppo_steps_per_round": 64,
     "final_steps": 64,
     "eval_episodes": 1,
-    "ppo": {"n_envs": 1, "n_steps": 64, "batch_size": 32, "n_epochs": 1, "net_arch": [16]},
-    "reward": {"epochs": 1, "initial_epoch_multiplier": 2},
+    "research": {
+        "ppo": {"n_envs": 1, "n_steps": 64, "batch_size": 32, "n_epochs": 1, "net_arch": [16]},
+        "reward": {"epochs": 1, "initial_epoch_multiplier": 2},
+    },
 }
 
 

@@ -26,8 +26,10 @@ TINY_TARGET = {
     "ppo_steps_per_round": 64,
     "final_steps": 64,
     "eval_episodes": 2,
-    "ppo": {"n_envs": 1, "n_steps": 64, "batch_size": 32, "n_epochs": 1, "net_arch": [16]},
-    "reward": {"epochs": 1, "initial_epoch_multiplier": 1},
+    "research": {
+        "ppo": {"n_envs": 1, "n_steps": 64, "batch_size": 32, "n_epochs": 1, "net_arch": [16]},
+        "reward": {"epochs": 1, "initial_epoch_multiplier": 1},
+    },
 }
 
 

@@ -17,7 +17,7 @@ Server = Any  # conftest.Server
 CONTINUOUS = {
     "training": "continuous",
     "eval_episodes": 2,
-    "ppo": {"n_envs": 1, "n_steps": 64, "batch_size": 32, "n_epochs": 1},
+    "research": {"ppo": {"n_envs": 1, "n_steps": 64, "batch_size": 32, "n_epochs": 1}},
 }
 """A rollout of 64 steps takes a few milliseconds; every evaluation two GridWorld episodes."""
 

@@ -16,7 +16,7 @@ CONTINUOUS = {
     "training": "continuous",
     "eval_episodes": 2,
     # 256-step rollouts on GridWorld: a few a second on a busy machine
-    "ppo": {"n_envs": 1, "n_steps": 256, "batch_size": 64, "n_epochs": 1},
+    "research": {"ppo": {"n_envs": 1, "n_steps": 256, "batch_size": 64, "n_epochs": 1}},
 }
 COUNTER = ".training-steps"
 

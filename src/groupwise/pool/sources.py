@@ -85,10 +85,11 @@ class PoolSource(Protocol):
         rng: np.random.Generator,
         progress: ProgressFn | None = None,
     ) -> list[Trajectory]:
-        """Episodes holding at least `windows` windows of `ctx.length` steps (`windows` ≥ 1),
-        each tagged with its local `Trajectory.source` in [0, `tags`); their `episode`
-        numbers are renumbered by the pool. `progress` hears (steps sampled towards the
-        windows, `windows` × `ctx.length`)."""
+        """Episodes for `windows` windows of `ctx.length` steps (`windows` ≥ 1: a sampling
+        source plays until they hold at least that many; a source of recorded episodes
+        returns what it has, the pool tiles them all), each tagged with its local
+        `Trajectory.source` in [0, `tags`); the pool renumbers their `episode`. `progress`
+        hears (steps sampled towards the windows, `windows` × `ctx.length`)."""
         ...
 
 

@@ -20,7 +20,7 @@ The fields after `seed` are advanced knobs: the New-session page shows them unde
 
 from typing import Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from groupwise.clips.timing import ClipTiming, default_clip_seconds, env_clip_timing
 from groupwise.config import (
@@ -205,8 +205,16 @@ class SessionSettings(BaseModel):
 
     @model_validator(mode="after")
     def _research_is_a_config(self) -> "SessionSettings":
-        if self.research:
-            RunConfig().merged(self.research)  # raises ValueError naming the field
+        if not self.research:
+            return self
+        try:
+            RunConfig().merged(self.research)
+        except ValidationError as error:  # one sentence naming each field under research
+            parts = [
+                f"research.{'.'.join(map(str, e['loc']))}: {e['msg'].removeprefix('Value error, ')}"
+                for e in error.errors()
+            ]
+            raise ValueError("; ".join(parts)) from None
         return self
 
     def clip_timing(self, env: str) -> ClipTiming:

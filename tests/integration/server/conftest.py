@@ -24,8 +24,10 @@ TINY_SETTINGS = {
     "frame_size": 32,
     "render_workers": 0,
     "eval_episodes": 1,
-    "ppo": {"n_envs": 1, "n_steps": 64, "batch_size": 32, "n_epochs": 1, "net_arch": [16]},
-    "reward": {"epochs": 1, "initial_epoch_multiplier": 2},
+    "research": {
+        "ppo": {"n_envs": 1, "n_steps": 64, "batch_size": 32, "n_epochs": 1, "net_arch": [16]},
+        "reward": {"epochs": 1, "initial_epoch_multiplier": 2},
+    },
 }
 """Advanced settings that make a GridWorld round take seconds (see docs/app.md)."""
 TINY_FLAGS = [

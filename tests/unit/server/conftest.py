@@ -33,7 +33,7 @@ TINY = {
     "frame_size": 32,
     "render_workers": 0,
     "eval_episodes": 1,
-    "ppo": {"n_envs": 1, "n_steps": 32, "batch_size": 16, "n_epochs": 1},
+    "research": {"ppo": {"n_envs": 1, "n_steps": 32, "batch_size": 16, "n_epochs": 1}},
 }
 """Settings that make a GridWorld round take about a second."""
 

@@ -61,7 +61,7 @@ def test_a_new_session_waits_for_its_first_pool(client):
         (
             {
                 "env": "GridWorld",
-                "settings": {"ppo": {"n_envs": 1, "n_steps": 8, "batch_size": 64}},
+                "settings": {"research": {"ppo": {"n_envs": 1, "n_steps": 8, "batch_size": 64}}},
             },
             "batch_size",
         ),
