@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from groupwise.cli import main
+from groupwise.cli import build_parser, main
 from groupwise.clips.video import probe
+from groupwise.commands.case_study import CASE_STEPS_PER_ROUND, case_config
 from groupwise.envs import TARGETS, horizon
 from groupwise.run.run import CONFIG_FILE, RESULTS_FILE
 from groupwise.study.case_studies.splits_posture import replay_posture
@@ -220,3 +221,22 @@ def test_a_bad_config_file_is_one_line_and_exit_code_2(tmp_path, capsys, config,
     assert main(["case-study", *args, "-q"]) == 2
     err = capsys.readouterr().err.strip()
     assert message in err and "Traceback" not in err and len(err.splitlines()) == 1
+
+
+def test_a_config_file_sets_research_fields_under_the_options_given():
+    def config(*args: str, partial: dict | None = None):
+        parsed = build_parser().parse_args(
+            ["case-study", "--target", "hopper-backflip", "--out", "unused", *args]
+        )
+        return case_config(parsed, partial or {})
+
+    default = config()
+    assert (default.loop.rounds, default.loop.steps) == (10, 10 * CASE_STEPS_PER_ROUND)
+    assert not default.reward.use_actions and default.loop.eval_episodes == 0
+    five = config(partial={"loop": {"rounds": 5}, "reward": {"ensemble_size": 5}})
+    assert (five.loop.rounds, five.loop.steps) == (5, 5 * CASE_STEPS_PER_ROUND)  # per round kept
+    assert five.reward.ensemble_size == 5 and not five.reward.use_actions
+    given = config("--rounds", "2", "--steps", "2048", partial={"loop": {"rounds": 5}})
+    assert (given.loop.rounds, given.loop.steps) == (2, 4096)  # the options win
+    ppo = config("--ppo", "mujoco", partial={"ppo": {"n_epochs": 3}}).ppo
+    assert (ppo.learning_rate, ppo.n_epochs) == (3e-4, 3)  # the file changes the preset

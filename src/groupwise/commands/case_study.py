@@ -104,7 +104,7 @@ def case_config(args: argparse.Namespace, partial: dict[str, Any]) -> "RunConfig
         "oracle": args.dm,
         "comparisons": comparisons,
         "rounds": rounds,
-        "steps": (args.steps or loop.steps // loop.rounds) * rounds,
+        "steps": (args.steps or _steps_per_round(partial, loop.steps, loop.rounds)) * rounds,
         "seed": args.seed,
         "pair_cap": pair_cap(args.pairs, target.name, comparisons),
     }
@@ -113,6 +113,16 @@ def case_config(args: argparse.Namespace, partial: dict[str, Any]) -> "RunConfig
     options = pool_options(args)
     options["loop"] |= {k: v for k, v in given.items() if v is not None}
     return apply_teacher_options(cfg.merged(options), args, target.name)
+
+
+def _steps_per_round(partial: dict[str, Any], steps: int, rounds: int) -> int:
+    """PPO steps per round when --steps is not given: the config file's `loop.steps` over
+    its rounds when it sets them, else `CASE_STEPS_PER_ROUND` (a file that sets only
+    `loop.rounds` keeps a case study's steps per round)."""
+    loop = partial.get("loop")
+    if isinstance(loop, dict) and "steps" in loop:
+        return steps // rounds
+    return CASE_STEPS_PER_ROUND
 
 
 def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") -> None:

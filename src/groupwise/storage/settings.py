@@ -14,8 +14,8 @@ A behaviour covers `clip_seconds` of simulated time (the env's default when null
 real speed (`groupwise.clips.timing`); a new session stores its L in steps (`for_env`), and
 sessions stored before clips were measured in seconds keep the L = 30 steps they stored.
 
-The fields after `seed` are advanced knobs: the New-session page shows them under
-"Advanced"; tests and the latency benchmark use them to make rounds take seconds.
+The New-session page shows the fields its groups name first (`web/src/lib/settings-form.ts`)
+and the others under "Advanced" (clips, the worker, shared sessions), `research` never.
 """
 
 from typing import Any, Literal
