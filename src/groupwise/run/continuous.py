@@ -11,9 +11,9 @@ whichever comes first. A rollout's rewards therefore all come from one fit: the 
 reward (`ensemble.mean_reward`, refitted in place) changes only between `learn` calls,
 which are whole rollouts. A round is the teacher's unit of *fresh behaviours*: its pool is
 cut from PPO's own latest rollouts when the round begins (issue 39: `LiveRound` records
-every round's rollouts, `rl.recording`, and `begin_round` reads them through
-`pool.recent.fresh_sources`), so the teacher judges what the agent does now and the pool
-costs no sampling; round 0, or a round after too short a one, samples what the recorded
+PPO's episodes, `rl.recording`, the latest ones across rounds, and `begin_round` reads them
+through `pool.recent.fresh_sources`), so the teacher judges what the agent does now and the
+pool costs no sampling; round 0, or a round after a restart, samples what the recorded
 rollouts lack from the policy.
 
 In a **rounds** round the teacher answers the whole offer first and PPO trains afterwards
@@ -129,7 +129,6 @@ class LiveRound:
         self.report: FitReport | None = None
         self.started = False
         self.recorder = recorder_for(run, offer.budget)
-        self.recorder.clear()  # the next pool is cut from this round's rollouts alone
 
     def learn(self, steps: int) -> None:
         """`steps` more PPO steps: the round's first call seeds PPO from the round's stream

@@ -96,12 +96,14 @@ def train(
     progress: JobProgress,
     live: LiveRound | None = None,
     render: RenderPool | None = None,
-) -> None:
+) -> bool:
     """End round `job.round` on its stored judgements and queue the next round or the final
-    phase (module docstring). With `live` (a continuous session's round, `worker.live`) the
-    round's run is the one that trained while the person compared and the round adds no PPO
-    steps of its own; with `render` too, the next round is cut from that run's rollouts and
-    opens *before* the round is committed (`open_fresh`): the person compares again while the
+    phase (module docstring); True when the next round opened here. With `live` (a
+    continuous session's round, `worker.live`) the round's run is the one that trained while
+    the person compared, the round adds no PPO steps of its own, and the run is left open
+    for the caller (it trains on into the next round); with `render` too, the next round is
+    cut from that run's rollouts and opens *before* the round is committed (`open_fresh`):
+    the person compares again while the
     worker evaluates and checkpoints (a worker killed meanwhile commits it when it resumes:
     `worker.resume`)."""
     r = job.round
@@ -115,7 +117,6 @@ def train(
         if render is not None:
             opened = open_fresh(job, db, data_dir, live, render, progress)
         record = commit_live(live, keyed, job.elapsed_s, progress)
-        live.run.close()
     checkpoint = checkpoint_of(job.session_id, r)
     stats = {**record.stats(), "pool_steps": pool_steps_of(db, data_dir, job.session_id, r)}
     with db.write() as s:
@@ -131,6 +132,7 @@ def train(
         record.reward_accuracy,
         record.true_return_mean,
     )
+    return opened
 
 
 def open_fresh(

@@ -8,11 +8,13 @@ timer is paused trains no PPO until it is resumed, so "Pause" pauses the agent t
 
 The round's end (the person, its budget or its timer) queues its training job, which takes
 the round's run from here (`take`): the next round's pool is cut from that run's latest
-rollouts and opened, then the round is committed (`jobs.train`, `jobs.open_fresh`). A round
-this worker does not hold (a restarted worker) is resumed from its live checkpoint
+rollouts and opened, then the round is committed (`jobs.train`, `jobs.open_fresh`), and the
+same run trains on into the next round (`keep`), its recorded rollouts kept. A round this
+worker does not hold (a restarted worker) is resumed from its live checkpoint
 (`worker.resume`).
 """
 
+import dataclasses
 import logging
 import time
 from collections.abc import Callable
@@ -24,7 +26,7 @@ from groupwise.storage.sessions import sessions_in, settings_of
 from groupwise.worker import curve
 from groupwise.worker.job import Job
 from groupwise.worker.live_round import LiveTraining, train_slice
-from groupwise.worker.resume import resume
+from groupwise.worker.resume import resume, resume_round
 
 log = logging.getLogger(__name__)
 
@@ -92,6 +94,22 @@ class LiveSessions:
         if training is not None:
             training.run.close()
         return resume(job, self.db, self.data_dir, self.evaluator)
+
+    def keep(self, job: Job, training: LiveTraining, opened: bool) -> None:
+        """After `job`'s training job: with the next round `opened`, train on into it on the
+        same run (its recorded rollouts and statistics kept: no reload from the checkpoint
+        just written); else close the run."""
+        if not opened:
+            training.run.close()
+            return
+        following = dataclasses.replace(job, round=job.round + 1, phase=READY, elapsed_s=0.0)
+        try:
+            self._live[job.session_id] = resume_round(
+                following, self.db, self.data_dir, self.evaluator, run=training.run
+            )
+        except Exception:
+            training.run.close()
+            raise
 
     def evaluator(self) -> curve.Evaluator:
         """The process that evaluates the curve's points, started on first use."""

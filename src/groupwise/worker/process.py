@@ -197,9 +197,15 @@ class Worker:
                 elif job.phase == "finishing":
                     finishing.finish(job, self.db, self.data_dir, progress)
                 elif job.settings.training == "continuous":
-                    live = self.live.take(job).live
+                    training = self.live.take(job)
                     render = self._render_pool(job.settings.render_workers)
-                    jobs.train(job, self.db, self.data_dir, progress, live=live, render=render)
+                    opened = False
+                    try:
+                        opened = jobs.train(
+                            job, self.db, self.data_dir, progress, training.live, render
+                        )
+                    finally:  # the run trains on into the round it opened, or closes
+                        self.live.keep(job, training, opened)
                 else:
                     jobs.train(job, self.db, self.data_dir, progress)
         except Exception as error:

@@ -16,6 +16,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 from groupwise.run.continuous import LiveRound
+from groupwise.run.run import Run
 from groupwise.run.streams import round_streams
 from groupwise.storage import Database
 from groupwise.storage.judgements import round_judgements
@@ -62,12 +63,19 @@ def resume(
 
 
 def resume_round(
-    job: Job, db: Database, data_dir: Path, evaluator: Callable[[], curve.Evaluator]
+    job: Job,
+    db: Database,
+    data_dir: Path,
+    evaluator: Callable[[], curve.Evaluator],
+    run: Run | None = None,
 ) -> LiveTraining:
     """Round `job.round` on the session's run from its live checkpoint (or the round
-    before's), refitted on its judgements so far."""
-    run = open_run(job, data_dir, job.round - 1)
-    resumed = run.restore_live(job.round)
+    before's), refitted on its judgements so far; on `run` instead when the worker holds it
+    (as the round before left it, committed)."""
+    resumed = False
+    if run is None:
+        run = open_run(job, data_dir, job.round - 1)
+        resumed = run.restore_live(job.round)
     with db.read() as s:
         pool_dir = get_round(s, job.session_id, job.round).pool_dir
         keyed = round_judgements(s, job.session_id, job.round)
