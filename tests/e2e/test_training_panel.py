@@ -91,3 +91,22 @@ def test_the_step_counter_moves_while_ppo_runs_and_the_chart_names_its_axes(
         arg=[COUNTER, paused[0]],
         timeout=60_000,
     )
+
+
+def test_the_new_session_forms_training_section_says_what_each_setting_does_in_its_mode(
+    server: Server, page: Page
+) -> None:
+    page.goto(f"{server.url}/?new")
+    expect(page.get_by_role("heading", name="New session")).to_be_visible()
+    section = page.get_by_role("group", name="Training", exact=True)
+    mode = section.get_by_label("Training", exact=True)
+    expect(mode).to_have_value("continuous")  # the default, in the visible Training section
+    help_of = section.locator("#setting-training-help")
+    expect(help_of).to_contain_text("PPO trains while you compare")
+    steps = section.locator("#setting-ppo_steps_per_round-help")
+    expect(steps).to_contain_text("Not used in continuous training")
+    mode.select_option("rounds")
+    expect(steps).to_contain_text("PPO env steps after each round")
+    expect(help_of).to_contain_text("PPO trains after each round ends")
+    for text in section.locator(".help").all_inner_texts():
+        assert not text.rstrip().endswith(":"), text  # never cut at a colon
