@@ -1,16 +1,26 @@
-"""Benchmark: how balanced the behaviour tree is on pools of trained policies (issue 22).
+"""Benchmark: how balanced the behaviour tree is on pools of random and trained policies
+(issues 22 and 40).
 
-For each env, a short headless run (`groupwise train --rounds 3 --comparisons 60 --steps
-90000 --dm groupwise --seed 0`, written to `--runs`, reused when there) gives the policy
-and reward model after each round; from each checkpoint (and the random policy: round 0)
-a pool is sampled as the app samples one (100 behaviours of the env's default clip
-duration, 0.25 exploration, the run's oversampling by ensemble uncertainty) and its exact
-DTW distances are kept (`--runs`/pools/ENV-rR.npz). Per pool and tree config: the
-largest node's share of the leaves at each level (top level = the root's children) and
-the selectable groups (level 1-2 nodes of 2-8 leaves, `group_candidates`).
+Two presets. "quick" (default, ~5 min on 2 cores): one seeded headless Hopper run
+(`groupwise train --env Hopper --rounds 2 --comparisons 30 --steps 40000 --dm groupwise
+--seed 0`, 20,000 PPO steps a round); "full" (~30 min): the four envs of issue 22 (`--rounds
+3 --comparisons 60 --steps 90000`). Runs are written to `--runs` and reused when there. From
+the random policy (round 0) and each round's checkpoint (rounds >= 1) a pool is sampled as
+the app samples one (the env's default clip duration, 0.25 exploration, the run's
+oversampling by ensemble uncertainty), of each `--n` size, and its DTW distances measured
+as the app measures them (`TreeConfig.dtw_band`; cached in `--runs`/pools/ENV-rR-nN.npz).
 
-    python -m benchmarks tree_balance                    # on demand: trains first (~30 min)
-    python benchmarks/tree_balance.py [--envs Hopper ...] [--runs runs/tree-balance]
+Per pool and tree config:
+- top: the number of top-level clusters (the root's children) and the largest one's share
+  of the leaves (L3 = top, then levels 2 and 1);
+- 2 clicks: the share of top-level clusters offering a group candidate (2-8 behaviours)
+  within two clicks: the cluster itself holds at most 8, or, focused (one click), one of
+  the rings it then fills has a node of 2-8 (the second click picks it);
+- 1 ring: the same without focus: the cluster or one of its children;
+- groups: the selectable groups of `group_candidates` (level 1-2 nodes of 2-8 leaves).
+
+    python -m benchmarks tree_balance                        # quick: Hopper, N 100 and 1,000
+    python benchmarks/tree_balance.py --preset full --n 100  # issue 22's four envs
 """
 
 import argparse
@@ -21,29 +31,43 @@ from pathlib import Path
 
 import numpy as np
 
-from groupwise.behaviour import TreeConfig, build_tree, dtw_matrix, group_candidates, pool_features
-from groupwise.behaviour.tree import BehaviourTree
+from groupwise.behaviour import (
+    TreeConfig,
+    band_window,
+    build_tree,
+    dtw_matrix,
+    group_candidates,
+    pool_features,
+)
+from groupwise.behaviour.tree import BehaviourTree, TreeNode
 from groupwise.clips.timing import env_clip_timing
 from groupwise.config import RunConfig
 from groupwise.pool.sampling import sample_pool
+from groupwise.preferences.judgement import MAX_GROUP
 from groupwise.run.run import Run
 
-ENVS = ("Hopper", "HalfCheetah", "Walker2d", "GridWorld")
-TRAIN = ["--rounds", "3", "--comparisons", "60", "--steps", "90000", "--dm", "groupwise"]
+PRESETS = {
+    "quick": (("Hopper",), ["--rounds", "2", "--comparisons", "30", "--steps", "40000"]),
+    "full": (
+        ("Hopper", "HalfCheetah", "Walker2d", "GridWorld"),
+        ["--rounds", "3", "--comparisons", "60", "--steps", "90000"],
+    ),
+}
+"""Preset -> (envs, `groupwise train` arguments of each env's run)."""
 CONFIGS = {
-    "counts (before)": TreeConfig(balance=None),
-    "counts + caps (now)": TreeConfig(),
-    "ward, no caps": TreeConfig(method="ward", balance=None),
-    "ward + caps": TreeConfig(method="ward"),
+    "no caps": TreeConfig(balance=None),
+    "caps (issue 22)": TreeConfig(top_balance=None),
+    "+ top cap (now)": TreeConfig(),
 }
 
 
-def train(env: str, out: Path, seed: int) -> None:
+def train(env: str, out: Path, seed: int, flags: Sequence[str]) -> None:
     """A short headless run of `env` into `out`, unless one is there."""
     if (out / "checkpoints").is_dir():
         return
-    cmd = [sys.executable, "-m", "groupwise.cli", "train", "--env", env, *TRAIN]
-    subprocess.run([*cmd, "--seed", str(seed), "--out", str(out), "-q"], check=True)
+    cmd = [sys.executable, "-m", "groupwise.cli", "train", "--env", env, *flags]
+    subprocess.run([*cmd, "--dm", "groupwise", "--seed", str(seed), "--out", str(out), "-q"],
+                   check=True)  # fmt: skip
 
 
 def pools(run_dir: Path, cache: Path, size: int, seed: int) -> list[tuple[int, Path]]:
@@ -54,7 +78,7 @@ def pools(run_dir: Path, cache: Path, size: int, seed: int) -> list[tuple[int, P
     rounds = sorted(int(p.name.split("-")[1]) for p in (run_dir / "checkpoints").glob("round-*"))
     out = []
     for after in [-1, *rounds]:
-        path = cache / f"{run_dir.name}-r{after + 1}.npz"
+        path = cache / f"{run_dir.name}-r{after + 1}-n{size}.npz"
         if not path.exists():
             run = Run.create(cfg)
             run.out = run_dir
@@ -71,7 +95,10 @@ def pools(run_dir: Path, cache: Path, size: int, seed: int) -> list[tuple[int, P
                 max_windows=cfg.loop.pool_windows_max,
                 ensemble=run.ensemble,
             )
-            distances = dtw_matrix(pool_features(pool.fragments))
+            features = pool_features(pool.fragments)
+            tree = TreeConfig()  # the app's DTW band and time step
+            window = band_window(tree.dtw_band, max(len(f) for f in features))
+            distances = dtw_matrix(features, window=window, stride=tree.dtw_stride)
             cache.mkdir(parents=True, exist_ok=True)
             np.savez(path, distances=distances, true=pool.true_returns, length=length)
         out.append((after + 1, path))
@@ -84,34 +111,62 @@ def shares(tree: BehaviourTree) -> list[float]:
     return [max(x.size for x in tree.at_level(lv)) / n for lv in range(tree.levels - 1, 0, -1)]
 
 
+def offers_group(node: TreeNode, depth: int) -> bool:
+    """Whether `node` holds at most MAX_GROUP behaviours, or a node 1..depth levels below it
+    holds 2..MAX_GROUP (a group to pick)."""
+    if node.size <= MAX_GROUP:
+        return True
+    rings, below = [node], []
+    for _ in range(depth):
+        rings = [c for x in rings for c in x.children]
+        below.extend(rings)
+    return any(2 <= x.size <= MAX_GROUP for x in below)
+
+
+def within_reach(tree: BehaviourTree, depth: int) -> float:
+    """The share of top-level clusters that offer a group within `depth` rings of them."""
+    top = tree.root.children
+    return sum(offers_group(t, depth) for t in top) / len(top)
+
+
 def main(argv: Sequence[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=(__doc__ or "").splitlines()[0])
-    parser.add_argument("--envs", nargs="+", default=list(ENVS))
+    parser.add_argument("--preset", choices=list(PRESETS), default="quick")
+    parser.add_argument("--envs", nargs="+", help="only these of the preset's envs")
     parser.add_argument("--runs", type=Path, default=Path("runs/tree-balance"))
-    parser.add_argument("--n", type=int, default=100, help="behaviours per pool (the app's)")
+    parser.add_argument("--n", type=int, nargs="+", default=[100, 1000], help="pool sizes")
     parser.add_argument("--seed", type=int, default=0, help="the training runs' seed")
     parser.add_argument("--pool-seed", type=int, default=7, help="the pools' sampling seed")
     # argv None (as `python -m benchmarks` calls it) means the defaults, not sys.argv
     args = parser.parse_args([] if argv is None else list(argv))
+    envs, flags = PRESETS[args.preset]
 
     print(
-        f"Largest cluster's share of the leaves per level (L3 = top level) and selectable "
-        f"2-8-leaf groups at levels 1-2; N = {args.n}, 4 levels; pools of round r come from "
-        f"the policy after r rounds of a short run (round 0: random).\n"
+        "Per pool: top-level clusters (count, largest share), the largest cluster's share of "
+        "the leaves at levels 3 (top), 2 and 1, the share of top-level clusters offering a "
+        "group of 2-8 within two clicks (focus, pick) and within one ring (no focus), and the "
+        "selectable groups. Round r's pool comes from the policy after r rounds (0: random); "
+        "4 levels.\n"
     )
-    head = ["env", "round", "config", "L3", "L2", "L1", "groups"]
+    head = ["env", "N", "round", "config", "top", "L3", "L2", "L1", "2 clicks", "1 ring", "groups"]
     print("| " + " | ".join(head) + " |")
-    print("|---|---:|---|" + "---:|" * (len(head) - 3))
-    for env in args.envs:
+    print("|---|---:|---:|---|" + "---:|" * (len(head) - 4))
+    for env in args.envs or envs:
         run_dir = args.runs / env
-        train(env, run_dir, args.seed)
-        for r, path in pools(run_dir, args.runs / "pools", args.n, args.pool_seed):
-            distances = np.load(path)["distances"]
-            for name, cfg in CONFIGS.items():
-                tree = build_tree(distances, cfg)
-                cells = [f"{s:.2f}" for s in shares(tree)]
-                groups = len(group_candidates(tree))
-                print(f"| {env} | {r} | {name} | " + " | ".join(cells) + f" | {groups} |")
+        train(env, run_dir, args.seed, flags)
+        for n in args.n:
+            for r, path in pools(run_dir, args.runs / "pools", n, args.pool_seed):
+                distances = np.load(path)["distances"]
+                for name, cfg in CONFIGS.items():
+                    tree = build_tree(distances, cfg)
+                    cells = [
+                        str(len(tree.root.children)),
+                        *(f"{s:.2f}" for s in shares(tree)),
+                        f"{within_reach(tree, 2):.2f}",
+                        f"{within_reach(tree, 1):.2f}",
+                        str(len(group_candidates(tree))),
+                    ]
+                    print(f"| {env} | {n} | {r} | {name} | " + " | ".join(cells) + " |")
 
 
 if __name__ == "__main__":

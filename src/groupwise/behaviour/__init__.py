@@ -10,6 +10,13 @@ Pure numpy/scipy/numba; no torch, FastAPI or SB3. A round uses it as
     payload = to_json(tree, leaf_extra={i: {"clip": url_i} ...})
 """
 
+from groupwise.behaviour.bands import (
+    BANDS,
+    assign_levels,
+    count_thresholds,
+    geometric_thresholds,
+    linear_thresholds,
+)
 from groupwise.behaviour.dtw import (
     band_window,
     dtw_distance,
@@ -27,20 +34,14 @@ from groupwise.behaviour.features import (
 )
 from groupwise.behaviour.linkage import LINKAGE_METHODS, as_condensed, leaf_order, linkage_matrix
 from groupwise.behaviour.tree import (
-    BANDS,
     BehaviourTree,
     TreeConfig,
     TreeNode,
-    assign_levels,
     build_tree,
-    count_thresholds,
-    from_json,
-    geometric_thresholds,
     group_candidates,
-    linear_thresholds,
     medoids,
-    to_json,
 )
+from groupwise.behaviour.tree_json import from_json, to_json
 
 __all__ = [
     "BANDS",

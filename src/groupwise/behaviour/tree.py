@@ -18,21 +18,11 @@ Construction, from condensed DTW distances of N behaviours:
    A merge of height h gets the first level k whose threshold exceeds h (t_k > h); a merge
    that no threshold exceeds (the root, and any merge as high as the root) gets the top
    level. So a merge exactly at t_k goes to level k + 1. Leaves are level 0.
-   Size caps ("balance", `balance_levels`; on by default, `TreeConfig.balance`). A cut fixes
-   how many clusters a level has, not how balanced they are: pools of a trained policy are
-   concentrated, and in a Hopper session round 1's top level held 3, 94 and 3 behaviours
-   (issue 22). So, top down, a node at level l (1 <= l < levels) with more than cap_l leaves
-   (MAX_GROUP at level 1, max(MAX_GROUP, ceil(balance · k^l)) above, at most floor(N / 2))
-   is split by its own sub-tree: its merge moves up to its parent's level (and is dissolved
-   into it), so its two dendrogram children take its place at level l, each split again
-   while too big. k^l is the mean cluster size the counts cut aims for at level l, so a node
-   may hold `balance` times that; a level-1 node at most MAX_GROUP (it is a group a person
-   picks: none is left unselectable for want of a split); and no node below the root more
-   than half the pool — unless its behaviours are indistinguishable: at levels >= 2 a node
-   whose mean pairwise distance is at most half the pool's mean pairwise distance
-   (`INDISTINCT_SPREAD`) is left whole (its behaviours are closer to each other than most
-   behaviours of the pool are to their nearest neighbour, so a split could only be
-   arbitrary). Level 1 is always split down to its cap: it holds the groups a person picks.
+   Size caps (`behaviour.balance`; on by default, `TreeConfig.balance` and `top_balance`):
+   top down, a node with more leaves than its level's cap is split by its own sub-tree, so
+   no top-level cluster holds more than top_balance times the mean size the cut aims for,
+   none below the root more than half the pool, and every level-1 node is a group of at
+   most MAX_GROUP (issues 22, 40).
 3. n-ary tree. A merge with the same level as its parent is dissolved: its children take
    its place in the parent's child list, at the same position. Heights are monotone for
    every offered linkage, so a child's level never exceeds its parent's.
@@ -52,35 +42,18 @@ Node ids (unique; the prototype's padding ids collided):
 - "{id}@{l}" for the padding node at level l above the real node `id`; each real node has
   at most one padding node per level, so these never collide.
 
-JSON (`to_json`, read back by `from_json`):
-
-    {
-      "format": "groupwise.behaviour-tree/1",
-      "levels": 4, "method": "complete", "bands": "linear",
-      "thresholds": [t_1, ..., t_levels],       # floats, t_levels = root height
-      "leaf_order": [i, ...],                   # behaviour indices, left to right
-      "root": NODE
-    }
-    NODE = {
-      "id": "m17", "kind": "merge" | "padding" | "leaf", "level": 2,
-      "height": 1.25,                           # merge height; a padding node repeats its
-                                                # child's, a leaf has 0
-      "size": 3, "leaves": [4, 0, 9],           # behaviour indices under it, in order
-      "children": [NODE, ...]                   # ordered; [] for a leaf
-    }
-    a leaf NODE also has "behaviour": i and "extra": {...}, the per-leaf slot (clip URL,
-    poster URL, ...) filled by `to_json`'s `leaf_extra` argument ({} without it).
+The JSON form the page reads: `behaviour.tree_json`.
 """
 
-import math
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Iterator, Sequence
 from dataclasses import dataclass
 from functools import cached_property
-from typing import Any, Literal
+from typing import Literal
 
 import numpy as np
-from scipy.spatial.distance import squareform
 
+from groupwise.behaviour.balance import balance_levels
+from groupwise.behaviour.bands import BANDS, assign_levels
 from groupwise.behaviour.linkage import (
     as_condensed,
     linkage_matrix,
@@ -89,51 +62,9 @@ from groupwise.behaviour.linkage import (
 from groupwise.config import TreeConfig
 from groupwise.episodes.ids import behaviour_id
 from groupwise.preferences.judgement import MAX_GROUP
-from groupwise.types import FloatArray, IntArray
+from groupwise.types import FloatArray
 
 NodeKind = Literal["leaf", "merge", "padding"]
-JSON_FORMAT = "groupwise.behaviour-tree/1"
-
-
-def linear_thresholds(heights: FloatArray, levels: int) -> tuple[float, ...]:
-    """t_k = D k / levels for k = 1..levels (SPEC §4); D the highest merge."""
-    root_height = _root_height(heights)
-    out = [root_height * k / levels for k in range(1, levels)]
-    return (*out, root_height)
-
-
-def geometric_thresholds(heights: FloatArray, levels: int) -> tuple[float, ...]:
-    """t_k = D 2^(k - levels) for k = 1..levels: D/8, D/4, D/2, D for 4 levels."""
-    root_height = _root_height(heights)
-    out = [root_height * 2.0 ** (k - levels) for k in range(1, levels)]
-    return (*out, root_height)
-
-
-def count_thresholds(heights: FloatArray, levels: int) -> tuple[float, ...]:
-    """Thresholds that leave about N / k^l clusters at level l, k = N^(1/levels) (module
-    docstring); `heights` are the N − 1 merge heights in ascending order."""
-    h = np.sort(np.asarray(heights, dtype=np.float64))
-    n = len(h) + 1
-    if n < 2:
-        return tuple([0.0] * levels)
-    k = n ** (1.0 / levels)
-    out = []
-    for level in range(1, levels):
-        clusters = max(1, round(n / k**level))
-        out.append(float(h[min(max(n - clusters, 0), n - 2)]))
-    return (*out, float(h[-1]))
-
-
-def _root_height(heights: FloatArray) -> float:
-    return float(np.max(heights)) if len(heights) else 0.0
-
-
-BANDS: dict[str, Callable[[FloatArray, int], tuple[float, ...]]] = {
-    "counts": count_thresholds,
-    "linear": linear_thresholds,
-    "geometric": geometric_thresholds,
-}
-"""Band name -> thresholds (levels,) from the merge heights and the number of levels."""
 
 
 @dataclass(frozen=True)
@@ -205,13 +136,6 @@ class BehaviourTree:
         return [n for n in self.nodes() if n.level == level]
 
 
-def assign_levels(heights: FloatArray, thresholds: Sequence[float]) -> np.ndarray:
-    """(M,) level of each merge height: the first k with t_k > h, else the top level."""
-    t = np.asarray(thresholds, dtype=np.float64)
-    first_above = np.searchsorted(t, np.asarray(heights, dtype=np.float64), side="right")
-    return np.minimum(first_above + 1, len(t)).astype(np.int64)
-
-
 def _leaf(i: int) -> TreeNode:
     return TreeNode(id=behaviour_id(i), level=0, kind="leaf", children=(), leaves=(i,), height=0.0)
 
@@ -267,7 +191,7 @@ def build_tree(distances: FloatArray, config: TreeConfig | None = None) -> Behav
             # levels consistent even if rounding ever made a child higher than its parent
             level[child] = min(level[child], level[n + r]) if child >= n else 0
     if cfg.balance is not None:
-        balance_levels(z, level, parent, d, cfg.balance)
+        balance_levels(z, level, parent, d, cfg.balance, cfg.top_balance)
     # a merge at its parent's level is dissolved into the parent
     dissolved = np.zeros(n_clusters, dtype=bool)
     dissolved[n:-1] = level[n:-1] == level[parent[n:-1]]
@@ -294,81 +218,6 @@ def build_tree(distances: FloatArray, config: TreeConfig | None = None) -> Behav
             built[c] = _merge(node_id, lvl, children, float(heights[r]))
     root = built.pop(n_clusters - 1)
     return BehaviourTree(root, cfg.levels, thresholds, cfg.method, cfg.bands)
-
-
-def level_caps(n: int, levels: int, balance: float) -> tuple[int, ...]:
-    """(levels - 1,) the most leaves a node at level 1 … levels - 1 may hold before it is
-    split (module docstring): MAX_GROUP at level 1, max(MAX_GROUP, ceil(balance · k^l))
-    above, never more than floor(N / 2)."""
-    k = n ** (1.0 / levels)
-    caps = [MAX_GROUP] + [max(MAX_GROUP, _ceil(balance * k**lv)) for lv in range(2, levels)]
-    return tuple(min(cap, n // 2) for cap in caps)
-
-
-def _ceil(x: float) -> int:
-    """ceil, forgiving rounding: 100^(2/4) is 10.000000000000002 in floating point."""
-    return math.ceil(x - 1e-9)
-
-
-INDISTINCT_SPREAD = 0.5
-"""A node whose mean pairwise distance is at most this share of the pool's is left whole
-above level 1 (module docstring). On the Hopper pools of issue 22 the tightest cluster of
-more than a quarter of the pool had 0.59 of the pool's mean distance; a behaviour's
-nearest neighbour was typically 0.59–0.71 of the median distance away
-(docs/results/tree-balance)."""
-
-
-def indistinguishable_spread(distances: FloatArray) -> float:
-    """The largest mean pairwise distance of an indistinguishable node: INDISTINCT_SPREAD
-    times the mean of the pool's condensed `distances` (module docstring)."""
-    return INDISTINCT_SPREAD * float(np.mean(distances))
-
-
-def balance_levels(
-    z: FloatArray, level: IntArray, parent: IntArray, distances: FloatArray, balance: float
-) -> None:
-    """Apply the size caps (module docstring) to the merge levels of a dendrogram, in place.
-
-    z: SciPy linkage (N - 1, 4); level, parent: (2N - 1,) each cluster's level (leaves 0,
-    the root `levels`, monotone) and parent (-1 for the root); distances: condensed.
-    Only raises levels, each to its parent's, so they stay monotone.
-    """
-    n = z.shape[0] + 1
-    top = int(level[-1])
-    if n < 4 or top < 2:
-        return
-    caps = level_caps(n, top, balance)
-    square = squareform(distances)
-    floor = indistinguishable_spread(distances)
-    size = np.ones(2 * n - 1, dtype=np.int64)
-    size[n:] = z[:, 3].astype(np.int64)
-    children = z[:, :2].astype(np.int64)
-
-    def leaves(c: int) -> list[int]:
-        out, stack = [], [c]
-        while stack:
-            x = stack.pop()
-            if x < n:
-                out.append(x)
-            else:
-                stack.extend(children[x - n])
-        return out
-
-    def spread(c: int) -> float:
-        idx = np.asarray(leaves(c))
-        return float(square[np.ix_(idx, idx)].sum() / (len(idx) * (len(idx) - 1)))
-
-    for upper in range(top, 1, -1):  # nodes at level upper - 1 under nodes at level upper
-        at = upper - 1
-        cap = caps[at - 1]
-        below = level[:-1] <= at
-        frontier = np.flatnonzero(below & (level[parent[:-1]] >= upper)).tolist()
-        while frontier:
-            c = frontier.pop()
-            if c < n or size[c] <= cap or (at >= 2 and spread(c) <= floor):
-                continue
-            level[c] = upper  # dissolved into its parent: its children take its place
-            frontier.extend(int(x) for x in children[c - n])
 
 
 def group_candidates(
@@ -420,69 +269,3 @@ def medoids(node: TreeNode, distances: FloatArray, k: int = 3) -> tuple[int, ...
         sub = np.where(i == j, 0.0, d[np.where(i == j, 0, pos)])
     order = np.argsort(sub.sum(axis=1), kind="stable")[:k]
     return tuple(int(idx[o]) for o in order)
-
-
-LeafExtra = Callable[[int], Mapping[str, Any]] | Mapping[int, Mapping[str, Any]]
-"""Per-leaf JSON fields: a function of the behaviour index, or a mapping from it."""
-
-
-def to_json(tree: BehaviourTree, leaf_extra: LeafExtra | None = None) -> dict[str, Any]:
-    """The JSON-serialisable form of a tree (format in the module docstring).
-
-    leaf_extra fills each leaf's "extra" object (e.g. {"clip": url, "poster": url}); a
-    mapping may leave behaviours out.
-    """
-
-    def extra(i: int) -> dict[str, Any]:
-        if leaf_extra is None:
-            return {}
-        if isinstance(leaf_extra, Mapping):
-            return dict(leaf_extra.get(i, {}))
-        return dict(leaf_extra(i))
-
-    def encode(node: TreeNode) -> dict[str, Any]:
-        out: dict[str, Any] = {
-            "id": node.id,
-            "kind": node.kind,
-            "level": node.level,
-            "height": node.height,
-            "size": node.size,
-            "leaves": list(node.leaves),
-            "children": [encode(c) for c in node.children],
-        }
-        if node.kind == "leaf":
-            out["behaviour"] = node.behaviour
-            out["extra"] = extra(node.behaviour)
-        return out
-
-    return {
-        "format": JSON_FORMAT,
-        "levels": tree.levels,
-        "method": tree.method,
-        "bands": tree.bands,
-        "thresholds": list(tree.thresholds),
-        "leaf_order": list(tree.leaf_order),
-        "root": encode(tree.root),
-    }
-
-
-def from_json(data: Mapping[str, Any]) -> BehaviourTree:
-    """Rebuild a tree from `to_json` output (leaf "extra" fields are not part of the tree)."""
-    if data.get("format") != JSON_FORMAT:
-        raise ValueError(f"not a {JSON_FORMAT} document: format {data.get('format')!r}")
-
-    def decode(obj: Mapping[str, Any]) -> TreeNode:
-        children = tuple(decode(c) for c in obj["children"])
-        leaves = tuple(int(i) for i in obj["leaves"])
-        if children and leaves != tuple(i for c in children for i in c.leaves):
-            raise ValueError(f"node {obj['id']}: leaves disagree with its children")
-        height = float(obj["height"])
-        return TreeNode(str(obj["id"]), int(obj["level"]), obj["kind"], children, leaves, height)
-
-    return BehaviourTree(
-        root=decode(data["root"]),
-        levels=int(data["levels"]),
-        thresholds=tuple(float(t) for t in data["thresholds"]),
-        method=str(data["method"]),
-        bands=str(data["bands"]),
-    )

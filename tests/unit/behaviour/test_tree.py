@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 from scipy.cluster.hierarchy import leaves_list, linkage
 from scipy.spatial.distance import pdist, squareform
 
-from groupwise.behaviour.tree import (
+from groupwise.behaviour import (
     BehaviourTree,
     TreeConfig,
     TreeNode,
@@ -17,12 +17,11 @@ from groupwise.behaviour.tree import (
     from_json,
     geometric_thresholds,
     group_candidates,
-    indistinguishable_spread,
-    level_caps,
     linear_thresholds,
     medoids,
     to_json,
 )
+from groupwise.behaviour.balance import indistinguishable_spread, level_caps
 
 # six points on a line; complete linkage merges (0,1)@1 -> m6, (4,5)@1 -> m7,
 # (2,m6)@3 -> m8, (3,m8)@7 -> m9, (m7,m9)@16 -> root. D = 16, thresholds 4, 8, 12, 16.
@@ -58,15 +57,17 @@ def check_invariants(tree: BehaviourTree, n: int) -> None:
     assert [leaf.behaviour for leaf in leaves] == list(tree.leaf_order)
 
 
-def check_caps(tree: BehaviourTree, d: np.ndarray, balance: float) -> None:
+def check_caps(
+    tree: BehaviourTree, d: np.ndarray, balance: float, top_balance: float | None = 1.25
+) -> None:
     """Every node below the root holds at most its level's cap, or is a level >= 2 node of
-    indistinguishable behaviours (`balance_levels`)."""
+    indistinguishable behaviours (`balance.balance_levels`)."""
     n = tree.root.size
     if n < 4 or tree.levels < 2:
         return
     square = squareform(d)
     floor = indistinguishable_spread(d)
-    caps = level_caps(n, tree.levels, balance)
+    caps = level_caps(n, tree.levels, balance, top_balance)
     for node in tree.nodes():
         if 1 <= node.level < tree.levels and node.size > caps[node.level - 1]:
             idx = np.array(node.leaves)
@@ -227,13 +228,16 @@ def test_invalid_inputs():
     levels=st.integers(1, 5),
     ties=st.booleans(),
     balance=st.sampled_from([None, 1.0, 2.0]),
+    top_balance=st.sampled_from([None, 1.0, 1.25]),
 )
-def test_tree_properties(n, seed, method, bands, levels, ties, balance):
+def test_tree_properties(n, seed, method, bands, levels, ties, balance, top_balance):
     rng = np.random.default_rng(seed)
     d = rng.random(n * (n - 1) // 2) * 10
     if ties:  # few distinct values: equal heights and merges exactly at thresholds
         d = np.round(d / 2.5) * 2.5
-    cfg = TreeConfig(levels=levels, method=method, bands=bands, balance=balance)
+    cfg = TreeConfig(
+        levels=levels, method=method, bands=bands, balance=balance, top_balance=top_balance
+    )
     tree = build_tree(d, cfg)
     check_invariants(tree, n)
     if n >= 2:
@@ -243,7 +247,7 @@ def test_tree_properties(n, seed, method, bands, levels, ties, balance):
             if node.kind == "merge" and node.level < levels and balance is None:
                 assert t[node.level - 1] <= node.height < t[node.level]
         if balance is not None:
-            check_caps(tree, d, balance)
+            check_caps(tree, d, balance, top_balance)
     assert from_json(json.loads(json.dumps(to_json(tree)))) == tree
 
 
@@ -362,3 +366,46 @@ def test_level_caps():
     assert level_caps(100, 4, 2.0) == (8, 20, 50)
     assert level_caps(1000, 4, 2.0) == (8, 64, 356)
     assert level_caps(10, 4, 2.0) == (5, 5, 5)
+    # the top level's own cap (issue 40): 1.25 N / k = 39.5 -> 40 of 100; 222.3 -> 223 of
+    # 1,000; never above N / 2 (N = 20: k = 2.11, 2 k^2 = 8.9 -> 9, 11.8 -> 12 > 10), and
+    # with 2 levels the top level is level 1, a group's cap
+    assert level_caps(100, 4, 2.0, 1.25) == (8, 20, 40)
+    assert level_caps(1000, 4, 2.0, 1.25) == (8, 64, 223)
+    assert level_caps(1000, 4, 2.0, 4.0) == (8, 64, 356)  # the lower cap wins
+    assert level_caps(20, 4, 2.0, 1.25) == (8, 9, 10)
+    assert level_caps(100, 2, 2.0, 1.25) == (8,)
+
+
+def offers_group(node: TreeNode, depth: int = 2) -> bool:
+    """At most MAX_GROUP leaves itself, or a node of 2..8 within `depth` levels below."""
+    rings, below = [node], []
+    for _ in range(depth):
+        rings = [c for x in rings for c in x.children]
+        below += rings
+    return node.size <= 8 or any(2 <= x.size <= 8 for x in below)
+
+
+@pytest.mark.parametrize(
+    ("n", "method", "seed"),
+    [(100, "complete", 101), (1000, "complete", 1000), (1000, "average", 1001)],
+)
+def test_the_top_level_is_balanced_by_its_own_cap(n, method, seed):
+    """Issue 40: with the caps of issue 22 alone a top-level cluster may hold up to half the
+    pool ([5, 49, 33, 13] of 100); the top level's cap, 1.25 times the mean of the k
+    clusters the cut aims for, splits it further, by the dendrogram alone: the leaf order
+    and every level below keep their caps, and every top-level cluster offers a group of
+    2–8 within two clicks (itself, or focused, a node of its next two rings)."""
+    d = _dominant_pool(n, seed=seed, spread=1.0)  # before: 46 of 100, 304 and 355 of 1,000
+    before = build_tree(d, TreeConfig(method=method, top_balance=None))
+    tree = build_tree(d, TreeConfig(method=method))
+    cap = level_caps(n, 4, 2.0, 1.25)[-1]
+    assert cap == {100: 40, 1000: 223}[n]
+    largest = max(c.size for c in tree.root.children)
+    assert largest <= cap < max(c.size for c in before.root.children)  # the cap bit
+    check_caps(tree, d, 2.0, 1.25)
+    check_invariants(tree, n)
+    assert tree.leaf_order == before.leaf_order
+    assert all(offers_group(top) for top in tree.root.children)
+    assert json.loads(json.dumps(to_json(tree)))["root"]["children"][0].keys() == {
+        "id", "kind", "level", "height", "size", "leaves", "children"
+    }  # fmt: skip
