@@ -190,7 +190,7 @@ def open_fresh(
             waited,
             r,
             len(offer.pool),
-            f"{int(ages.min(initial=0)):,}–{int(ages.max(initial=0)):,}",
+            f"{int(ages.min()) if len(ages) else 0:,}–{int(ages.max(initial=0)):,}",
             f"{int(np.median(ages)) if len(ages) else 0:,}",
         )
     return opened
