@@ -259,8 +259,9 @@ def test_next_suggestion_is_409_for_any_round_but_the_open_one(client):
     assert early.json()["detail"] == "round 1 is not open yet; the open round is 0"
     client.post(f"/api/sessions/{sid}/end-round")
     assert client.post(url.format(0)).status_code == 409  # training: no round is open
-    run_worker_once(client)  # train
-    run_worker_once(client)  # prepare round 1
+    while (state := client.get(f"/api/sessions/{sid}").json())["phase"] != "ready":
+        assert state["phase"] in ("training", "preparing"), state
+        run_worker_once(client)  # train, then prepare round 1
     closed = client.post(url.format(0))
     assert closed.status_code == 409
     assert closed.json()["detail"] == "round 0 is closed; the open round is 1"
