@@ -109,11 +109,10 @@ class FaultConfig:
     """Longest wait for the session to be usable again before the trial counts as stuck."""
     training: str = "continuous"
     """The session's training mode: "continuous" (the app's default: the worker trains PPO
-    and refits while the clients answer, and prepares the next round ahead after
-    `stage_after_s`, so kills land mid-PPO, mid-refit, mid-staging and between opening a
-    round and committing the one before) or "rounds" (PPO only after a round ends)."""
-    stage_after_s: float = 2.0
-    """Continuous: seconds into a round when the next one is prepared ahead."""
+    and refits while the clients answer, and at a round's end cuts the next round from the
+    latest rollouts and opens it before committing the round, so kills land mid-PPO,
+    mid-refit, mid-cut and between opening a round and committing the one before) or
+    "rounds" (PPO only after a round ends)."""
     db: str = "sqlite"
     """The server's database: "sqlite" (in the data directory), "postgresql" (a throw-away
     local cluster, fsync on) or the SQLAlchemy URL of an empty database."""
@@ -235,8 +234,6 @@ class Harness:
         self.described = described
         self.rng = np.random.default_rng(config.seed)
         settings = {**SETTINGS, "training": config.training}
-        if config.training == "continuous":
-            settings["stage_after_s"] = config.stage_after_s
         self.server = ServeProcess(data, settings, db)
         self.ledger = Ledger()
         self.http = httpx.Client(timeout=15)
