@@ -150,3 +150,13 @@ def test_a_round_checkpointed_but_not_recorded_keeps_its_checkpoint_on_resume(cl
     resumed = Worker(context.db, context.data_dir, poll_s=0.1)
     assert resumed.train_live()
     assert _round_stats(client, sid, 0) == {**record.stats(), "pool_steps": 0}
+
+
+def test_finish_now_opens_no_next_round(client):
+    sid, worker = _training_session(client, slices=2, rounds=3)
+    state = client.post(f"/api/sessions/{sid}/finish").json()
+    assert (state["phase"], state["round"]) == ("training", 0)
+    assert worker.run_next()  # round 0 committed, no round cut from its rollouts
+    state = client.get(f"/api/sessions/{sid}").json()
+    assert state["phase"] == "finishing"
+    assert _round_stats(client, sid, 0) is not None
