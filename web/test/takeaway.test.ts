@@ -38,7 +38,7 @@ describe("the rounds' agents to choose from", () => {
   it("lists every round in order with its score, the last one chosen until a pick", () => {
     const rounds = takeawayRounds(gridworld);
     expect(rounds.map((r) => r.round)).toEqual([0, 1, 2]);
-    expect(rounds.map((r) => r.score)).toEqual(["True return 0 ± 1.5", "True return 10 ± 1.5", "True return 20 ± 1.5"]);
+    expect(rounds.map((r) => r.score)).toEqual(["True return 0.0 ± 1.5", "True return 10.0 ± 1.5", "True return 20.0 ± 1.5"]);
     expect(rounds.map((r) => r.kind)).toEqual(["after 3 comparisons", "after 1 comparison", "PPO on the frozen reward"]);
     expect(rounds.map((r) => r.chosen)).toEqual([false, false, true]);
     expect(rounds.map((r) => r.last)).toEqual([false, false, true]);
@@ -80,7 +80,7 @@ describe("the rounds' agents to choose from", () => {
         row(1, { target_score_mean: null, true_return_mean: 66.5, true_return_std: null }),
       ],
     });
-    expect(rounds.map((r) => r.score)).toEqual(["Backward turns 0.23 ± 0.05", "Per-step sum 66.5 rad/s"]);
+    expect(rounds.map((r) => r.score)).toEqual(["Backward turns 0.230 ± 0.050", "Per-step sum 66.5 rad/s"]);
   });
 });
 
