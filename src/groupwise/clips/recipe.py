@@ -12,7 +12,10 @@ the clip and poster `render_jobs.run_job` makes of the same window (tested):
   one frame) — a few milliseconds for a poster, ~0.2 s for a 47-frame Hopper clip, whatever
   the window's place in its episode;
 - without (GridWorld, classic control, episodes sampled without snapshots): replay from the
-  reset, as `replay.replay_windows` does for every clip of a pool.
+  reset, as `replay.replay_windows` does for every clip of a pool;
+- a recorded dataset's window (`envs.datasets.RecordedStates`: a state for every step): each
+  frame drawn from its own state (``frame_states``), no step taken, so nothing is checked
+  against a replay.
 
 Every step taken is checked against the stored observation (`replay.check_observation`).
 
@@ -27,7 +30,7 @@ import io
 import json
 import tempfile
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import metadata
 from pathlib import Path
 from typing import Any
@@ -44,7 +47,8 @@ from groupwise.clips.replay import (
 )
 from groupwise.clips.timing import ClipTiming
 from groupwise.clips.video import ClipEncoder, VideoConfig, poster_bytes, poster_frame
-from groupwise.envs.physics_state import restore_physics_state
+from groupwise.envs.datasets import RecordedStates
+from groupwise.envs.physics_state import restore_physics_state, show_physics_state
 from groupwise.episodes.fragments import Fragment, Trajectory
 from groupwise.types import FloatArray
 
@@ -68,6 +72,9 @@ class ClipRecipe:
     poster_state: FloatArray  # (S,) physics state before step poster_step − 1, or (0,)
     actions: np.ndarray  # (start + L − 1 − origin, *action_shape) raw actions of steps origin …
     observations: FloatArray  # (start + L − origin, obs_dim) stored observations of origin …
+    frame_states: FloatArray = field(default_factory=lambda: _NO_STATE)
+    """(frames, S) the physics state each frame shows, for a recorded dataset's window
+    (module docstring); (0,) otherwise."""
 
     def __post_init__(self) -> None:
         end = self.start + self.length
@@ -113,6 +120,7 @@ class ClipRecipe:
             poster_state=self.poster_state,
             actions=self.actions,
             observations=self.observations,
+            frame_states=self.frame_states,
         )
         return buffer.getvalue()
 
@@ -142,6 +150,7 @@ class ClipRecipe:
                 poster_state=arrays["poster_state"],
                 actions=arrays["actions"],
                 observations=arrays["observations"],
+                frame_states=arrays["frame_states"] if "frame_states" in arrays else _NO_STATE,
             )
 
     @classmethod
@@ -153,7 +162,9 @@ def window_recipe(
     trajectory: Trajectory, fragment: Fragment, settings: FrameSettings, timing: ClipTiming
 ) -> ClipRecipe:
     """The recipe of `fragment`'s clip, a window of `trajectory` (its episode), rendered with
-    `settings` at `timing`'s stride and rate; from the episode's snapshots when it has them.
+    `settings` at `timing`'s stride and rate; from the episode's snapshots when it has them
+    (a recorded dataset's episode, whose snapshots are `RecordedStates`: each frame from
+    its own state).
 
     Raises:
         ValueError: the fragment is not a window of this trajectory.
@@ -164,6 +175,8 @@ def window_recipe(
         raise ValueError(f"fragment {fragment.key} is not a window of episode {trajectory.episode}")
     if end > len(trajectory) or length != timing.steps:
         raise ValueError(f"fragment {fragment.key} does not fit its episode or the clip timing")
+    if isinstance(trajectory.snapshots, RecordedStates):
+        return _recorded_recipe(trajectory, trajectory.snapshots, start, settings, timing)
     state = trajectory.snapshots.get(start - 1) if start > 0 else None
     origin = start - 1 if state is not None else 0
     poster_step = start + poster_frame(timing.frames) * timing.stride
@@ -181,6 +194,32 @@ def window_recipe(
         poster_state=_NO_STATE if poster_state is None else np.asarray(poster_state, np.float64),
         actions=np.asarray(trajectory.actions[origin : end - 1]),
         observations=np.asarray(trajectory.obs[origin:end]),
+    )
+
+
+def _recorded_recipe(
+    trajectory: Trajectory,
+    states: RecordedStates,
+    start: int,
+    settings: FrameSettings,
+    timing: ClipTiming,
+) -> ClipRecipe:
+    """A recorded window's recipe: the state of each of its frames (module docstring)."""
+    end = start + timing.steps
+    frames = np.stack([states[start + j * timing.stride] for j in range(timing.frames)])
+    return ClipRecipe(
+        settings=settings,
+        reset_seed=trajectory.reset_seed,
+        start=start,
+        length=timing.steps,
+        stride=timing.stride,
+        fps=timing.fps,
+        origin=start,
+        state=frames[0],
+        poster_state=_NO_STATE,
+        actions=np.asarray(trajectory.actions[start : end - 1]),
+        observations=np.asarray(trajectory.obs[start:end]),
+        frame_states=frames,
     )
 
 
@@ -217,6 +256,8 @@ def window_frames(recipe: ClipRecipe, env: gym.Env[Any, Any]) -> np.ndarray:
     """The window's frames (⌈L / stride⌉, H, W, 3) uint8, uncropped, as `replay_windows`
     renders them: from the recipe's state when it has one, else replayed from the reset."""
     start, length, stride = recipe.start, recipe.length, recipe.stride
+    if recipe.frame_states.size:
+        return np.stack([_state_frame(env, recipe, state) for state in recipe.frame_states])
     if recipe.origin == 0:
         windows = replay_windows(
             env, recipe.reset_seed, recipe.actions, [start], length, recipe.observations,
@@ -241,6 +282,9 @@ def _poster_frame(recipe: ClipRecipe, env: gym.Env[Any, Any]) -> np.ndarray:
     """The poster's frame (H', W', 3), cropped even: one step from the state before the
     poster's step − 1, else from the recipe's state, else replayed from the reset."""
     step = recipe.poster_step
+    if recipe.frame_states.size:
+        state = recipe.frame_states[poster_frame(recipe.frames)]
+        return even_crop(_state_frame(env, recipe, state)[None])[0]
     if recipe.poster_state.size or recipe.origin > 0:
         state, before = (recipe.state, recipe.origin)
         if recipe.poster_state.size:
@@ -264,6 +308,13 @@ def replayed_posters(
         env, longest.reset_seed, longest.actions, steps, 1, longest.observations
     )
     return {step: even_crop(frames)[0] for step, frames in windows}
+
+
+def _state_frame(env: gym.Env[Any, Any], recipe: ClipRecipe, state: FloatArray) -> np.ndarray:
+    """The frame (H, W, 3) uint8 of `state` shown without a step."""
+    env.reset(seed=recipe.reset_seed)  # the wrappers' own bookkeeping, as a replay's
+    show_physics_state(env, state)
+    return np.asarray(env.render())
 
 
 def _restored_steps(
@@ -318,7 +369,8 @@ def _header(recipe: ClipRecipe) -> dict[str, Any]:
 def _digest(recipe: ClipRecipe) -> str:
     digest = hashlib.sha256()
     digest.update(json.dumps({**_header(recipe), "renderer": _versions()}, sort_keys=True).encode())
-    for name in ("state", "poster_state", "actions", "observations"):
+    names = ("state", "poster_state", "actions", "observations")
+    for name in (*names, "frame_states") if recipe.frame_states.size else names:
         array = np.ascontiguousarray(getattr(recipe, name))
         digest.update(f"{name} {array.dtype.str} {array.shape}".encode())
         digest.update(array.tobytes())

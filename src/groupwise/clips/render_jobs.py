@@ -295,7 +295,7 @@ def _replayed_posters(
     replay per episode: (settings, reset seed, step) → frame."""
     episodes: dict[tuple[FrameSettings, int], list[ClipRecipe]] = {}
     for recipe in recipes:
-        if recipe.origin == 0 and recipe.poster_state.size == 0:
+        if recipe.origin == 0 and recipe.poster_state.size == recipe.frame_states.size == 0:
             episodes.setdefault((recipe.settings, recipe.reset_seed), []).append(recipe)
     frames = {}
     for (settings, seed), group in episodes.items():

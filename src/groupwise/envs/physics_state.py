@@ -62,3 +62,18 @@ def restore_physics_state(env: gym.Env[Any, Any], state: FloatArray) -> None:
     if state.shape != (size,):
         raise ValueError(f"a physics state of shape {state.shape} for a model of {size} values")
     mujoco.mj_setState(model, data, state, spec)
+
+
+def show_physics_state(env: gym.Env[Any, Any], state: FloatArray) -> None:
+    """Set the env's MuJoCo integration state to `state` and compute its positions
+    (``mj_forward``), so that the next frame rendered shows that state without a step
+    (a recorded dataset's clips, `groupwise.envs.datasets`).
+
+    Raises:
+        ValueError: as `restore_physics_state`.
+    """
+    restore_physics_state(env, state)
+    parts = _mujoco_parts(env)
+    assert parts is not None
+    mujoco, model, data = parts
+    mujoco.mj_forward(model, data)
