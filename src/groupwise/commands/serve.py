@@ -63,6 +63,14 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
         help="run the interactive web app: compare behaviours in the browser while it trains",
     )
     serve.add_argument("--env", help="GridWorld, Hopper, ... or a Gymnasium id")
+    serve.add_argument(
+        "--dataset",
+        metavar="minari:ID|PATH",
+        help="label a recorded dataset instead of an agent's behaviours, with no agent: "
+        "minari:<id> (the local Minari store; never downloaded), a Minari dataset directory "
+        "or a D4RL-style .hdf5 file; its env is the dataset's unless --env names one "
+        "(docs/bring-your-own.md)",
+    )
     serve.add_argument("--mode", choices=["groupwise", "pairwise"], default="groupwise")
     serve.add_argument("--data", type=Path, default=Path("groupwise-data"), help="data directory")
     serve.add_argument("--db", help="SQLAlchemy database URL (default: DATA/groupwise.db)")
@@ -114,6 +122,8 @@ def _settings_overrides(args: argparse.Namespace) -> dict[str, Any]:
         value = getattr(args, name)
         if value is not None:
             overrides[name] = value
+    if args.dataset is not None:
+        overrides["dataset"] = args.dataset
     return overrides
 
 
@@ -164,9 +174,11 @@ def choose_session(
 
     Raises UsageError (a clash of options), StorageError (unknown env or session, or an
     env whose episodes cannot hold a behaviour: `server.state.check_env`, before the
-    database is opened), pydantic.ValidationError (bad settings).
+    database is opened; a dataset that cannot be labelled: `check_dataset`),
+    pydantic.ValidationError (bad settings). With a dataset in `overrides` (``--dataset``)
+    the env defaults to the dataset's and only a session of that dataset is resumed.
     """
-    from groupwise.server.state import check_env
+    from groupwise.server.state import check_new_session
     from groupwise.storage import SessionSettings
     from groupwise.storage import sessions as repo
 
@@ -178,11 +190,13 @@ def choose_session(
                 raise UsageError(f"session {session_id} is a {found.env} session, not {env}")
             _check_same_settings(found.id, found.settings, overrides)
             return Chosen(found.id, found.env, found.mode, "resuming")
-    if env is None:
-        raise UsageError("--env is required unless --session names a session")
-    settings = check_env(env, settings)  # before the database: a refused env creates nothing
+    if env is None and settings.dataset is None:
+        raise UsageError("--env is required unless --session or --dataset names one")
+    # before the database: a refused env or dataset creates nothing
+    env, settings = check_new_session(env, settings)
+    overrides = {**overrides, "dataset": settings.dataset} if settings.dataset else overrides
     with _database(database_url) as db, db.write() as s:
-        resumable = None if new else repo.find_resumable(s, env, mode)
+        resumable = None if new else repo.find_resumable(s, env, mode, settings.dataset)
         if resumable is not None:
             _check_same_settings(resumable.id, resumable.settings, overrides)
             return Chosen(resumable.id, env, mode, "resuming")

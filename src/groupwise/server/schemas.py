@@ -80,7 +80,14 @@ class EnvOut(_Out):
 
 
 class SessionCreate(_In):
-    env: str = Field(min_length=1, max_length=200, examples=["GridWorld"])
+    env: str | None = Field(
+        default=None,
+        min_length=1,
+        max_length=200,
+        examples=["GridWorld"],
+        description="the env (required unless settings.dataset names a recorded dataset, "
+        "whose own env is the default)",
+    )
     mode: Mode = "groupwise"
     settings: SessionSettings = SessionSettings()
     annotator: str = Field(default="", max_length=200)

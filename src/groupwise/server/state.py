@@ -14,7 +14,8 @@ from datetime import datetime
 import numpy as np
 from sqlalchemy.orm import Session as DbSession
 
-from groupwise.envs import horizon
+from groupwise.envs import horizon, make_env
+from groupwise.envs.datasets import check_dataset_env, open_dataset
 from groupwise.envs.episodes import check_episode_length
 from groupwise.server import schemas
 from groupwise.server.context import AppContext, Viewer
@@ -172,11 +173,63 @@ def check_env(env: str, settings: SessionSettings) -> SessionSettings:
     return resolved
 
 
+MIN_DATASET_WINDOWS = 2
+"""Fewest windows a dataset session's episodes must hold (a comparison needs two)."""
+
+
+def check_new_session(env: str | None, settings: SessionSettings) -> tuple[str, SessionSettings]:
+    """The env and settings a new session stores: `check_env`'s, or for a session over a
+    recorded dataset (`settings.dataset`) `check_dataset`'s. Raises InvalidError."""
+    if settings.dataset is not None:
+        return check_dataset(settings.dataset, env, settings)
+    if env is None:
+        raise InvalidError("env is required unless settings.dataset names a recorded dataset")
+    return env, check_env(env, settings)
+
+
+def check_dataset(
+    reference: str, env: str | None, settings: SessionSettings
+) -> tuple[str, SessionSettings]:
+    """The env (`env`, else the one the dataset names) and settings (the dataset's reference
+    made absolute, L in steps) of a new session labelling the recorded dataset `reference`
+    (`envs.datasets.open_dataset`). Raises InvalidError unless the dataset can be read, the
+    env made and its clips drawn (`check_dataset_env`), and its episodes hold at least
+    `MIN_DATASET_WINDOWS` windows of L steps."""
+    try:
+        dataset = open_dataset(reference)
+    except ValueError as error:
+        raise InvalidError(str(error)) from None
+    name = env or dataset.env
+    if name is None:
+        raise InvalidError(f"dataset {reference} names no env: give the env to show it in")
+    try:
+        resolved = settings.model_copy(update={"dataset": dataset.reference}).for_env(name)
+        probe = make_env(name)
+        try:
+            check_dataset_env(dataset, probe, name)
+        finally:
+            probe.close()
+    except ValueError as error:
+        raise InvalidError(str(error)) from None
+    except Exception as error:  # as in check_env: the env's own constructor failed
+        raise InvalidError(f"env {name!r} cannot be made here: {error}") from None
+    length = resolved.fragment_length or 0
+    held = sum(len(e) // length for e in dataset.episodes)
+    if held < MIN_DATASET_WINDOWS:
+        seconds = resolved.clip_timing(name).seconds
+        raise InvalidError(
+            f"dataset {reference}'s episodes hold {held} windows of {length} steps "
+            f"({seconds:.3g} s of {name}); it needs {MIN_DATASET_WINDOWS}: ask for shorter "
+            "clips (clip_seconds or fragment_length)"
+        )
+    return name, resolved
+
+
 def create_session(context: AppContext, request: schemas.SessionCreate) -> schemas.SessionState:
     """Create a session (its round 0 is queued for the worker). Raises InvalidError."""
-    settings = check_env(request.env, request.settings)
+    env, settings = check_new_session(request.env, request.settings)
     with context.db.write() as s:
-        session = sessions.create_session(s, request.env, request.mode, settings, request.annotator)
+        session = sessions.create_session(s, env, request.mode, settings, request.annotator)
         session_id = session.id
     context.supervisor.ensure_worker_soon()
     return read_state(context.db, session_id, context.viewer())

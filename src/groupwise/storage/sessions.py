@@ -129,15 +129,18 @@ def list_sessions(s: DbSession) -> list[SessionRow]:
     return list(s.scalars(select(SessionRow).order_by(SessionRow.created_at.desc())))
 
 
-def find_resumable(s: DbSession, env: str, mode: str) -> SessionRow | None:
-    """The newest session of `env` and `mode` that has not finished, if any."""
+def find_resumable(
+    s: DbSession, env: str, mode: str, dataset: str | None = None
+) -> SessionRow | None:
+    """The newest session of `env` and `mode` (and recorded `dataset`, None: none) that has
+    not finished, if any."""
     query = (
         select(SessionRow)
         .where(SessionRow.env == env, SessionRow.mode == mode, SessionRow.phase != FINISHED)
         .order_by(SessionRow.created_at.desc())
-        .limit(1)
     )
-    return s.scalars(query).one_or_none()
+    rows = (row for row in s.scalars(query) if row.settings.get("dataset") == dataset)
+    return next(rows, None)
 
 
 def sessions_in(s: DbSession, phases: tuple[str, ...]) -> list[SessionRow]:

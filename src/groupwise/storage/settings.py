@@ -14,6 +14,10 @@ A behaviour covers `clip_seconds` of simulated time (the env's default when null
 real speed (`groupwise.clips.timing`); a new session stores its L in steps (`for_env`), and
 sessions stored before clips were measured in seconds keep the L = 30 steps they stored.
 
+A session with a `dataset` labels a recorded dataset's episodes (issue 42,
+docs/bring-your-own.md): it has no agent, so its agent settings are set to none whatever was
+given (`NO_AGENT`: rounds-only, no PPO, pre-training, evaluation or pool variants).
+
 The New-session page shows the fields its groups name first (`web/src/lib/settings-form.ts`)
 and the others under "Advanced" (clips, the worker, shared sessions), `research` never.
 """
@@ -56,6 +60,16 @@ MAX_POOL_VARIANTS = 32
 """Most pool variants (`LoopConfig.pool_variants`) a session asks for."""
 FINAL_STEPS_FACTOR = 2
 """The final phase trains this many rounds' worth of PPO steps unless `final_steps` says."""
+
+NO_AGENT: dict[str, Any] = {
+    "training": "rounds",
+    "ppo_steps_per_round": 0,
+    "final_steps": 0,
+    "pretrain_steps": 0,
+    "eval_episodes": 0,
+    "pool_variants": 0,
+}
+"""The settings of a session without an agent (a recorded dataset's): set whatever is given."""
 
 LEGACY_SECTIONS = frozenset({"ppo", "reward"})
 """Settings stored before issue 38 held these core configs whole; they are `research` now."""
@@ -179,6 +193,14 @@ class SessionSettings(BaseModel):
     eval_episodes: int = Field(
         default=5, ge=0, le=100, description="episodes measuring the true return after training"
     )
+    dataset: str | None = Field(
+        default=None,
+        min_length=1,
+        max_length=1000,
+        description="label a recorded dataset instead of an agent's behaviours: minari:<id> "
+        "(a dataset of the server's local Minari store) or a path on the server to a Minari "
+        "dataset directory or a D4RL-style .hdf5 file; no agent is trained",
+    )
     research: dict[str, Any] | None = Field(
         default=None,
         description="research settings: a partial run config merged over these "
@@ -202,6 +224,19 @@ class SessionSettings(BaseModel):
                 research[key] = data[key]  # validation names the bad value
         rest = {k: v for k, v in data.items() if k not in LEGACY_SECTIONS}
         return {**rest, "research": research}
+
+    @model_validator(mode="before")
+    @classmethod
+    def _no_agent_for_a_dataset(cls, data: Any) -> Any:
+        """A dataset session's agent settings are `NO_AGENT`'s, whatever was given."""
+        if isinstance(data, dict) and data.get("dataset"):
+            return {**data, **NO_AGENT}
+        return data
+
+    @property
+    def has_agent(self) -> bool:
+        """Whether the session trains an agent (False: it labels a recorded `dataset`)."""
+        return self.dataset is None
 
     @model_validator(mode="after")
     def _research_is_a_config(self) -> "SessionSettings":

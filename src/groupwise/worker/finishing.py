@@ -39,7 +39,8 @@ def finish(job: Job, db: Database, data_dir: Path, progress: JobProgress) -> Non
             record = train_frozen(run, steps, callback=progress)
             checkpoint = str(checkpoint_dir(Path(session_directory(job.session_id)), r))
             stats = record.stats()
-        publish_agent(run, frozen, frame_size=job.settings.frame_size, callback=progress)
+        if job.settings.has_agent:  # a recorded dataset's session ends with its reward model
+            publish_agent(run, frozen, frame_size=job.settings.frame_size, callback=progress)
     with db.write() as s:
         if not finish_final(s, job.session_id, r, checkpoint, stats):
             log.warning("session %s moved on while its final phase ran", job.session_id)

@@ -29,6 +29,7 @@ import numpy as np
 
 from groupwise.behaviour import kernel_threads
 from groupwise.clips.render import RenderPool
+from groupwise.pool.dataset import dataset_sources
 from groupwise.pool.recent import fresh_sources, pool_ages
 from groupwise.preferences.judgement import Judgement
 from groupwise.rl.batch_envs import free_cores
@@ -62,6 +63,9 @@ def prepare(
     settings = job.settings
     progress.on_phase("load", 0, 1)
     # nothing else of this worker runs meanwhile: the distances take the free cores
+    # a recorded dataset's session has no agent: its pools are the dataset's windows, and
+    # its settings (`SessionSettings.has_agent`) train no PPO, pre-train and evaluate nothing
+    recorded = None if settings.dataset is None else dataset_sources(settings.dataset, job.env)
     with open_run(job, data_dir, job.round - 1) as run, kernel_threads(free_cores()):
         offer = begin_round(
             run,
@@ -69,6 +73,7 @@ def prepare(
             settings.comparisons_per_round,
             n_queries=offered_queries(settings),
             callback=progress,
+            sources=recorded,
         )
         steps = run.agent.num_timesteps
     publish_offer(

@@ -33,9 +33,9 @@ floor under the body shifts by the x error (measured: 0.08 at 96 × 96 px, x off
 @pytest.fixture(scope="module")
 def store(tmp_path_factory):
     root = tmp_path_factory.mktemp("minari")
+    build_hopper_dataset(root, "test/hopper-random-v0", steps=400)
     with pytest.MonkeyPatch.context() as patch:
         patch.setenv("MINARI_DATASETS_PATH", str(root))
-        build_hopper_dataset(root, "test/hopper-random-v0", steps=400)
         yield root
 
 

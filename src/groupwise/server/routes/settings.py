@@ -18,4 +18,4 @@ def resolve_settings(request: SessionCreate) -> SessionSettings:
 
     A POST, not a GET, because checking a ``module:Env-v0`` id imports that module: only the
     app's own page and scripts may make the server do that (docs/app.md, Security)."""
-    return state.check_env(request.env, request.settings)
+    return state.check_new_session(request.env, request.settings)[1]
