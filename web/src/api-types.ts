@@ -1259,9 +1259,10 @@ export interface components {
             annotator: string;
             /**
              * Env
+             * @description the env (required unless settings.dataset names a recorded dataset, whose own env is the default)
              * @example GridWorld
              */
-            env: string;
+            env?: string | null;
             /**
              * Mode
              * @default groupwise
@@ -1311,6 +1312,11 @@ export interface components {
              * @default 20
              */
             comparisons_per_round: number;
+            /**
+             * Dataset
+             * @description a recorded dataset to label, with no agent: minari:<id> or a path on the server. A minari:<id> is a dataset of the server's local Minari store (never downloaded); a path names a Minari dataset directory or a D4RL-style .hdf5 file
+             */
+            dataset?: string | null;
             /**
              * Driver
              * @description who prepares and trains the rounds: the app's worker, or a program using groupwise.WebTeacher

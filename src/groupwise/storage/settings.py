@@ -197,9 +197,9 @@ class SessionSettings(BaseModel):
         default=None,
         min_length=1,
         max_length=1000,
-        description="label a recorded dataset instead of an agent's behaviours: minari:<id> "
-        "(a dataset of the server's local Minari store) or a path on the server to a Minari "
-        "dataset directory or a D4RL-style .hdf5 file; no agent is trained",
+        description="a recorded dataset to label, with no agent: minari:<id> or a path on the "
+        "server. A minari:<id> is a dataset of the server's local Minari store (never "
+        "downloaded); a path names a Minari dataset directory or a D4RL-style .hdf5 file",
     )
     research: dict[str, Any] | None = Field(
         default=None,
