@@ -120,3 +120,49 @@ def test_a_rebuilt_state_clips_first_frame_is_a_reruns_within_the_documented_err
     assert error <= FRAME_ERROR, error
     other = window_frames(recipe, cached_env(settings))[-1].astype(np.float64)
     assert np.abs(other - rerun).mean() > error  # the test can tell frames apart
+
+
+def test_a_d4rl_style_hdf5_file_with_stored_states_draws_a_reruns_frames(tmp_path):
+    """A D4RL-style file: two episodes of Hopper-v5 (reset seeds 0 and 1) with their qpos and
+    qvel in ``infos/``: a window's frames are a rerun's, exactly."""
+    h5py = pytest.importorskip("h5py")
+    settings = FrameSettings(HOPPER, 64, 64)
+    env = cached_env(settings)
+    rng = np.random.default_rng(5)
+    rows: dict[str, list] = {k: [] for k in ("obs", "act", "rew", "end", "qpos", "qvel")}
+    frames = []
+    for seed in (0, 1):
+        obs = env.reset(seed=seed)[0]
+        for t in range(30):
+            rows["qpos"].append(env.unwrapped.data.qpos.copy())
+            rows["qvel"].append(env.unwrapped.data.qvel.copy())
+            if seed == 1:
+                frames.append(np.asarray(env.render()))
+            action = rng.uniform(-1, 1, 3)
+            rows["obs"].append(obs)
+            rows["act"].append(action)
+            obs, reward, terminated, _, _ = env.step(action)
+            rows["rew"].append(reward)
+            rows["end"].append(terminated or t == 29)
+            if terminated:
+                break
+    path = tmp_path / "hopper.hdf5"
+    with h5py.File(path, "w") as f:
+        f.attrs["env"] = HOPPER
+        f["observations"], f["actions"] = np.array(rows["obs"]), np.array(rows["act"])
+        f["rewards"], f["terminals"] = np.array(rows["rew"]), np.array(rows["end"])
+        f["infos/qpos"], f["infos/qvel"] = np.array(rows["qpos"]), np.array(rows["qvel"])
+    dataset = open_dataset(str(path))
+    assert dataset.env == HOPPER and dataset.has_states and len(dataset.episodes) == 2
+    first = len(dataset.episodes[0])
+    pool = sample_pool(
+        lambda: make_env(HOPPER), None, 100, 5, np.random.default_rng(0),
+        sources=(RecordedEpisodes(str(path), HOPPER),),
+    )  # fmt: skip
+    fragment = next(f for f in pool.fragments if f.reset_seed >= first)  # of episode 1
+    trajectory = next(t for t in pool.episodes if t.episode == fragment.episode)
+    timing = clip_timing(step_seconds(make_env(HOPPER)), steps=5)
+    recipe = window_recipe(trajectory, fragment, settings, timing)
+    drawn = window_frames(recipe, cached_env(settings))
+    start = fragment.reset_seed - first
+    np.testing.assert_array_equal(drawn[0], frames[start])
