@@ -10,8 +10,11 @@ import pytest
 from tests.datasets import HOPPER, build_hopper_dataset
 from tests.unit.server.conftest import context_of, run_worker_once
 
+from groupwise.cli import main
+from groupwise.commands.serve import choose_session
 from groupwise.reward import RewardEnsemble
 from groupwise.run.checkpoint import REWARD_FILE, STATE_FILE, checkpoint_dir
+from groupwise.storage import sqlite_url
 
 pytest.importorskip("minari")
 pytest.importorskip("jax")  # Minari's DataCollector needs it (groupwise[dev])
@@ -121,3 +124,23 @@ def test_a_dataset_session_is_refused_in_one_line(client, minari_store, tmp_path
     assert too_long.status_code == 422 and "windows of 1000 steps" in too_long.json()["detail"]
     no_env = create(client, settings=SMALL)
     assert no_env.status_code == 422 and "env is required" in no_env.json()["detail"]
+
+
+def test_serve_dataset_opens_a_session_of_the_datasets_env_and_resumes_only_it(
+    tmp_path, minari_store, capsys
+):
+    url = sqlite_url(tmp_path / "groupwise.db")
+    plain = choose_session(url, HOPPER, "groupwise", {"fragment_length": 10}, None, True)
+    asked = {"fragment_length": 10, "dataset": f"minari:{DATASET}"}
+    first = choose_session(url, None, "groupwise", asked, None, False)
+    assert (first.env, first.verb) == (HOPPER, "new") and first.session_id != plain.session_id
+    again = choose_session(url, None, "groupwise", asked, None, False)
+    assert (again.session_id, again.verb) == (first.session_id, "resuming")
+    directory = str(minari_store / DATASET)
+    by_path = choose_session(url, None, "groupwise", {**asked, "dataset": directory}, None, False)
+    assert by_path.verb == "new"  # another reference: another session
+
+    code = main(["serve", "--data", str(tmp_path / "d"), "--dataset", "minari:nope/none-v0"])
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and len(err.splitlines()) == 1 and "never downloads" in err
+    assert not (tmp_path / "d" / "groupwise.db").exists()
