@@ -28,7 +28,8 @@ rewards). Clips are drawn from MuJoCo physics states (`RecordedStates`):
   faster stretch drifts more. Every other part of the state is the observation's own, so
   the body's pose is exact and only the floor under it (the camera follows the body) is
   shifted by that much: `tests/unit/pool/test_dataset.py` compares a rebuilt-state clip's
-  first frame with a rerun's.
+  first frame with a rerun's. Any other observation needs stored states
+  (`check_dataset_env` refuses it without them).
 
 Rendering from states draws each frame from its own state (`clips.recipe`), never steps
 the physics, so no replay has to agree with the recording.
@@ -241,7 +242,7 @@ def check_dataset_env(dataset: RecordedDataset, env: gym.Env[Any, Any], name: st
     if dataset.has_states:
         return
     model = getattr(env.unwrapped, "model", None)
-    if model is None or obs_size < model.nq - 1 + model.nv:
+    if model is None or obs_size != model.nq - 1 + model.nv:
         raise DatasetError(
             f"dataset {dataset.reference} stores no qpos/qvel, and env {name}'s observation "
             "is not qpos[1:] and qvel (Hopper, Walker2d, HalfCheetah v5): its clips cannot be "

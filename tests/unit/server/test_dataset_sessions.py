@@ -97,6 +97,7 @@ def test_a_dataset_session_ends_with_its_pairs_and_a_fitted_ensemble(client, min
 
     directory = context_of(client).data_dir / "sessions" / sid
     assert not (directory / "agent.zip").exists()
+    assert client.get(f"/api/sessions/{sid}/agent").status_code == 404  # none to hand over
     checkpoint = checkpoint_dir(directory, 0)
     state = json.loads((checkpoint / STATE_FILE).read_text())
     assert state["records"][-1]["env_steps"] == 0  # PPO never ran
