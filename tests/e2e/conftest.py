@@ -48,6 +48,7 @@ CHROMIUM_ARGS = [
 # session would keep the one worker busy by turns for the rest of the run; the continuous
 # tests ask for it (test_training_curve.py).
 SETTINGS: dict[str, Any] = {
+    "recipe": "paper",  # no pre-training on a MuJoCo env: tests stay fast
     "training": "rounds",
     "pool_size": 16,
     "rounds": 2,

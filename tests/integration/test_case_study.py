@@ -73,6 +73,8 @@ def _case_study(out, target: str, dm: str, seconds: str, *extra: str) -> int:
             "2",
             "--seed",
             "0",
+            "--recipe",
+            "paper",  # the tiny runs' numbers: no pre-training, no variants, the study's PPO
             "--out",
             str(out),
             "-q",

@@ -13,6 +13,7 @@ from groupwise.cli import main
 
 def _train(tmp_path, env: str, *more: str) -> int:
     args = ["train", "--env", env, "--comparisons", "4", "--rounds", "1", "--steps", "512"]
+    args += ["--recipe", "paper"]  # no pre-training on a MuJoCo env
     return main([*args, "--final-steps", "0", *more, "--out", str(tmp_path / "out"), "-q"])
 
 

@@ -2,6 +2,7 @@
 
 import dataclasses
 import json
+from typing import get_args
 
 import pytest
 from pydantic import TypeAdapter
@@ -156,8 +157,8 @@ def test_sessions_stored_with_the_whole_ppo_and_reward_configs_keep_running_as_t
 def test_the_session_settings_are_product_settings_with_one_line_help():
     assert set(SessionSettings.model_fields) >= {"pool_variants", "ppo_preset", "pretrain_steps"}
     assert not set(SessionSettings.model_fields) & {"ppo", "reward"}
-    presets = SessionSettings.model_fields["ppo_preset"].annotation
-    assert set(presets.__args__) == set(PPO_PRESETS)  # type: ignore[union-attr]  # a Literal
+    presets = SessionSettings.model_fields["ppo_preset"].annotation  # a Literal or None
+    assert set(get_args(get_args(presets)[0])) == set(PPO_PRESETS)
     schema = SessionSettings.model_json_schema()["properties"]
     for name, field in schema.items():
         help_ = field.get("description", "")

@@ -153,15 +153,45 @@ def add_pool_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="K",
         help="sample half of each pool's windows from K variants of the current policy, each "
         "pushing its actions one way (offsets drawn anew each round), so that the pools show "
-        "behaviours the policy rarely reaches (default 0: the policy alone)",
+        "behaviours the policy rarely reaches (0: the policy alone; default: the recipe's)",
     )
     parser.add_argument(
         "--pretrain-steps",
         type=non_negative_int,
         metavar="N",
         help="PPO steps of unsupervised pre-training on a state-entropy bonus before round 0, "
-        "so that the first pools are more diverse (PEBBLE; default 0: none)",
+        "so that the first pools are more diverse (PEBBLE; 0: none; default: the recipe's)",
     )
+
+
+def add_recipe_arguments(parser: argparse.ArgumentParser) -> None:
+    """--recipe and --ppo (`groupwise.config.RECIPES`, `PPO_PRESETS`): the recipe, and its PPO
+    part on its own (its other parts: `add_pool_arguments`)."""
+    from groupwise.config import DEFAULT_RECIPE, PPO_PRESETS, RECIPES
+
+    parser.add_argument(
+        "--recipe",
+        choices=sorted(RECIPES),
+        help="how to teach (config.RECIPES): "
+        + "; ".join(f"{r.name}: {r.description}" for r in RECIPES.values())
+        + f" (default {DEFAULT_RECIPE}); --pretrain-steps, --pool-variants, --ppo and "
+        "--config change its parts",
+    )
+    parser.add_argument(
+        "--ppo",
+        choices=sorted(PPO_PRESETS),
+        help="PPO settings (config.PPO_PRESETS): the study's (SPEC §3) or PPO's own MuJoCo "
+        "settings (lr 3e-4, clip 0.2, γ 0.99, 64 × 64); default: the recipe's; --config's "
+        "ppo fields change it",
+    )
+
+
+def with_recipe(cfg: "RunConfig", args: argparse.Namespace, env: str) -> "RunConfig":
+    """`cfg` with --recipe's parts for `env` and --ppo's preset, when given."""
+    from groupwise.config import DEFAULT_RECIPE, PPO_PRESETS, RECIPES
+
+    cfg = RECIPES[args.recipe or DEFAULT_RECIPE].apply(cfg, env)
+    return cfg if args.ppo is None else dataclasses.replace(cfg, ppo=PPO_PRESETS[args.ppo])
 
 
 def pool_options(args: argparse.Namespace) -> dict[str, dict[str, Any]]:

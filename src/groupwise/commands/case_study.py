@@ -2,7 +2,6 @@
 decision-maker and measure it by the behaviour's target score (docs/case-studies.md)."""
 
 import argparse
-import dataclasses
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -10,6 +9,7 @@ from groupwise.commands.arguments import (
     UsageError,
     add_config_argument,
     add_pool_arguments,
+    add_recipe_arguments,
     add_takeaway_arguments,
     add_training_arguments,
     apply_teacher_options,
@@ -18,9 +18,9 @@ from groupwise.commands.arguments import (
     pool_options,
     positive_int,
     read_config,
+    with_recipe,
     writable_dir,
 )
-from groupwise.config import PPO_PRESETS
 from groupwise.envs import TARGETS
 
 if TYPE_CHECKING:
@@ -68,8 +68,8 @@ CASE_STEPS_PER_ROUND = 100_000
 def case_config(args: argparse.Namespace, partial: dict[str, Any]) -> "RunConfig":
     """The run config of a case study: the defaults with `CASE_DEFAULTS`, the target's env
     and clip length, reward members on the observation alone (a target has no action cost,
-    and a clip shows states) and the PPO preset --ppo; then `partial` (--config) merged
-    over it; then the options given.
+    and a clip shows states), the recipe --recipe (default "teach") and the PPO preset
+    --ppo; then `partial` (--config) merged over it; then the options given.
 
     Raises:
         ValueError: `partial` names another env than the target's, or a field fails
@@ -93,10 +93,9 @@ def case_config(args: argparse.Namespace, partial: dict[str, Any]) -> "RunConfig
                 "fragment_length": clip_timing(env_step_seconds(target.env), seconds).steps,
             },
             "reward": {"use_actions": False},
-            "ppo": dataclasses.asdict(PPO_PRESETS[args.ppo or "study"]),
         }
     )
-    cfg = base.merged(partial)
+    cfg = with_recipe(base, args, target.env).merged(partial)
     loop = cfg.loop
     rounds = args.rounds or loop.rounds
     comparisons = args.preferences or loop.comparisons
@@ -171,18 +170,13 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
         help="simulated seconds per behaviour (default: the env's clip duration)",
     )
     case.add_argument(
-        "--ppo",
-        choices=sorted(PPO_PRESETS),
-        help="PPO settings (config.PPO_PRESETS): the study's (SPEC §3, default) or PPO's own "
-        "MuJoCo settings (lr 3e-4, clip 0.2, γ 0.99, 64 × 64); --config's ppo fields change it",
-    )
-    case.add_argument(
         "--eval-episodes", type=positive_int, default=5, help="episodes scored after each round"
     )
     case.add_argument("--seed", type=non_negative_int, help="random seed (default 0)")
     case.add_argument("--out", type=Path, required=True, help="output directory")
     case.add_argument("--no-video", action="store_true", help="skip the video and the strip")
     add_training_arguments(case)
+    add_recipe_arguments(case)
     add_pool_arguments(case)
     add_config_argument(case, " of a case study (CASE_DEFAULTS, the target's env and clip)")
     add_takeaway_arguments(case)

@@ -222,8 +222,8 @@ def _check_same_settings(
 ) -> None:
     from groupwise.storage import SessionSettings
 
-    wanted = SessionSettings.model_validate({**stored, **overrides})
-    if wanted != SessionSettings.model_validate(stored):
+    wanted = SessionSettings.stored({**stored, **overrides})
+    if wanted != SessionSettings.stored(stored):
         raise UsageError(
             f"session {session_id} was started with other settings; pass --new to start a "
             "new session with these, or leave the setting flags out to resume it"

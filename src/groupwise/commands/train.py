@@ -9,6 +9,7 @@ from groupwise.commands.arguments import (
     UsageError,
     add_config_argument,
     add_pool_arguments,
+    add_recipe_arguments,
     add_takeaway_arguments,
     add_training_arguments,
     apply_teacher_options,
@@ -17,6 +18,7 @@ from groupwise.commands.arguments import (
     pool_options,
     positive_int,
     read_config,
+    with_recipe,
     writable_dir,
 )
 
@@ -32,6 +34,8 @@ FROM_SESSION_EXCLUDES = (
     "pretrain_steps",
     "pool_size",
     "pool_variants",
+    "recipe",
+    "ppo",
 )
 """Options --from-session takes from DIR itself (its config.json)."""
 
@@ -79,6 +83,7 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
         "place, from its latest checkpoint: --steps N or --rounds N --dm NAME",
     )
     add_training_arguments(train)
+    add_recipe_arguments(train)
     add_pool_arguments(train)
     add_takeaway_arguments(train)
     train.add_argument("-q", "--quiet", action="store_true", help="no progress bars")
@@ -114,7 +119,7 @@ def run(args: argparse.Namespace) -> int:
     given["loop"] |= {key: value for key, value in overrides.items() if value is not None}
     try:
         make_env(args.env).close()  # the registry's message names the known envs
-        base = RunConfig().merged(read_config(args.config))
+        base = with_recipe(RunConfig(), args, args.env).merged(read_config(args.config))
         cfg = apply_teacher_options(base.merged(given), args, None)
     except ValueError as error:
         raise config_error(error) from None

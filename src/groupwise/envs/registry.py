@@ -150,6 +150,26 @@ def env_entry(name: str) -> EnvEntry | None:
     return ENVS.get(name) or TARGET_ENVS.get(name)
 
 
+MUJOCO_MODULES = ("groupwise.envs.mujoco", "groupwise.envs.targets", "gymnasium.envs.mujoco")
+"""Entry-point modules (and their sub-modules) of MuJoCo envs (`is_mujoco`)."""
+
+
+def is_mujoco(name: str) -> bool:
+    """Whether `name` is a MuJoCo env: a groupwise one made in `MUJOCO_MODULES` (Hopper,
+    HalfCheetah, Walker2d, Reacher and the case studies' targets), a registered Gymnasium id
+    made there (e.g. "Hopper-v5"), or a dm_control id; False for anything else, unknown
+    names included (`config.Recipe.parts` reads it)."""
+    if (entry := env_entry(name)) is not None:
+        entry_point: object = entry.entry_point
+    elif dmc.is_dmc_id(name):
+        return True
+    else:
+        spec = gym.registry.get(name.partition(":")[2] or name)
+        entry_point = None if spec is None else spec.entry_point
+    module = entry_point.partition(":")[0] if isinstance(entry_point, str) else ""
+    return any(module == m or module.startswith(m + ".") for m in MUJOCO_MODULES)
+
+
 def register_envs() -> None:
     """Register every env in `ENVS` and `TARGET_ENVS` with Gymnasium; calling it again does
     nothing."""

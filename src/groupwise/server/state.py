@@ -62,7 +62,7 @@ def state_of(
 ) -> schemas.SessionState:
     """The `SessionState` of a session row (`shown_at`: its current round's; `me`: the
     caller, default the owner; `team`: `storage.team.team_stats`)."""
-    settings = SessionSettings.model_validate(session.settings)
+    settings = SessionSettings.stored(session.settings)
     return schemas.SessionState(
         id=session.id,
         env=session.env,

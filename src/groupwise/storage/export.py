@@ -110,7 +110,7 @@ def export_session(
             id=session.id,
             env=session.env,
             mode=session.mode,  # type: ignore[arg-type]  # checked on creation (MODES)
-            settings=SessionSettings.model_validate(session.settings),
+            settings=SessionSettings.stored(session.settings),
             annotator=session.annotator,
             phase=session.phase,
             round=session.round,

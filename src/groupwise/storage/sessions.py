@@ -46,7 +46,7 @@ def session_directory(session_id: str) -> str:
 
 def settings_of(session: SessionRow) -> SessionSettings:
     """The session's stored settings, parsed."""
-    return SessionSettings.model_validate(session.settings)
+    return SessionSettings.stored(session.settings)
 
 
 def create_session(

@@ -28,12 +28,17 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from groupwise.clips.timing import ClipTiming, default_clip_seconds, env_clip_timing
 from groupwise.config import (
+    DEFAULT_RECIPE,
     PPO_PRESETS,
+    RECIPES,
     ExplorationFraction,
     LoopConfig,
     PairCap,
     PairDerivation,
     PairOversample,
+    PPOPreset,
+    RecipeName,
+    RecipeParts,
     RunConfig,
     Seed,
     TrainingConfig,
@@ -71,6 +76,10 @@ NO_AGENT: dict[str, Any] = {
 }
 """The settings of a session without an agent (a recorded dataset's): set whatever is given."""
 
+REMOVED_SETTINGS = frozenset({"stage_after_s"})
+"""Settings of mechanisms removed since (the stager of continuous rounds, gone with fresh
+pools, issue 39): stored sessions that carry them load without them."""
+
 LEGACY_SECTIONS = frozenset({"ppo", "reward"})
 """Settings stored before issue 38 held these core configs whole; they are `research` now."""
 
@@ -82,17 +91,21 @@ LIBRARY = "library"
 
 
 class SessionSettings(BaseModel):
-    """What a session does each round; every number is a default, not a constant."""
+    """What a session does each round; every number is a default, not a constant.
+
+    `recipe` (`config.RECIPES`, default "teach") gives the parts `ppo_preset`,
+    `pretrain_steps` and `pool_variants` left empty; `for_env` stores them resolved. A
+    session stored before recipes has none (`stored`): it keeps the parts it stored."""
 
     model_config = ConfigDict(frozen=True, extra="forbid")
 
     pool_size: int = Field(default=100, ge=8, le=1000, description="behaviours per round")
-    pool_variants: int = Field(
-        default=0,
+    pool_variants: int | None = Field(
+        default=None,
         ge=0,
         le=MAX_POOL_VARIANTS,
-        description="half of each pool comes from this many copies of the agent, each pushed one "
-        "way, to show rarer behaviours (0: none)",
+        description="half of each pool comes from this many copies of the agent, each pushed "
+        "one way, to show rarer behaviours",
     )
     fragment_length: int | None = Field(
         default=None,
@@ -144,17 +157,23 @@ class SessionSettings(BaseModel):
         description="continuous: the agent trains while you compare; rounds: it trains after "
         "each round ends",
     )
-    ppo_preset: Literal["study", "mujoco"] = Field(
-        default="study",
-        description="PPO settings: study (small, fast nets) or mujoco (PPO's own, for long "
-        "walking and jumping episodes)",
+    recipe: RecipeName | None = Field(
+        default=DEFAULT_RECIPE,
+        description="how to teach: the recipe whose parts the empty PPO, pre-training and pool "
+        "variant fields take",
+        json_schema_extra={"x-choice-help": {r.name: r.summary() for r in RECIPES.values()}},
     )
-    pretrain_steps: int = Field(
-        default=0,
+    ppo_preset: PPOPreset | None = Field(
+        default=None,
+        description="PPO settings: study (small, fast nets) or mujoco (PPO's own, for long "
+        "walking and jumping; null: the recipe's)",
+    )
+    pretrain_steps: int | None = Field(
+        default=None,
         ge=0,
         le=MAX_PPO_STEPS,
         description="PPO steps the agent first explores, seeking new states, so the first "
-        "behaviours differ more (0: none)",
+        "behaviours differ more (null: the recipe's)",
     )
     # -- advanced knobs (the New-session page's "Advanced") ------------------------------
     driver: Literal["app", "library"] = Field(
@@ -167,13 +186,6 @@ class SessionSettings(BaseModel):
     )
     render_workers: int = Field(
         default=2, ge=0, le=8, description="clip render processes (0: inline)"
-    )
-    stage_after_s: float = Field(
-        default=60,
-        ge=0,
-        le=3600,
-        description="continuous training: seconds into a round when the next round is "
-        "prepared, so End round opens it at once",
     )
     lease_s: float = Field(
         default=60,
@@ -227,6 +239,41 @@ class SessionSettings(BaseModel):
 
     @model_validator(mode="before")
     @classmethod
+    def _removed_dropped(cls, data: Any) -> Any:
+        """Settings of mechanisms since removed (`REMOVED_SETTINGS`) are dropped: sessions
+        stored with them still load."""
+        if isinstance(data, dict) and data.keys() & REMOVED_SETTINGS:
+            return {k: v for k, v in data.items() if k not in REMOVED_SETTINGS}
+        return data
+
+    @classmethod
+    def stored(cls, data: Any) -> "SessionSettings":
+        """Settings as a session stored them: one stored before recipes (no "recipe") has
+        none, so it keeps the parts it stored (and the paper's for those it did not store,
+        the defaults then).
+
+        Raises:
+            pydantic.ValidationError: a field fails validation.
+        """
+        if isinstance(data, dict) and "recipe" not in data:
+            data = {**data, "recipe": None}
+        return cls.model_validate(data)
+
+    def recipe_parts(self, env: str) -> RecipeParts:
+        """The pre-training, pool variants and PPO preset of a session on `env`: each set
+        here, else the recipe's (`config.RECIPES`; none: the paper's, the defaults before
+        recipes)."""
+        parts = RECIPES[self.recipe or "paper"].parts(env)
+        return RecipeParts(
+            pretrain_steps=parts.pretrain_steps
+            if self.pretrain_steps is None
+            else self.pretrain_steps,
+            pool_variants=parts.pool_variants if self.pool_variants is None else self.pool_variants,
+            ppo=parts.ppo if self.ppo_preset is None else self.ppo_preset,
+        )
+
+    @model_validator(mode="before")
+    @classmethod
     def _no_agent_for_a_dataset(cls, data: Any) -> Any:
         """A dataset session's agent settings are `NO_AGENT`'s, whatever was given."""
         if isinstance(data, dict) and data.get("dataset"):
@@ -271,9 +318,9 @@ class SessionSettings(BaseModel):
 
     def for_env(self, env: str) -> "SessionSettings":
         """These settings with `fragment_length` fixed for `env` (and `clip_seconds` the
-        duration asked for, when L was not given in steps) and `final_steps` resolved: what
-        a new session stores, so that its L never changes, whatever later versions choose
-        as the env's default.
+        duration asked for, when L was not given in steps), `final_steps` and the recipe's
+        parts resolved (`recipe_parts`): what a new session stores, so that its L and its
+        recipe's parts never change, whatever later versions choose as the env's default.
 
         Raises:
             ValueError: unknown env; both set and disagreeing; or a clip under
@@ -281,6 +328,15 @@ class SessionSettings(BaseModel):
         """
         if self.final_steps is None:
             return self.model_copy(update={"final_steps": self.final_ppo_steps}).for_env(env)
+        if None in (self.pretrain_steps, self.pool_variants, self.ppo_preset):
+            parts = self.recipe_parts(env)
+            return self.model_copy(
+                update={
+                    "pretrain_steps": parts.pretrain_steps,
+                    "pool_variants": parts.pool_variants,
+                    "ppo_preset": parts.ppo,
+                }
+            ).for_env(env)
         timing = self.clip_timing(env)
         if self.fragment_length is None:
             seconds = self.clip_seconds or default_clip_seconds(env)
@@ -307,6 +363,7 @@ class SessionSettings(BaseModel):
 
     def run_config(self, env: str) -> RunConfig:
         """The session as the core's configuration; its feedback comes from a person."""
+        parts = self.recipe_parts(env)
         loop = LoopConfig(
             env=env,
             oracle=HUMAN,
@@ -322,9 +379,9 @@ class SessionSettings(BaseModel):
             pair_cap=self.pair_cap,
             pair_oversample=self.pair_oversample,
             pool_size=self.pool_size,
-            pool_variants=self.pool_variants,
+            pool_variants=parts.pool_variants,
             seed=self.seed,
         )
-        training = TrainingConfig(mode=self.training, pretrain_steps=self.pretrain_steps)
-        cfg = RunConfig(loop=loop, ppo=PPO_PRESETS[self.ppo_preset], training=training)
+        training = TrainingConfig(mode=self.training, pretrain_steps=parts.pretrain_steps)
+        cfg = RunConfig(loop=loop, ppo=PPO_PRESETS[parts.ppo], training=training)
         return cfg.merged(self.research) if self.research else cfg

@@ -7,6 +7,8 @@ what a round of the session offers its person.
 """
 
 import json
+import os
+import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -14,7 +16,7 @@ from groupwise.agent_file.summary import SETTINGS_FILE
 from groupwise.config import RunConfig
 from groupwise.oracles import STRATEGIES
 from groupwise.query.strategies import QueryStrategy
-from groupwise.run.checkpoint import STATE_FILE, checkpoint_dir
+from groupwise.run.checkpoint import CHECKPOINTS, STATE_FILE, checkpoint_dir
 from groupwise.run.pretrain import before_first_round
 from groupwise.run.records import RoundRecord, read_record
 from groupwise.run.run import Run
@@ -62,7 +64,8 @@ def job_of(db: Database, session_id: str) -> Job | None:
 
 def open_run(job: Job, data_dir: Path, after: int) -> Run:
     """The session's run as round `after` left it (fresh for −1: after its setup hooks,
-    `run.pretrain.before_first_round`, as a headless run begins); writes its
+    `run.pretrain.before_first_round`, as a headless run begins, run once per session:
+    `_set_up`); writes its
     ``config.json`` and ``settings.json`` (the settings may have changed since: "Finish
     now", "Continue training")."""
     cfg = job.settings.run_config(job.env)
@@ -70,8 +73,34 @@ def open_run(job: Job, data_dir: Path, after: int) -> Run:
     run = Run.create(cfg, out)
     (out / SETTINGS_FILE).write_text(job.settings.model_dump_json(indent=2) + "\n")
     if not run.restore(after):
-        before_first_round(run)
+        _set_up(run)
     return run
+
+
+PRETRAINED = "pretrained"
+"""``checkpoints/pretrained`` of a session: its agent as its setup hooks left it, before
+round 0 (`open_run`)."""
+
+
+def _set_up(run: Run) -> None:
+    """Run a fresh session run's setup hooks once (`run.pretrain.before_first_round`): the
+    first open (the job preparing round 0) runs them and writes the agent they leave to
+    ``checkpoints/pretrained``; every later open of the fresh run (the job ending round 0,
+    round 0's continuous training, a restarted worker) loads that instead of pre-training
+    again (issue 39: the app pre-trained twice for round 0)."""
+    directory = run.directory / CHECKPOINTS / PRETRAINED
+    if (directory / STATE_FILE).is_file():
+        run.load_policy(directory)
+        return
+    if not before_first_round(run) or run.agent.num_timesteps == 0:
+        return  # no hook trained the agent: nothing to keep
+    tmp = directory.with_name(directory.name + ".tmp")
+    shutil.rmtree(tmp, ignore_errors=True)
+    tmp.mkdir(parents=True)
+    run.save_policy(tmp)
+    (tmp / STATE_FILE).write_text(json.dumps({"env_steps": run.agent.num_timesteps}))
+    shutil.rmtree(directory, ignore_errors=True)
+    os.replace(tmp, directory)
 
 
 def session_strategy(cfg: RunConfig, mode: str) -> QueryStrategy:

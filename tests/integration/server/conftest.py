@@ -21,6 +21,7 @@ import httpx
 import pytest
 
 TINY_SETTINGS = {
+    "recipe": "paper",  # no pre-training on a MuJoCo env: tests stay fast
     "frame_size": 32,
     "render_workers": 0,
     "eval_episodes": 1,

@@ -25,6 +25,7 @@ from groupwise.server.context import AppContext
 from groupwise.worker.process import Worker
 
 TINY = {
+    "recipe": "paper",  # no pre-training on a MuJoCo env: tests stay fast
     "pool_size": 16,
     "fragment_length": 10,
     "ppo_steps_per_round": 64,

@@ -41,10 +41,17 @@ def test_resolve_gives_the_envs_defaults_with_l_in_steps(client):
     # 1.5 s of 0.008 s steps; the final phase trains two rounds' worth of PPO steps
     assert (hopper["clip_seconds"], hopper["fragment_length"]) == (1.5, 188)
     assert hopper["final_steps"] == 2 * hopper["ppo_steps_per_round"] == 40_000
-    assert hopper["pool_size"] == 100 and hopper["ppo_preset"] == "study"
+    assert hopper["pool_size"] == 100 and hopper["recipe"] == "teach"
+    # the teach recipe's parts on a MuJoCo env (config.RECIPES)
+    assert (hopper["ppo_preset"], hopper["pretrain_steps"], hopper["pool_variants"]) == (
+        "mujoco",
+        100_000,
+        8,
+    )
     assert hopper["research"] is None and "ppo" not in hopper  # the core's configs are not settings
     grid = client.post("/api/settings/resolve", json={"env": "GridWorld"}).json()
     assert (grid["clip_seconds"], grid["fragment_length"]) == (1.0, 30)
+    assert (grid["ppo_preset"], grid["pretrain_steps"], grid["pool_variants"]) == ("study", 0, 0)
     assert client.get("/api/sessions").json() == []  # nothing was created
 
 
@@ -58,6 +65,17 @@ def test_resolve_fills_what_follows_from_the_chosen_settings(client):
         "/api/settings/resolve", json={"env": "Hopper", "settings": {"fragment_length": 30}}
     ).json()
     assert (steps["fragment_length"], steps["clip_seconds"]) == (30, None)
+
+
+def test_resolve_gives_the_chosen_recipes_parts_and_each_part_chosen_on_its_own(client):
+    def resolve(settings: dict) -> tuple:
+        body = {"env": "Hopper-backflip", "settings": settings}
+        got = client.post("/api/settings/resolve", json=body).json()
+        return got["recipe"], got["ppo_preset"], got["pretrain_steps"], got["pool_variants"]
+
+    assert resolve({"recipe": "paper"}) == ("paper", "study", 0, 0)
+    assert resolve({"pretrain_steps": 5000}) == ("teach", "mujoco", 5000, 8)
+    assert resolve({"recipe": "paper", "ppo_preset": "mujoco"}) == ("paper", "mujoco", 0, 0)
 
 
 @pytest.mark.parametrize(

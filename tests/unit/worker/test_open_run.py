@@ -33,3 +33,19 @@ def test_a_fresh_session_run_pretrains_when_its_settings_ask(tmp_path):
         assert again.agent.num_timesteps == steps
         weights = again.ppo.model.policy.state_dict()
         assert all(weights[k].equal(v) for k, v in first.items())
+
+
+def test_a_session_pretrains_once_for_round_0(tmp_path, caplog):
+    """The job preparing round 0 and the one ending it both open the fresh run: the first
+    pre-trains and keeps the agent (checkpoints/pretrained), the second loads it."""
+    settings = SessionSettings(pretrain_steps=128, research=RESEARCH)
+    caplog.set_level("INFO", logger="groupwise.run.pretrain")
+    with open_run(_job(settings), tmp_path, after=-1) as prepared:  # prepare round 0
+        steps = prepared.agent.num_timesteps
+        first = {k: v.clone() for k, v in prepared.ppo.model.policy.state_dict().items()}
+    with open_run(_job(settings), tmp_path, after=-1) as ending:  # end round 0
+        assert ending.agent.num_timesteps == steps >= 128
+        weights = ending.ppo.model.policy.state_dict()
+        assert all(weights[k].equal(v) for k, v in first.items())
+    pretrained = [r for r in caplog.records if "pre-trained" in r.getMessage()]
+    assert len(pretrained) == 1

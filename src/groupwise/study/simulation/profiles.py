@@ -30,7 +30,7 @@ import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-from groupwise.config import LoopConfig, PPOConfig, RewardConfig, RunConfig
+from groupwise.config import RECIPES, LoopConfig, PPOConfig, RewardConfig, RunConfig
 from groupwise.study.simulation.ablations import ablate
 
 
@@ -100,13 +100,16 @@ class StudyProfile:
             "eval_episodes": self.eval_episodes,
             "seed": seed,
         }
-        config = RunConfig(
-            loop=dataclasses.replace(LoopConfig(), **values),  # type: ignore[arg-type]  # mixed value types
-            reward=self.reward,
-            ppo=self.ppo,
-        )
+        loop = dataclasses.replace(LoopConfig(), **values)  # type: ignore[arg-type]  # mixed value types
+        # SPEC §8's protocol by name (config.RECIPES), then the profile's own reward and PPO
+        config = RECIPES[STUDY_RECIPE].apply(RunConfig(loop=loop), env)
+        config = dataclasses.replace(config, reward=self.reward, ppo=self.ppo)
         return ablate(config, ablation)
 
+
+STUDY_RECIPE = "paper"
+"""The recipe of every study cell (`config.RECIPES`): SPEC §8's protocol, whatever the CLI's
+and the app's default recipe is."""
 
 PAPER_DMS = ("pairwise", "groupwise", "interactive")
 """The paper's three decision-makers (SPEC §7); any other registered DM can be asked for."""
