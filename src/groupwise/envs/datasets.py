@@ -93,7 +93,12 @@ def open_dataset(reference: str) -> RecordedDataset:
     Raises:
         DatasetError: no such dataset, Minari or h5py missing, or a layout it cannot read.
     """
-    return _open(_normalised(reference))
+    try:
+        return _open(_normalised(reference))
+    except DatasetError:
+        raise
+    except (OSError, ValueError) as error:  # a path the OS refuses (too long, a NUL byte)
+        raise DatasetError(f"dataset {reference[:200]!r} cannot be read: {error}") from None
 
 
 def _normalised(reference: str) -> str:

@@ -123,6 +123,9 @@ def test_a_dataset_session_is_refused_in_one_line(client, minari_store, tmp_path
         client, settings={**SMALL, "fragment_length": 1000, "dataset": f"minari:{DATASET}"}
     )
     assert too_long.status_code == 422 and "windows of 1000 steps" in too_long.json()["detail"]
+    for path in (str(tmp_path / "nothing.hdf5"), "/" + "a" * 600, str(tmp_path)):
+        refused = create(client, settings={**SMALL, "dataset": path})
+        assert refused.status_code == 422 and "dataset" in refused.json()["detail"], path
     no_env = create(client, settings=SMALL)
     assert no_env.status_code == 422 and "env is required" in no_env.json()["detail"]
 
