@@ -493,9 +493,8 @@ RECIPES: dict[RecipeName, Recipe] = {
             "study's PPO (SPEC §3)",
             mujoco=_PAPER_PARTS,
             other=_PAPER_PARTS,
-            measured="the simulation study's protocol; on the case studies without "
-            "pre-training or variants (MuJoCo PPO) stand-up 3/5, backflip 1/5, splits 1/5 seeds",
-            source="docs/results/six-envs, docs/results/case-studies",
+            measured="stand-up 3/5, backflip 1/5, splits 1/5 seeds with its pool and MuJoCo PPO",
+            source="docs/results/case-studies",
         ),
     )
 }

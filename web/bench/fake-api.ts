@@ -169,7 +169,7 @@ export function fakeApi(
       pair_derivation: "cover",
       pair_oversample: 1,
       training: "rounds",
-      stage_after_s: 60,
+      recipe: "paper",
       lease_s: 60,
       overlap_share: 0.1,
     },

@@ -1281,15 +1281,12 @@ export interface components {
              *       "pair_derivation": "cover",
              *       "pair_oversample": 1,
              *       "pool_size": 100,
-             *       "pool_variants": 0,
-             *       "ppo_preset": "study",
              *       "ppo_steps_per_round": 20000,
-             *       "pretrain_steps": 0,
+             *       "recipe": "teach",
              *       "render_workers": 2,
              *       "round_seconds": 600,
              *       "rounds": 5,
              *       "seed": 0,
-             *       "stage_after_s": 60,
              *       "suggestions": 100,
              *       "training": "continuous"
              *     }
@@ -1299,6 +1296,10 @@ export interface components {
         /**
          * SessionSettings
          * @description What a session does each round; every number is a default, not a constant.
+         *
+         *     `recipe` (`config.RECIPES`, default "teach") gives the parts `ppo_preset`,
+         *     `pretrain_steps` and `pool_variants` left empty; `for_env` stores them resolved. A
+         *     session stored before recipes has none (`stored`): it keeps the parts it stored.
          */
         SessionSettings: {
             /**
@@ -1390,17 +1391,14 @@ export interface components {
             pool_size: number;
             /**
              * Pool Variants
-             * @description half of each pool comes from this many copies of the agent, each pushed one way, to show rarer behaviours (0: none)
-             * @default 0
+             * @description half of each pool comes from this many copies of the agent, each pushed one way, to show rarer behaviours
              */
-            pool_variants: number;
+            pool_variants?: number | null;
             /**
              * Ppo Preset
-             * @description PPO settings: study (small, fast nets) or mujoco (PPO's own, for long walking and jumping episodes)
-             * @default study
-             * @enum {string}
+             * @description PPO settings: study (small, fast nets) or mujoco (PPO's own, for long walking and jumping; null: the recipe's)
              */
-            ppo_preset: "study" | "mujoco";
+            ppo_preset?: ("study" | "mujoco") | null;
             /**
              * Ppo Steps Per Round
              * @description PPO env steps after each round
@@ -1409,10 +1407,15 @@ export interface components {
             ppo_steps_per_round: number;
             /**
              * Pretrain Steps
-             * @description PPO steps the agent first explores, seeking new states, so the first behaviours differ more (0: none)
-             * @default 0
+             * @description PPO steps the agent first explores, seeking new states, so the first behaviours differ more (null: the recipe's)
              */
-            pretrain_steps: number;
+            pretrain_steps?: number | null;
+            /**
+             * Recipe
+             * @description how to teach: the recipe whose parts the empty PPO, pre-training and pool variant fields take
+             * @default teach
+             */
+            recipe: ("teach" | "paper") | null;
             /**
              * Render Workers
              * @description clip render processes (0: inline)
@@ -1444,12 +1447,6 @@ export interface components {
              * @default 0
              */
             seed: number;
-            /**
-             * Stage After S
-             * @description continuous training: seconds into a round when the next round is prepared, so End round opens it at once
-             * @default 60
-             */
-            stage_after_s: number;
             /**
              * Suggestions
              * @description pairwise suggestions precomputed per round

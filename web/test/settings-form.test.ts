@@ -59,7 +59,6 @@ describe("settingFields", () => {
       "rounds",
       "round_seconds",
       "pool_size",
-      "pool_variants",
       "clip_seconds",
       "fragment_length",
       "pair_derivation",
@@ -68,8 +67,10 @@ describe("settingFields", () => {
       "training",
       "ppo_steps_per_round",
       "final_steps",
+      "recipe",
       "ppo_preset",
       "pretrain_steps",
+      "pool_variants",
       "seed",
       "eval_episodes",
     ]);
@@ -102,8 +103,9 @@ describe("settingFields", () => {
     expect(field("final_steps")).toMatchObject({ kind: "integer", min: 0, max: 10_000_000, nullable: true });
     expect(field("frame_size").step).toBe(2);
     expect(field("pair_derivation")).toMatchObject({ kind: "choice", choices: ["cover", "cartesian"] });
-    expect(field("ppo_preset")).toMatchObject({ kind: "choice", choices: ["study", "mujoco"] });
-    expect(field("pool_variants")).toMatchObject({ kind: "integer", min: 0, max: 32, nullable: false });
+    expect(field("ppo_preset")).toMatchObject({ kind: "choice", choices: ["study", "mujoco"], nullable: true });
+    expect(field("pool_variants")).toMatchObject({ kind: "integer", min: 0, max: 32, nullable: true });
+    expect(field("recipe")).toMatchObject({ kind: "choice", choices: ["teach", "paper"] });
     expect(nestedField("ppo.net_arch")).toMatchObject({ kind: "list", integerItems: true });
     expect(nestedField("ppo.l2_range")).toMatchObject({ kind: "list", integerItems: false });
     expect(nestedField("ppo.normalize_obs").kind).toBe("boolean");
@@ -228,5 +230,17 @@ describe("the Training section says what each setting does in the chosen mode (i
     for (const [key, byMode] of Object.entries(MODE_HELP)) {
       for (const words of Object.values(byMode)) expect(words.length, key).toBeLessThan(160);
     }
+  });
+});
+
+describe("the recipe shows its measured success in one line (issue 39)", () => {
+  it("tells the chosen recipe's success, from the server's schema", () => {
+    const f = field("recipe");
+    expect(helpIn(f, "continuous", "teach")).toBe(
+      "Teach (measured: stand-up 5/5, backflip 4/5, splits 2/5 seeds; docs/results/case-studies)",
+    );
+    expect(helpIn(f, "rounds", "paper")).toMatch(/^Paper \(measured: /);
+    expect(helpIn(f, "rounds", "")).toBe(f.help); // nothing chosen yet: the field's own help
+    expect(helpIn(field("seed"), "rounds", "3")).toBe(field("seed").help);
   });
 });

@@ -22,6 +22,9 @@ export interface JsonSchema {
   items?: JsonSchema;
   prefixItems?: JsonSchema[];
   properties?: Record<string, JsonSchema>;
+  /** One line per choice of a choice field, shown when it is chosen (the recipes' measured
+   * success: `SessionSettings.recipe`). */
+  "x-choice-help"?: Record<string, string>;
 }
 
 export type Schemas = Record<string, JsonSchema>;
@@ -41,6 +44,8 @@ export interface SettingField {
   /** An empty input means null (the server's default). */
   nullable: boolean;
   choices?: string[];
+  /** Of a choice: the help each choice shows when chosen (the schema's `x-choice-help`). */
+  choiceHelp?: Record<string, string>;
   /** Of a list: whether its items are whole numbers. */
   integerItems?: boolean;
   min?: number;
@@ -62,12 +67,22 @@ export const GROUPS: Readonly<Record<Exclude<GroupId, "advanced">, readonly stri
     "rounds",
     "round_seconds",
     "pool_size",
-    "pool_variants",
     "clip_seconds",
     "fragment_length",
     "pair_derivation",
   ],
-  training: ["training", "ppo_steps_per_round", "final_steps", "ppo_preset", "pretrain_steps", "seed", "eval_episodes"],
+  training: [
+    "training",
+    "ppo_steps_per_round",
+    "final_steps",
+    // the recipe, then its parts, each changeable on its own (issue 39)
+    "recipe",
+    "ppo_preset",
+    "pretrain_steps",
+    "pool_variants",
+    "seed",
+    "eval_episodes",
+  ],
 };
 
 /** Settings the page never offers: a session made here is driven by the app's worker
@@ -128,8 +143,11 @@ export const MODE_HELP: Readonly<Record<string, Readonly<Record<TrainingMode, st
   },
 };
 
-/** The help `f` shows when the form's training mode is `mode`. */
-export function helpIn(f: SettingField, mode: string): string {
+/** The help `f` shows when the form's training mode is `mode` and its input holds `value`
+ * (a choice with help of its own shows the chosen one's: "Teach (measured: …)"). */
+export function helpIn(f: SettingField, mode: string, value?: string): string {
+  const chosen = value === undefined ? undefined : f.choiceHelp?.[value];
+  if (chosen) return chosen;
   const byMode = MODE_HELP[f.key];
   return byMode && (mode === "rounds" || mode === "continuous") ? byMode[mode] : f.help;
 }
@@ -155,7 +173,10 @@ function field(path: string[], schema: JsonSchema, section: string): SettingFiel
     group,
     section,
   };
-  if (core.enum) return { ...base, kind: "choice", choices: core.enum.map(String) };
+  if (core.enum) {
+    const choiceHelp = core["x-choice-help"];
+    return { ...base, kind: "choice", choices: core.enum.map(String), ...(choiceHelp ? { choiceHelp } : {}) };
+  }
   if (core.type === "boolean") return { ...base, kind: "boolean" };
   if (core.type === "array") {
     const items = core.items ?? core.prefixItems?.[0];

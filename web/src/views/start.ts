@@ -158,7 +158,8 @@ function fieldRow(view: View, f: SettingField): HTMLElement {
     if (f.kind === "list") control.placeholder = "e.g. 64, 64";
   }
   view.controls.set(f.key, control);
-  const help = f.help || MODE_HELP[f.key] ? h("small", { class: "help", id: `${id}-help` }, helpIn(f, modeOf(view))) : null;
+  const shown = f.help || MODE_HELP[f.key] || f.choiceHelp;
+  const help = shown ? h("small", { class: "help", id: `${id}-help` }, helpIn(f, modeOf(view), control.value)) : null;
   if (help) control.setAttribute("aria-describedby", help.id);
   const edited = (now: boolean) => {
     view.touched = touch(view.touched, f.key);
@@ -175,13 +176,14 @@ function modeOf(view: View): string {
   return control?.value || "continuous";
 }
 
-/** Each mode-dependent setting's help for the mode chosen now (`MODE_HELP`). */
+/** Each mode-dependent setting's help for the mode chosen now (`MODE_HELP`), and each
+ * choice's with help of its own for the choice made (the recipe's measured success). */
 function showModeHelp(view: View): void {
   const mode = modeOf(view);
   for (const f of view.fields) {
-    if (!MODE_HELP[f.key]) continue;
+    if (!MODE_HELP[f.key] && !f.choiceHelp) continue;
     const help = view.form.querySelector(`#setting-${f.key.replace(/\W/g, "-")}-help`);
-    if (help) text(help as HTMLElement, helpIn(f, mode));
+    if (help) text(help as HTMLElement, helpIn(f, mode, view.controls.get(f.key)?.value));
   }
 }
 

@@ -161,7 +161,8 @@ export function renderStatus(element: HTMLElement, data: StatusData, handlers: S
   view.pause.hidden = !owner; // the owner's (403 for an annotator)
   const paused = s?.timer.paused ?? false;
   text(view.pause, paused ? "Resume" : "Pause");
-  attr(view.pause, "aria-label", paused ? "Resume the round timer" : "Pause the round timer");
+  // Pause stops the round's timer and the agent's training (issue 39)
+  attr(view.pause, "aria-label", paused ? "Resume the round timer and training" : "Pause the round timer and training");
   view.end.disabled = !ready || data.busy;
   if (!ready) resetConfirm(view);
   const finishable = !!s && canFinish(s);
