@@ -94,7 +94,7 @@ def open_dataset(reference: str) -> RecordedDataset:
         DatasetError: no such dataset, Minari or h5py missing, or a layout it cannot read.
     """
     try:
-        return _open(_normalised(reference))
+        return _open(_normalised(reference), str(minari_store()))
     except DatasetError:
         raise
     except (OSError, ValueError) as error:  # a path the OS refuses (too long, a NUL byte)
@@ -108,7 +108,8 @@ def _normalised(reference: str) -> str:
 
 
 @functools.lru_cache(maxsize=2)
-def _open(reference: str) -> RecordedDataset:
+def _open(reference: str, store: str) -> RecordedDataset:
+    """The dataset `reference` (a minari:<id> of the store `store`, or an absolute path)."""
     if reference.startswith(MINARI):
         return _minari(reference, reference.removeprefix(MINARI), None)
     path = Path(reference)
@@ -122,29 +123,30 @@ def _open(reference: str) -> RecordedDataset:
     )
 
 
+def minari_store() -> Path:
+    """The local Minari store: ``MINARI_DATASETS_PATH``, else ``~/.minari/datasets``."""
+    return Path(os.environ.get("MINARI_DATASETS_PATH", "~/.minari/datasets")).expanduser()
+
+
 def _minari(reference: str, dataset_id: str | None, path: Path | None) -> RecordedDataset:
     try:
-        import minari
         from minari.dataset.minari_dataset import MinariDataset
     except ImportError:
         raise DatasetError(
             f"dataset {reference}: Minari is not installed (pip install 'groupwise[minari]')"
         ) from None
+    if dataset_id is not None:  # read from the store's own layout: <id>/data (Minari's
+        # lookups would make the store's directory as a side effect)
+        path = minari_store() / dataset_id / "data"
+        named = Path(dataset_id)
+        if named.is_absolute() or ".." in named.parts or not path.is_dir():
+            raise DatasetError(
+                f"dataset {dataset_id} is not in the local Minari store ({minari_store()}); "
+                f"groupwise never downloads: run `minari download {dataset_id}` first"
+            )
+    assert path is not None
     try:
-        if dataset_id is not None:
-            local = minari.list_local_datasets()
-            if dataset_id not in local:
-                store = os.environ.get("MINARI_DATASETS_PATH", "~/.minari/datasets")
-                raise DatasetError(
-                    f"dataset {dataset_id} is not in the local Minari store ({store}); "
-                    f"groupwise never downloads: run `minari download {dataset_id}` first"
-                )
-            dataset = minari.load_dataset(dataset_id, download=False)
-        else:
-            assert path is not None
-            dataset = MinariDataset(path)
-    except DatasetError:
-        raise
+        dataset = MinariDataset(path)
     except Exception as error:  # Minari's own errors: a missing or broken metadata file
         raise DatasetError(f"dataset {reference}: Minari cannot read it: {error}") from None
     spec = dataset.spec.env_spec

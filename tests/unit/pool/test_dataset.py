@@ -47,6 +47,9 @@ def test_a_minari_dataset_opens_by_id_and_by_directory(store):
     assert [len(e) for e in by_id.episodes] == [len(e) for e in by_dir.episodes]
     with pytest.raises(DatasetError, match=r"not in the local Minari store.*never downloads"):
         open_dataset("minari:mujoco/hopper/expert-v0")
+    for outside in (f"minari:../{store.name}/test/hopper-random-v0", f"minari:{store}/test"):
+        with pytest.raises(DatasetError, match="not in the local Minari store"):
+            open_dataset(outside)  # an id names a dataset of the store, nothing else
     with pytest.raises(DatasetError, match="no such Minari dataset directory"):
         open_dataset(str(store / "nothing-here"))
 
