@@ -12,13 +12,22 @@ BENCHMARKS = [
     "web_render",
     "suggestions",
 ]
-ON_DEMAND = ["peer", "faults", "fuzz", "continuous", "tree_balance", "dtw_options"]
+ON_DEMAND = [
+    "peer",
+    "faults",
+    "fuzz",
+    "continuous",
+    "app_teacher",
+    "tree_balance",
+    "dtw_options",
+]
 """Run only when named: `peer` (groupwise against imitation) takes about 45 minutes,
 `faults` (100 kills of server or worker under load, then `fuzz`) about 25, `fuzz`
 (schemathesis, 10,000 requests to the live API) about 5, `continuous` (a person's pace on a
 continuous session, then PPO's one-core throughput) about 5, `tree_balance` (short training
 runs of four envs, then their pools' trees) about 30 on 2 cores, `dtw_options` (a band or
-a coarser time step against exact DTW on Hopper pools) about 5."""
+a coarser time step against exact DTW on Hopper pools) about 5, `app_teacher` (a simulated
+person teaching three targets × three seeds through a live server, 20 minutes each) about 200."""
 
 
 def main(names: list[str]) -> None:

@@ -1,0 +1,323 @@
+"""Benchmark: a simulated person teaching through the app's own path (issue 39).
+
+For each target and seed it starts a real `groupwise serve` (uvicorn, SQLite, the training
+worker) with one session of the target env, and plays a person on it over HTTP: it shows
+each round (`…/shown`), asks the page's next group suggestion (`…/next-suggestion`),
+answers it with the case studies' calibrated teacher (the Groupwise-DM's teacher with the
+paper's people's label error, 12 % by default, its σ set per pool), one comparison every
+`--pace` seconds (default: the paper's pace for the target, `run.continuous.paper_pace`),
+and lets the round close itself at its comparison budget (or ends it when the suggestions
+run out). The worker trains as it would for a person.
+
+The teacher's time is the wall time since round 0 opened (answers and waits alike). At each
+mark of `--minutes` the benchmark copies the session's run directory (its committed
+checkpoints and the live checkpoint the worker writes every 30 s); after the session it
+loads each copy's policy and measures its greedy episodes' target score in the target env,
+as the case studies do (`study.case_study.evaluate_target`). A seed succeeds when its
+success rate reaches `SEED_SUCCESS`, as in the case studies' tables.
+
+The teacher reads the true step scores of a round's behaviours from the pool files the
+worker published (a person sees them in the clips); everything else goes through HTTP.
+
+    python -m benchmarks.app_teacher [--targets hopper-backflip ...] [--seeds 0 1 2]
+                                     [--minutes 10 20] [--pace S] [--label-error 0.12]
+                                     [--training continuous|rounds] [--out DIR] [--log FILE]
+
+Prints one row per target and seed: success after each mark, PPO steps, the pool's age
+when judged (PPO steps between the policy that sampled the judged behaviours and the policy
+at the moment of the judgement: median / max) and End round → next round open (median).
+"""
+
+import argparse
+import dataclasses
+import json
+import shutil
+import statistics
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+import uuid
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import httpx
+import numpy as np
+
+from benchmarks.submit_latency import URL, wait_listening
+from groupwise.config import RunConfig, TeacherConfig
+from groupwise.envs import TARGETS, make_env
+from groupwise.episodes.ids import behaviour_id, behaviour_index
+from groupwise.oracles import ORACLES
+from groupwise.oracles.calibration import PEOPLE_LABEL_ERROR
+from groupwise.pool.files import load_pool
+from groupwise.preferences.judgement import LEFT_BETTER, RIGHT_BETTER
+from groupwise.query.strategies import Query
+from groupwise.run.continuous import PAPER_CASES, paper_pace
+from groupwise.run.run import CONFIG_FILE, Run
+from groupwise.storage.sessions import round_directory, session_directory
+from groupwise.study.case_study import evaluate_target
+from groupwise.study.case_study_table import SEED_SUCCESS
+
+ROUNDS = 5
+"""Rounds of a session, as the case studies' (the person stops at the last mark first)."""
+EPISODES = 5
+"""Greedy episodes measuring a copy's target score."""
+
+
+@dataclass
+class Cell:
+    """What one target and seed measured."""
+
+    target: str
+    seed: int
+    marks: dict[float, Path] = field(default_factory=dict)
+    """minute → the copy of the run directory taken then."""
+    ppo_steps: dict[float, int] = field(default_factory=dict)
+    success: dict[float, float] = field(default_factory=dict)
+    """minute → the success rate of the copy's greedy episodes."""
+    pool_ages: list[int] = field(default_factory=list)
+    waits: list[float] = field(default_factory=list)
+    judgements: int = 0
+
+
+def start_server(data: Path, env: str, settings: dict, log: Path | None) -> tuple:
+    """`groupwise serve` on a free port with one session of `env`; (process, URL, id)."""
+    process = subprocess.Popen(
+        [
+            sys.executable, "-m", "groupwise.cli", "serve", "--env", env, "--data", str(data),
+            "--port", "0", "--settings", json.dumps(settings),
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL if log is None else log.open("a"),
+        text=True,
+    )  # fmt: skip
+    assert process.stdout is not None
+    for line in process.stdout:
+        if found := URL.search(line):
+            threading.Thread(target=process.stdout.read, daemon=True).start()
+            wait_listening(found.group(1))
+            return process, found.group(1), found.group(2)
+    raise RuntimeError("the server did not start")
+
+
+def teacher_of(dm: str, label_error: float):
+    """The case studies' simulated teacher of decision-maker `dm`, calibrated to `label_error`."""
+    cfg = RunConfig(teacher=TeacherConfig(label_error=label_error))
+    return ORACLES[dm](dataclasses.replace(cfg, loop=dataclasses.replace(cfg.loop, oracle=dm)))
+
+
+def state_of(http: httpx.Client, session: str) -> dict:
+    state = http.get(f"/api/sessions/{session}").json()
+    if state.get("phase") == "failed":
+        raise RuntimeError(f"session {session} failed: {state.get('error')}")
+    return state
+
+
+def wait_open(http: httpx.Client, session: str, round_index: int, until: float) -> bool:
+    """Poll until round `round_index` is open; False when `until` (monotonic) comes first."""
+    while time.monotonic() < until:
+        state = state_of(http, session)
+        if state["phase"] == "ready" and state["round"] == round_index:
+            return True
+        time.sleep(0.05)
+    return False
+
+
+def pool_age(http: httpx.Client, session: str) -> int | None:
+    summary = http.get(f"/api/sessions/{session}/training").json().get("summary")
+    return None if summary is None else int(summary["pool_age"])
+
+
+def teach(
+    target: str,
+    seed: int,
+    marks: Sequence[float],
+    args: argparse.Namespace,
+    out: Path,
+) -> Cell:
+    """One session of `target` taught by the simulated person until the last mark."""
+    env = TARGETS[target].env
+    pairs, _ = PAPER_CASES[target]
+    comparisons = round(pairs / 2.71 / ROUNDS)  # the paper's pairs in ROUNDS rounds
+    settings = {
+        "seed": seed,
+        "training": args.training,
+        "rounds": ROUNDS,
+        "comparisons_per_round": comparisons,
+        "round_seconds": 0,
+        "frame_size": 96,
+    }
+    pace = args.pace or paper_pace(target, pairwise=False)
+    feedback = teacher_of("groupwise", args.label_error)
+    rng = np.random.default_rng(seed)
+    cell = Cell(target, seed)
+    with tempfile.TemporaryDirectory() as tmp:
+        data = Path(tmp) / "data"
+        process, url, session = start_server(data, env, settings, args.log)
+        try:
+            with httpx.Client(base_url=url, timeout=120) as http:
+                if not wait_open(http, session, 0, time.monotonic() + 1800):
+                    raise TimeoutError("round 0 did not open in 30 min")
+                start = time.monotonic()
+                pending = sorted(marks)
+                round_index = 0
+                while pending:
+                    http.post(f"/api/sessions/{session}/rounds/{round_index}/shown")
+                    run_dir = data / round_directory(session, round_index)
+                    pool = load_pool(run_dir, round_index)
+                    closed = False
+                    while not closed and pending:
+                        reply = http.post(
+                            f"/api/sessions/{session}/rounds/{round_index}/next-suggestion",
+                            json={"exclude": []},
+                        )
+                        suggestion = reply.json().get("suggestion") if reply.is_success else None
+                        if suggestion is None:
+                            http.post(f"/api/sessions/{session}/end-round")
+                            closed = True
+                            break
+                        query = Query(
+                            tuple(behaviour_index(b) for b in suggestion["left"]),
+                            tuple(behaviour_index(b) for b in suggestion["right"]),
+                        )
+                        time.sleep(pace)
+                        answered = feedback.teacher.answer(pool, [query], rng)
+                        label = "equal"
+                        left, right = query.left, query.right
+                        if answered:
+                            j = answered[0]
+                            left, right = j.left, j.right
+                            label = {LEFT_BETTER: "left", RIGHT_BETTER: "right"}.get(
+                                j.label, "equal"
+                            )
+                        age = pool_age(http, session)
+                        if age is not None:
+                            cell.pool_ages.append(age)
+                        body = {
+                            "client_id": str(uuid.uuid4()),
+                            "round": round_index,
+                            "left": [behaviour_id(i) for i in left],
+                            "right": [behaviour_id(i) for i in right],
+                            "label": label,
+                            "source": "suggested",
+                            "seconds": pace,
+                        }
+                        http.post(f"/api/sessions/{session}/judgements", json=body)
+                        cell.judgements += 1
+                        state = state_of(http, session)
+                        closed = state["round"] != round_index or state["phase"] != "ready"
+                        _take_marks(cell, pending, start, data, session, out)
+                    if not pending:
+                        break
+                    tick = time.monotonic()
+                    last = round_index + 1 >= ROUNDS
+                    if last or not wait_open(http, session, round_index + 1, tick + 1800):
+                        break
+                    cell.waits.append(time.monotonic() - tick)
+                    round_index += 1
+                while pending:  # the rounds ran out before the last mark: wait for it
+                    time.sleep(1.0)
+                    _take_marks(cell, pending, start, data, session, out)
+        finally:
+            process.terminate()
+            process.wait(timeout=60)
+    return cell
+
+
+def _take_marks(
+    cell: Cell, pending: list[float], start: float, data: Path, session: str, out: Path
+) -> None:
+    """Copy the run directory at each mark whose minute has come."""
+    while pending and time.monotonic() - start >= 60 * pending[0]:
+        minute = pending.pop(0)
+        copy = out / f"{cell.target}-s{cell.seed}-m{minute:g}"
+        shutil.rmtree(copy, ignore_errors=True)
+        source = data / session_directory(session)
+        shutil.copytree(source, copy, ignore=shutil.ignore_patterns("round-*"))
+        cell.marks[minute] = copy
+
+
+def evaluate_copy(cell: Cell, minute: float, copy: Path) -> None:
+    """The success rate of the greedy policy in `copy` (the newest of its committed and
+    live checkpoints), measured on the target env."""
+    cfg = RunConfig.load(copy / CONFIG_FILE)
+    with Run.create(cfg, copy) as run:
+        run.restore()
+        round_index = run.next_round
+        run.restore_live(round_index)
+        cell.ppo_steps[minute] = int(run.agent.num_timesteps)
+        target = TARGETS[cell.target]
+        rng = np.random.default_rng([cell.seed, int(minute)])
+        evaluation = evaluate_target(
+            lambda: make_env(target.env), run.agent.policy(deterministic=True), EPISODES, rng
+        )
+        cell.success[minute] = evaluation.success_rate(target)
+
+
+def table(cells: Sequence[Cell], marks: Sequence[float]) -> str:
+    head = ["target", "seed", *(f"success {m:g} min" for m in marks)]
+    head += [*(f"PPO steps {m:g} min" for m in marks), "comparisons"]
+    head += ["pool age, median / max", "End round → open, median (s)"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+    for cell in cells:
+        ages = cell.pool_ages or [0]
+        wait = f"{statistics.median(cell.waits):.2f}" if cell.waits else "–"
+        row = [cell.target, str(cell.seed)]
+        row += [_success(cell, m) for m in marks]
+        row += [f"{cell.ppo_steps.get(m, 0):,}" for m in marks]
+        row += [str(cell.judgements), f"{statistics.median(ages):,.0f} / {max(ages):,}", wait]
+        lines.append("| " + " | ".join(row) + " |")
+    for target in dict.fromkeys(c.target for c in cells):
+        of = [c for c in cells if c.target == target]
+        counts = ", ".join(
+            f"{sum(c.success.get(m, 0.0) >= SEED_SUCCESS for c in of)}/{len(of)} at {m:g} min"
+            for m in marks
+        )
+        lines.append(f"\n{target}: successful seeds {counts}")
+    return "\n".join(lines)
+
+
+def _success(cell: Cell, minute: float) -> str:
+    rate = cell.success.get(minute)
+    if rate is None:
+        return "–"
+    return f"{'yes' if rate >= SEED_SUCCESS else 'no'} ({rate:.0%})"
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0] if __doc__ else None)
+    parser.add_argument("--targets", nargs="+", default=list(PAPER_CASES), choices=TARGETS)
+    parser.add_argument("--seeds", nargs="+", type=int, default=[0, 1, 2])
+    parser.add_argument("--minutes", nargs="+", type=float, default=[10.0, 20.0])
+    parser.add_argument("--pace", type=float, help="seconds per comparison (the paper's)")
+    parser.add_argument("--label-error", type=float, default=PEOPLE_LABEL_ERROR)
+    parser.add_argument("--training", choices=("continuous", "rounds"), default="continuous")
+    parser.add_argument("--out", type=Path, help="keep the copies here (default: a temp dir)")
+    parser.add_argument("--log", type=Path, help="write the servers' and workers' logs here")
+    args = parser.parse_args([] if argv is None else list(argv))
+    cells: list[Cell] = []
+    with tempfile.TemporaryDirectory() as tmp:
+        out = args.out or Path(tmp)
+        out.mkdir(parents=True, exist_ok=True)
+        for target in args.targets:
+            for seed in args.seeds:
+                cell = teach(target, seed, args.minutes, args, out)
+                for minute, copy in cell.marks.items():
+                    evaluate_copy(cell, minute, copy)
+                cells.append(cell)
+                print(
+                    f"{time.strftime('%H:%M:%S')} {target} seed {seed}: {cell.success}",
+                    file=sys.stderr,
+                )
+    print(
+        f"The app's path: one session at a time, {args.training} training, the calibrated "
+        f"teacher (label error {args.label_error:g}), {EPISODES} greedy episodes a mark\n"
+    )
+    print(table(cells, args.minutes))
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
