@@ -98,6 +98,15 @@ def test_a_target_env_with_chosen_settings_is_created_as_shown(
     page.get_by_label("PPO steps per round").fill("4096")
     expect(page.get_by_label("Final steps")).to_have_value("8192")
     page.get_by_label("Pairwise baseline").check()
+    # the recipe says what it measured; its parts follow it, each changeable on its own
+    recipe_help = page.locator("#setting-recipe-help")
+    expect(recipe_help).to_have_text(
+        "Teach (measured: stand-up 5/5, backflip 4/5, splits 2/5 seeds; docs/results/case-studies)"
+    )
+    expect(page.get_by_label("Pretrain steps")).to_have_value("100000")
+    page.get_by_label("Recipe").select_option("paper")  # no pre-training: the test stays fast
+    expect(recipe_help).to_contain_text("Paper (measured: ")
+    expect(page.get_by_label("Pretrain steps")).to_have_value("0")
     page.get_by_label("Pool variants").fill("4")
     page.get_by_label("PPO preset").select_option("mujoco")
     page.get_by_text("Advanced: clips, the worker and shared sessions").click()
@@ -116,6 +125,7 @@ def test_a_target_env_with_chosen_settings_is_created_as_shown(
     assert (settings["clip_seconds"], settings["fragment_length"]) == (2.0, 250)
     assert (settings["ppo_steps_per_round"], settings["final_steps"]) == (4096, 8192)
     assert (settings["pool_variants"], settings["ppo_preset"]) == (4, "mujoco")
+    assert (settings["recipe"], settings["pretrain_steps"]) == ("paper", 0)
     # exactly what the form showed, every field of it
     assert settings["driver"] == "app"
     differ = {key: (text, _at(settings, key)) for key, text in shown.items()}

@@ -21,6 +21,7 @@ FINAL_TIMEOUT_MS = 240_000
 # The least that still trains and evaluates: 8 behaviours, one round, 64 PPO steps after it
 # and 64 more in the final phase, two evaluation episodes of 1000 steps.
 TINY_TARGET = {
+    "recipe": "paper",  # no pre-training, no variants: the test stays fast
     "pool_size": 8,
     "rounds": 1,
     "ppo_steps_per_round": 64,
