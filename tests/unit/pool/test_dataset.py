@@ -169,3 +169,26 @@ def test_a_d4rl_style_hdf5_file_with_stored_states_draws_a_reruns_frames(tmp_pat
     drawn = window_frames(recipe, cached_env(settings))
     start = fragment.reset_seed - first
     np.testing.assert_array_equal(drawn[0], frames[start])
+
+
+def test_with_an_ensemble_a_dataset_pool_keeps_the_windows_it_is_least_sure_of(store):
+    """The source draws 2 N windows uniformly; `sample_pool` keeps the N of them whose
+    predicted returns the ensemble's members disagree on most, as for any source."""
+    from groupwise.config import RewardConfig
+    from groupwise.episodes.fragments import stack_fragments, tile_fragments
+    from groupwise.reward import RewardEnsemble
+
+    ensemble = RewardEnsemble.for_env(
+        lambda: make_env(HOPPER), RewardConfig(ensemble_size=3), np.random.default_rng(0)
+    )
+    source = RecordedEpisodes("minari:test/hopper-random-v0", HOPPER)
+    args = (lambda: make_env(HOPPER), None, 8, 10)
+    pool = sample_pool(
+        *args, np.random.default_rng(4), sources=(source,), oversample=2.0, ensemble=ensemble
+    )
+    drawn = sample_pool(*args, np.random.default_rng(4), sources=(source,), oversample=2.0)
+    assert len(drawn.episodes) == 16  # the same draw of 2 N windows (the same stream)
+    windows = tile_fragments(drawn.episodes, 10)
+    spread = ensemble.returns(*stack_fragments(windows)).var(axis=1)
+    wanted = sorted(np.argsort(-spread)[:8])
+    assert [f.reset_seed for f in pool.fragments] == [windows[i].reset_seed for i in wanted]
