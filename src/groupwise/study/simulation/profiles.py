@@ -30,7 +30,14 @@ import dataclasses
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 
-from groupwise.config import RECIPES, LoopConfig, PPOConfig, RewardConfig, RunConfig
+from groupwise.config import (
+    RECIPES,
+    LoopConfig,
+    PPOConfig,
+    RecipeName,
+    RewardConfig,
+    RunConfig,
+)
 from groupwise.study.simulation.ablations import ablate
 
 
@@ -107,7 +114,7 @@ class StudyProfile:
         return ablate(config, ablation)
 
 
-STUDY_RECIPE = "paper"
+STUDY_RECIPE: RecipeName = "paper"
 """The recipe of every study cell (`config.RECIPES`): SPEC §8's protocol, whatever the CLI's
 and the app's default recipe is."""
 
