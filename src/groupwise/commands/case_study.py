@@ -188,7 +188,12 @@ def run(args: argparse.Namespace) -> int:
     from groupwise.agent_file.summary import AGENT_ZIP
     from groupwise.oracles import ORACLES
     from groupwise.run.takeaway import TakeawayConfig
-    from groupwise.study.case_study import CASE_FILE, STRIP_FILE, VIDEO_FILE, run_case_study
+    from groupwise.study.case_studies.case_study import (
+        CASE_FILE,
+        STRIP_FILE,
+        VIDEO_FILE,
+        run_case_study,
+    )
 
     target = TARGETS[args.target]
     try:

@@ -5,7 +5,7 @@ import csv
 import json
 from pathlib import Path
 
-from groupwise.study.case_study_table import setup_label, summary_rows
+from groupwise.study.case_studies.table import setup_label, summary_rows
 
 
 def _run(

@@ -1,6 +1,6 @@
 """The case-study results table: one row per `groupwise case-study` run directory.
 
-    python -m groupwise.study.case_study_table RUN_DIR [RUN_DIR ...]
+    python -m groupwise.study.case_studies.table RUN_DIR [RUN_DIR ...]
 
 prints a Markdown table (target, DM, seed, comparisons, preference pairs, share of pairs
 between behaviours of equal target score, label error on the others, the greedy policy's
