@@ -50,8 +50,6 @@ from benchmarks.submit_latency import URL, wait_listening
 from groupwise.config import RunConfig, TeacherConfig
 from groupwise.envs import TARGETS, make_env
 from groupwise.episodes.ids import behaviour_id, behaviour_index
-from groupwise.oracles import ORACLES
-from groupwise.oracles.calibration import PEOPLE_LABEL_ERROR
 from groupwise.pool.files import load_pool
 from groupwise.preferences.judgement import LEFT_BETTER, RIGHT_BETTER
 from groupwise.query.strategies import Query
@@ -60,6 +58,8 @@ from groupwise.run.run import CONFIG_FILE, Run
 from groupwise.storage.sessions import round_directory, session_directory
 from groupwise.study.case_studies.case_study import evaluate_target
 from groupwise.study.case_studies.table import SEED_SUCCESS
+from groupwise.teachers import DECISION_MAKERS
+from groupwise.teachers.calibration import PEOPLE_LABEL_ERROR
 
 ROUNDS = 5
 """Rounds of a session, as the case studies' (the person stops at the last mark first)."""
@@ -106,7 +106,9 @@ def start_server(data: Path, env: str, settings: dict, log: Path | None) -> tupl
 def teacher_of(dm: str, label_error: float):
     """The case studies' simulated teacher of decision-maker `dm`, calibrated to `label_error`."""
     cfg = RunConfig(teacher=TeacherConfig(label_error=label_error))
-    return ORACLES[dm](dataclasses.replace(cfg, loop=dataclasses.replace(cfg.loop, oracle=dm)))
+    return DECISION_MAKERS[dm](
+        dataclasses.replace(cfg, loop=dataclasses.replace(cfg.loop, oracle=dm))
+    )
 
 
 def state_of(http: httpx.Client, session: str) -> dict:

@@ -20,11 +20,11 @@ import torch
 
 from groupwise.config import LoopConfig, PPOConfig, RewardConfig
 from groupwise.envs import make_env
-from groupwise.oracles import Feedback, PairwiseTeacher
 from groupwise.query.strategies import PairwiseQueries
 from groupwise.reward import RewardEnsemble
 from groupwise.rl.ppo import PPOAgent
 from groupwise.run.preference_comparisons import PreferenceComparisons
+from groupwise.teachers import Feedback, PairwiseTeacher
 from peer_eval import episode_returns
 
 VARIANTS: dict[str, dict[str, dict[str, Any]]] = {

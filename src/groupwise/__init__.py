@@ -11,7 +11,7 @@ stays light and the app's extras are needed only for `WebTeacher`:
   `behaviour_id`;
 - asking: `Query`, `PairwiseQueries`, `GroupSuggestions`, `InteractiveWalk`;
 - answering: `SimulatedTeacher`, `Perception`, `PairwiseTeacher`, `WebTeacher` (a person on
-  the app's page), `Feedback` (a strategy and a teacher), `ORACLES` (the study's DMs);
+  the app's page), `Feedback` (a strategy and a teacher), `DECISION_MAKERS` (the study's DMs);
 - judgements and learning: `Judgement`, `covering_pairs`, `PreferenceDataset`,
   `RewardEnsemble`, `fit`, `LearnedRewardVecEnv`, `PPOAgent`, `SB3Agent`;
 - the result: `load_agent` (an ``agent.zip`` from the app or `groupwise train --from-session`)
@@ -50,11 +50,11 @@ _EXPORTS = {
     "PairwiseQueries": "groupwise.query.strategies",
     "GroupSuggestions": "groupwise.query.strategies",
     "InteractiveWalk": "groupwise.query.strategies",
-    "SimulatedTeacher": "groupwise.oracles",
-    "Perception": "groupwise.oracles",
-    "PairwiseTeacher": "groupwise.oracles",
-    "Feedback": "groupwise.oracles",
-    "ORACLES": "groupwise.oracles",
+    "SimulatedTeacher": "groupwise.teachers",
+    "Perception": "groupwise.teachers",
+    "PairwiseTeacher": "groupwise.teachers",
+    "Feedback": "groupwise.teachers",
+    "DECISION_MAKERS": "groupwise.teachers",
     "WebTeacher": "groupwise.worker.web_teacher",
     "Judgement": "groupwise.preferences.judgement",
     "covering_pairs": "groupwise.preferences.pairs",

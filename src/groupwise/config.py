@@ -188,7 +188,7 @@ class LoopConfig:
     env: str = "GridWorld"
     """A groupwise env name (see `groupwise.envs.ENVS`) or any Gymnasium id."""
     oracle: str = "pairwise"
-    """Who gives feedback: a simulated decision-maker from `groupwise.oracles.ORACLES`."""
+    """Who gives feedback: a simulated decision-maker from `groupwise.teachers.DECISION_MAKERS`."""
     comparisons: PositiveInt = 100
     """Total comparisons (queries) over the whole session."""
     rounds: PositiveInt = 5
@@ -260,7 +260,7 @@ class LoopConfig:
 
 @dataclass(frozen=True, config=_STRICT)
 class TeacherConfig:
-    """How the simulated decision-makers perceive and answer (SPEC §7; `groupwise.oracles`).
+    """How the simulated decision-makers perceive and answer (SPEC §7; `groupwise.teachers`).
 
     A person answering through the page uses none of it; the rounds' diagnostics still
     measure pools in its noise unit (``return_sd_over_noise``)."""
@@ -285,7 +285,7 @@ class TeacherConfig:
     this many typical member deviations (`query.interactive.clear_gaps`)."""
     label_error: Annotated[float, Field(gt=0, lt=0.5)] | None = None
     """A teacher calibrated to people: its noise set per pool so that this share of its
-    comparisons of two behaviours of unequal return is wrong (`oracles.calibration`; the
+    comparisons of two behaviours of unequal return is wrong (`teachers.calibration`; the
     paper's user study: 0.108–0.128, so 0.12); None: `noise_sigma` per step (SPEC §7)."""
     pace_s: Annotated[float, Field(gt=0)] | None = None
     """Seconds of a virtual clock the teacher takes per comparison (a timed teacher,

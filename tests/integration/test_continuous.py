@@ -177,11 +177,11 @@ def test_train_continuous_from_the_command_line(tmp_path, capsys):
 
 
 def test_a_live_round_refits_when_due_and_an_undo_counts(tmp_path):
-    from groupwise.oracles import ORACLES
     from groupwise.preferences.judgement import LEFT_BETTER, Judgement
     from groupwise.run.continuous import LiveRound
     from groupwise.run.round import begin_round, derive_pairs
     from groupwise.run.streams import round_streams
+    from groupwise.teachers import DECISION_MAKERS
 
     cfg = dataclasses.replace(
         CONTINUOUS,
@@ -189,7 +189,7 @@ def test_a_live_round_refits_when_due_and_an_undo_counts(tmp_path):
     )
     with Run.create(cfg, None) as run:
         streams = round_streams(cfg.loop.seed, 0)
-        offer = begin_round(run, ORACLES["groupwise"](cfg).queries, 8, streams=streams)
+        offer = begin_round(run, DECISION_MAKERS["groupwise"](cfg).queries, 8, streams=streams)
         live = LiveRound(run, offer, streams, clock=0.0)
         a = Judgement((0, 1, 2), (3, 4), LEFT_BETTER)  # 3 pairs
         b = Judgement((5,), (6,), LEFT_BETTER)  # 1 pair

@@ -9,14 +9,14 @@ import numpy as np
 import pytest
 
 from groupwise.cli import main
-from groupwise.oracles import ORACLES
 from groupwise.run.headless import run_session
 from groupwise.run.progress import OnRoundEnd
 from groupwise.study.simulation.cells import Cell, is_done
 from groupwise.study.simulation.profiles import SMOKE
 from groupwise.study.simulation.runner import StudySpec, run_study
+from groupwise.teachers import DECISION_MAKERS
 
-DMS = tuple(dm for dm in SMOKE.dms if dm in ORACLES)
+DMS = tuple(dm for dm in SMOKE.dms if dm in DECISION_MAKERS)
 SPEC = StudySpec(SMOKE, ("GridWorld",), DMS, seeds=2)
 ROW = re.compile(r"(-?\d+\.\d) ± (\d+\.\d|–) \(n=(\d+)\)")
 

@@ -11,12 +11,12 @@ from stable_baselines3 import PPO
 
 from groupwise.agent_file.summary import AGENT_ZIP, read_summary
 from groupwise.config import LoopConfig, PPOConfig, RewardConfig, RunConfig
-from groupwise.oracles import ORACLES, Feedback
 from groupwise.preferences.judgement import Judgement
 from groupwise.run.agent_package import NoCheckpointError, UnknownRoundError, pick_round
 from groupwise.run.headless import hand_over, run_session
 from groupwise.run.run import Run
 from groupwise.run.takeaway import TakeawayConfig, read_choice
+from groupwise.teachers import DECISION_MAKERS, Feedback
 
 TINY = RunConfig(
     loop=LoopConfig(
@@ -70,7 +70,7 @@ def test_train_hands_over_the_teachers_round_and_records_it(run_dir):
 def test_the_package_holds_the_chosen_rounds_weights_not_the_last(run_dir):
     with Run.create(TINY, run_dir) as run:
         run.restore()
-        feedback = Feedback(ORACLES["pairwise"](TINY).queries, PrefersEarlier())
+        feedback = Feedback(DECISION_MAKERS["pairwise"](TINY).queries, PrefersEarlier())
         choice = hand_over(run, feedback, TakeawayConfig(episodes=2))
     assert choice.round == 0 and choice.scores[0] == 1.0
     packed = _weights(_zipped_policy(run_dir))

@@ -28,7 +28,7 @@ LAYERS: list[set[str]] = [
     # the app's database: below everything RL, so the server can load it without them
     {"groupwise.storage"},
     {"groupwise.query"},
-    {"groupwise.oracles", "groupwise.rl"},
+    {"groupwise.teachers", "groupwise.rl"},
     {"groupwise.pool"},
     {"groupwise.run"},
     # the programs around the loop
@@ -209,7 +209,7 @@ def test_an_import_under_type_checking_is_left_out(tmp_path):
 def test_the_layer_of_a_module_is_its_longest_entry():
     assert _layer("groupwise") == 0
     assert _layer("groupwise.episodes.ids") == 0
-    assert _layer("groupwise.rl.ppo") == _layer("groupwise.oracles")
+    assert _layer("groupwise.rl.ppo") == _layer("groupwise.teachers")
     assert _layer("groupwise.server.routes.agent") == len(LAYERS) - 2
     assert _layer("elsewhere.module") is None
 

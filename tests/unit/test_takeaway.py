@@ -8,10 +8,6 @@ import pytest
 
 from groupwise.behaviour.pool import BehaviourPool
 from groupwise.episodes.fragments import Trajectory
-from groupwise.oracles.base import Teacher
-from groupwise.oracles.calibration import CalibratedTeacher
-from groupwise.oracles.group_decision import Perception, SimulatedTeacher
-from groupwise.oracles.pairwise import PairwiseTeacher
 from groupwise.preferences.judgement import Judgement
 from groupwise.query.strategies import Query
 from groupwise.run.takeaway import (
@@ -21,6 +17,10 @@ from groupwise.run.takeaway import (
     read_choice,
     write_choice,
 )
+from groupwise.teachers.base import Teacher
+from groupwise.teachers.calibration import CalibratedTeacher
+from groupwise.teachers.group_decision import Perception, SimulatedTeacher
+from groupwise.teachers.pairwise import PairwiseTeacher
 
 
 def episode(total: float, seed: int = 0, steps: int = 10) -> Trajectory:

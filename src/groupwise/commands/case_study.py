@@ -138,7 +138,8 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
     )
     case.add_argument("--target", required=True, choices=sorted(TARGETS), help="the behaviour")
     case.add_argument(
-        "--dm", help=f"simulated decision-maker (ORACLES; default {CASE_DEFAULTS['oracle']})"
+        "--dm",
+        help=f"simulated decision-maker (DECISION_MAKERS; default {CASE_DEFAULTS['oracle']})",
     )
     case.add_argument(
         "--preferences",
@@ -186,7 +187,6 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
 
 def run(args: argparse.Namespace) -> int:
     from groupwise.agent_file.summary import AGENT_ZIP
-    from groupwise.oracles import ORACLES
     from groupwise.run.takeaway import TakeawayConfig
     from groupwise.study.case_studies.case_study import (
         CASE_FILE,
@@ -194,15 +194,16 @@ def run(args: argparse.Namespace) -> int:
         VIDEO_FILE,
         run_case_study,
     )
+    from groupwise.teachers import DECISION_MAKERS
 
     target = TARGETS[args.target]
     try:
         cfg = case_config(args, read_config(args.config))
     except ValueError as error:
         raise config_error(error) from None
-    if cfg.loop.oracle not in ORACLES:
+    if cfg.loop.oracle not in DECISION_MAKERS:
         raise UsageError(
-            f"unknown decision-maker {cfg.loop.oracle!r}; choose from {', '.join(ORACLES)}"
+            f"unknown decision-maker {cfg.loop.oracle!r}; choose from {', '.join(DECISION_MAKERS)}"
         )
     if cfg.loop.pair_cap is not None and cfg.training.mode == "continuous":
         raise UsageError("--pairs caps each round's pairs: use it with --training rounds")

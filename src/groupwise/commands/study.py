@@ -69,7 +69,6 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
 
 def run(args: argparse.Namespace) -> int:
     from groupwise.envs import make_env
-    from groupwise.oracles import ORACLES
     from groupwise.study.simulation.cells import CONDITIONS
     from groupwise.study.simulation.profiles import PROFILES
     from groupwise.study.simulation.runner import (
@@ -79,20 +78,21 @@ def run(args: argparse.Namespace) -> int:
         plan_jobs,
         run_study,
     )
+    from groupwise.teachers import DECISION_MAKERS
 
     profile = PROFILES[args.profile]
     envs = tuple(args.envs or profile.envs)
-    dms = tuple(args.dms or (dm for dm in profile.dms if dm in ORACLES))
+    dms = tuple(args.dms or (dm for dm in profile.dms if dm in DECISION_MAKERS))
     for env in envs:
         try:  # made once here: an unknown id or an observation it cannot teach (issue 42)
             make_env(env).close()
         except ValueError as error:
             raise UsageError(str(error)) from None
     if not dms:
-        raise UsageError(f"no decision-maker given; choose from {', '.join(ORACLES)}")
-    unknown = [dm for dm in dms if dm not in ORACLES]
+        raise UsageError(f"no decision-maker given; choose from {', '.join(DECISION_MAKERS)}")
+    unknown = [dm for dm in dms if dm not in DECISION_MAKERS]
     if unknown:
-        raise UsageError(f"unknown DM {unknown[0]!r}; choose from {', '.join(ORACLES)}")
+        raise UsageError(f"unknown DM {unknown[0]!r}; choose from {', '.join(DECISION_MAKERS)}")
     if any(name in CONDITIONS for name in (*envs, *dms)):
         raise UsageError(f"env and DM names cannot be {', '.join(CONDITIONS)}")
     ablations = tuple(dict.fromkeys([*args.ablations, *(["capped"] if args.cap_pairs else [])]))

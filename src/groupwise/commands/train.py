@@ -96,16 +96,16 @@ def run(args: argparse.Namespace) -> int:
     from groupwise.agent_file.summary import AGENT_ZIP
     from groupwise.config import RunConfig
     from groupwise.envs import make_env
-    from groupwise.oracles import ORACLES
     from groupwise.run.headless import run_session
     from groupwise.run.run import RESULTS_FILE, ConfigMismatchError
     from groupwise.run.takeaway import TakeawayConfig, read_choice
+    from groupwise.teachers import DECISION_MAKERS
 
     if args.env is None or args.out is None:
         raise UsageError("train needs --env and --out (or --from-session DIR)")
     oracle = args.oracle or "pairwise"
-    if oracle not in ORACLES:
-        raise UsageError(f"unknown oracle {oracle!r}; choose from {', '.join(ORACLES)}")
+    if oracle not in DECISION_MAKERS:
+        raise UsageError(f"unknown oracle {oracle!r}; choose from {', '.join(DECISION_MAKERS)}")
     overrides = {
         "env": args.env,
         "oracle": oracle,

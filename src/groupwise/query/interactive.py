@@ -23,7 +23,7 @@ GridWorld (299 → 273) and Reacher (−747 → −1 396). Either way most of th
 yield no judgement; we think the chain runs out of candidates (nested tree nodes, each
 behaviour used twice) before the round's queries do, but asked vs skipped was not counted.
 
-Three registered walks (`groupwise.oracles.ORACLES`) differ in what they rank and pair:
+Three registered walks (`groupwise.teachers.DECISION_MAKERS`) differ in what they rank and pair:
 
 - "interactive" — the paper's reference code: rank by the *sum* of the members' true returns
   over every level-1/2 node with at least 2 leaves (no 8-behaviour limit), two passes;

@@ -1,8 +1,8 @@
 """Query strategies: which comparisons to ask of a pool (SPEC §5, §7), apart from who answers.
 
-A strategy *proposes* queries, a teacher (`groupwise.oracles.Teacher`: a simulated
+A strategy *proposes* queries, a teacher (`groupwise.teachers.Teacher`: a simulated
 decision-maker, an imperfect teacher, or a person through the web page) *answers* them.
-`groupwise.oracles.Feedback` puts one of each together into what the loop asks for
+`groupwise.teachers.Feedback` puts one of each together into what the loop asks for
 feedback. The three strategies of the paper's study:
 
 - `PairwiseQueries`: pairwise active learning, for each query the most disputed of
@@ -152,7 +152,7 @@ class InteractiveWalk(_TreeGroups):
     (`interactive.clear_gaps`) and repeats passes, each allowing one more use per behaviour,
     until `n_queries` comparisons are found or none is left; otherwise `passes` walks.
     `perceived_noise`, when set, gives that noise sd per pool from its true returns instead
-    (a calibrated teacher's, `oracles.calibration.calibrated_noise_sd`). A pool in which no
+    (a calibrated teacher's, `teachers.calibration.calibrated_noise_sd`). A pool in which no
     partner is clear (every behaviour scores alike, as a case-study target's early pools
     do) is walked as "interactive-mean" walks it, rather than asked nothing.
     """

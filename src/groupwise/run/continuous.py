@@ -30,7 +30,6 @@ import time
 from collections.abc import Sequence
 
 from groupwise.clips.timing import clip_timing, step_seconds
-from groupwise.oracles.base import Feedback
 from groupwise.pool.recent import fresh_sources
 from groupwise.pool.sampling import windows_to_sample
 from groupwise.preferences.judgement import Judgement
@@ -48,6 +47,7 @@ from groupwise.run.round import (
 )
 from groupwise.run.run import Run
 from groupwise.run.streams import RoundStreams, round_streams
+from groupwise.teachers.base import Feedback
 
 
 def continuous_round(

@@ -40,8 +40,6 @@ from groupwise.clips.replay import FrameSettings
 from groupwise.config import RunConfig
 from groupwise.envs import DEFAULT_FRAME_SIZE
 from groupwise.episodes.fragments import Trajectory
-from groupwise.oracles import ORACLES
-from groupwise.oracles.base import Teacher
 from groupwise.rl.agent_file import normalisation
 from groupwise.rl.policy import Policy
 from groupwise.rl.ppo import POLICY_FILE, PPOAgent
@@ -60,6 +58,8 @@ from groupwise.run.takeaway import (
     last_round,
     write_choice,
 )
+from groupwise.teachers import DECISION_MAKERS
+from groupwise.teachers.base import Teacher
 
 log = logging.getLogger(__name__)
 
@@ -248,10 +248,10 @@ def continue_run(
     """
     if (steps is None) == (rounds is None):
         raise ValueError("give either steps or rounds")
-    if rounds is not None and oracle not in ORACLES:
+    if rounds is not None and oracle not in DECISION_MAKERS:
         raise ValueError(
             f"more rounds need a simulated decision-maker to answer them (--dm); "
-            f"choose from {', '.join(ORACLES)}"
+            f"choose from {', '.join(DECISION_MAKERS)}"
         )
     cfg = RunConfig.load(out / CONFIG_FILE)
     found = latest_checkpoint(out)
@@ -271,7 +271,7 @@ def continue_run(
                 train_frozen(run, steps, callback=callback)
             else:
                 assert rounds is not None and oracle is not None
-                feedback = ORACLES[oracle](cfg)
+                feedback = DECISION_MAKERS[oracle](cfg)
                 per_round = comparisons or _comparisons_per_round(cfg, out)
                 for _ in range(rounds):
                     run_round(run, feedback, per_round, cfg.loop.steps // cfg.loop.rounds, callback)

@@ -3,14 +3,13 @@
 `round_plan` says what each round asks (comparisons, PPO steps; a last row without
 feedback when `final_steps` is set); `run_rounds` runs the rounds not run yet
 (`round.run_round`, `round.train_frozen`); `run_session` does that for a fresh or resumed
-`Run` in a directory, answered by a simulated decision-maker from `ORACLES`.
+`Run` in a directory, answered by a simulated decision-maker from `DECISION_MAKERS`.
 """
 
 import logging
 from pathlib import Path
 
 from groupwise.config import LoopConfig, RunConfig
-from groupwise.oracles import ORACLES, Feedback
 from groupwise.query.schedule import comparisons_per_round
 from groupwise.run.continuous import continuous_round
 from groupwise.run.final import choose_takeaway, publish_agent
@@ -20,6 +19,7 @@ from groupwise.run.records import RoundRecord
 from groupwise.run.round import run_round, train_frozen
 from groupwise.run.run import Run
 from groupwise.run.takeaway import TakeawayChoice, TakeawayConfig
+from groupwise.teachers import DECISION_MAKERS, Feedback
 
 log = logging.getLogger(__name__)
 
@@ -36,17 +36,17 @@ def round_plan(loop: LoopConfig) -> list[tuple[int, int]]:
 
 
 def feedback_of(cfg: RunConfig) -> Feedback:
-    """The simulated decision-maker `cfg.loop.oracle` (`groupwise.oracles.ORACLES`).
+    """The simulated decision-maker `cfg.loop.oracle` (`groupwise.teachers.DECISION_MAKERS`).
 
     Raises:
         ValueError: no such decision-maker (e.g. "human": a person answers app sessions).
     """
-    if cfg.loop.oracle not in ORACLES:
+    if cfg.loop.oracle not in DECISION_MAKERS:
         raise ValueError(
             f"no simulated decision-maker {cfg.loop.oracle!r} (a person answers an app "
-            f"session's rounds); choose from {', '.join(ORACLES)}"
+            f"session's rounds); choose from {', '.join(DECISION_MAKERS)}"
         )
-    return ORACLES[cfg.loop.oracle](cfg)
+    return DECISION_MAKERS[cfg.loop.oracle](cfg)
 
 
 def run_rounds(

@@ -23,7 +23,6 @@ from collections.abc import Callable
 from typing import Any
 
 from groupwise.config import LoopConfig, RewardConfig, RunConfig
-from groupwise.oracles.base import Feedback
 from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.reward import RewardEnsemble
 from groupwise.rl.agents import as_agent
@@ -32,6 +31,7 @@ from groupwise.run.headless import round_plan, run_rounds
 from groupwise.run.progress import CallbackList, OnRoundEnd, ProgressBars, RunCallback
 from groupwise.run.records import RoundRecord
 from groupwise.run.run import Run
+from groupwise.teachers.base import Feedback
 
 
 class PreferenceComparisons:

@@ -27,8 +27,6 @@ import numpy as np
 from groupwise.behaviour import BehaviourTree
 from groupwise.behaviour.pool import BehaviourPool
 from groupwise.config import LoopConfig, RunConfig
-from groupwise.oracles.base import Feedback
-from groupwise.oracles.calibration import calibrated_noise_sd
 from groupwise.pool.sampling import sample_pool
 from groupwise.pool.sources import PoolSource, pool_sources
 from groupwise.preferences.judgement import Judgement
@@ -42,6 +40,8 @@ from groupwise.run.progress import RunCallback, as_callback
 from groupwise.run.records import PhaseTimer, RoundRecord
 from groupwise.run.run import Run
 from groupwise.run.streams import RoundStreams, eval_rng, round_streams
+from groupwise.teachers.base import Feedback
+from groupwise.teachers.calibration import calibrated_noise_sd
 
 
 @dataclass(frozen=True)

@@ -31,8 +31,8 @@ import numpy as np
 
 from groupwise.behaviour.pool import BehaviourPool
 from groupwise.episodes.fragments import Fragment, Trajectory
-from groupwise.oracles.base import Teacher
 from groupwise.query.strategies import Query
+from groupwise.teachers.base import Teacher
 
 TAKEAWAY_FILE = "takeaway.json"
 """The choice and the teacher's judgements, in the run's directory."""

@@ -209,10 +209,11 @@ class SessionSettings(BaseModel):
         default=None,
         min_length=1,
         max_length=1000,
-        description="a recorded dataset to label, with no agent: minari:<id> or a path on the "
-        "server. A minari:<id> is a dataset of the server's local Minari store (never "
-        "downloaded); a path names a Minari dataset directory or a D4RL-style .hdf5 file",
+        description="a recorded dataset to label, no agent: minari:<id> (local store) or a "
+        "Minari directory or .hdf5 path on the server",
     )
+    """A minari:<id> is a dataset of the server's local Minari store (never downloaded); a path
+    names a Minari dataset directory or a D4RL-style .hdf5 file (docs/bring-your-own.md)."""
     research: dict[str, Any] | None = Field(
         default=None,
         description="research settings: a partial run config merged over these "

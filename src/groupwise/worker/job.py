@@ -14,7 +14,6 @@ from pathlib import Path
 
 from groupwise.agent_file.summary import SETTINGS_FILE
 from groupwise.config import RunConfig
-from groupwise.oracles import STRATEGIES
 from groupwise.query.strategies import QueryStrategy
 from groupwise.run.checkpoint import CHECKPOINTS, STATE_FILE, checkpoint_dir
 from groupwise.run.pretrain import before_first_round
@@ -24,6 +23,7 @@ from groupwise.storage import Database, SessionSettings
 from groupwise.storage.phases import WORK_PHASES
 from groupwise.storage.sessions import get_round, get_session, session_directory, settings_of
 from groupwise.storage.timer import elapsed
+from groupwise.teachers import STRATEGIES
 
 QUEUE_FACTOR = 2
 """A round offers this many times its comparison budget in queries (skips use some up)."""
@@ -105,7 +105,7 @@ def _set_up(run: Run) -> None:
 
 def session_strategy(cfg: RunConfig, mode: str) -> QueryStrategy:
     """What the page suggests: the Pairwise-DM's queries in pairwise mode, else the
-    Groupwise-DM's group suggestions (`groupwise.oracles.STRATEGIES`)."""
+    Groupwise-DM's group suggestions (`groupwise.teachers.STRATEGIES`)."""
     return STRATEGIES["pairwise" if mode == "pairwise" else "groupwise"](cfg)
 
 

@@ -1,6 +1,6 @@
 """A person as the teacher of a user's own loop, through the running app's web page.
 
-`WebTeacher` is a `groupwise.oracles.Teacher`: `answer(pool, queries, rng)` publishes the
+`WebTeacher` is a `groupwise.teachers.Teacher`: `answer(pool, queries, rng)` publishes the
 pool as the next round of a session of the app (clips, behaviour tree, the strategy's
 queries as the page's suggestions), then blocks until the person ends the round on the page
 (or the round's comparison limit or time is reached), and returns the person's judgements.

@@ -25,10 +25,10 @@ from groupwise.envs import (
 )
 from groupwise.envs.scorers import upness, wrap_angle
 from groupwise.episodes.fragments import Trajectory, tile_fragments
-from groupwise.oracles import Feedback, PairwiseTeacher, Perception, SimulatedTeacher
 from groupwise.query.strategies import GroupSuggestions, InteractiveWalk, PairwiseQueries, Query
 from groupwise.rl.policy import RandomPolicy
 from groupwise.rl.rollout import sample_trajectories
+from groupwise.teachers import Feedback, PairwiseTeacher, Perception, SimulatedTeacher
 
 
 @pytest.fixture(scope="module")

@@ -27,7 +27,6 @@ from groupwise.behaviour.pool import BehaviourPool
 from groupwise.config import RunConfig
 from groupwise.envs import TARGET_TOTAL_KEY, Target
 from groupwise.envs.targets import TARGET_SCORE_KEY
-from groupwise.oracles import Feedback
 from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.query.strategies import Query, QueryStrategy
 from groupwise.rl.policy import Policy
@@ -45,6 +44,7 @@ from groupwise.study.case_studies.reward_rank import (
     rank_rng,
     reward_rank,
 )
+from groupwise.teachers import Feedback
 from groupwise.types import FloatArray
 
 CASE_FILE = "case-study.csv"

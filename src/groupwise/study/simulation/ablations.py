@@ -13,7 +13,7 @@ Each one reproduces a choice of the comparison the paper made that our defaults 
 - ``obs-only``: the reward members see the observation alone, not [obs ; act]
   (`RewardConfig.use_actions` off; ARCHITECTURE.md, "Reward inputs").
 - ``calibrated``: the simulated teacher is wrong as often as the paper's people (12 % of
-  behaviour pairs of unequal return, its noise set per pool: `oracles.calibration`) instead
+  behaviour pairs of unequal return, its noise set per pool: `teachers.calibration`) instead
   of SPEC §7's fixed σ per step.
 """
 
@@ -22,7 +22,7 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 from groupwise.config import RunConfig
-from groupwise.oracles.calibration import PEOPLE_LABEL_ERROR
+from groupwise.teachers.calibration import PEOPLE_LABEL_ERROR
 
 
 @dataclass(frozen=True)

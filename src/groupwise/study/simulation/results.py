@@ -180,9 +180,9 @@ def load_results(root: Path) -> StudyResults:
 
 def dm_order(names: set[str]) -> tuple[str, ...]:
     """The decision-makers in registry order, unknown ones after them alphabetically."""
-    from groupwise.oracles import ORACLES
+    from groupwise.teachers import DECISION_MAKERS
 
-    known = [name for name in ORACLES if name in names]
+    known = [name for name in DECISION_MAKERS if name in names]
     return (*known, *sorted(names - set(known)))
 
 

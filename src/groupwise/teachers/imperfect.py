@@ -23,8 +23,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from groupwise.oracles.group_decision import LabelState, Perception, SimulatedTeacher, decide
 from groupwise.preferences.judgement import EQUAL
+from groupwise.teachers.group_decision import LabelState, Perception, SimulatedTeacher, decide
 
 
 @dataclass(frozen=True)

@@ -24,7 +24,7 @@ class Teacher(Protocol):
     ) -> list[Judgement]: ...
 
 
-class Oracle(Protocol):
+class FeedbackSource(Protocol):
     """What the loop asks for feedback: up to `n_queries` judgements on a pool.
 
     A skipped comparison uses up its query and yields no judgement, so the list may be
@@ -38,7 +38,7 @@ class Oracle(Protocol):
 
 @dataclass(frozen=True)
 class Feedback:
-    """A query strategy proposes, a teacher answers: `gather` is the loop's `Oracle`.
+    """A query strategy proposes, a teacher answers: `gather` is the loop's `FeedbackSource`.
 
     The same generator serves both, strategy first, so a simulated decision-maker's run is
     a function of (pool, n_queries, rng).

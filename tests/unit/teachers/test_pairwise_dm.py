@@ -2,9 +2,9 @@ import numpy as np
 
 from groupwise.behaviour.pool import BehaviourPool
 from groupwise.episodes.fragments import Fragment
-from groupwise.oracles import Feedback, PairwiseTeacher
-from groupwise.oracles.noise import perceived_returns, preference
 from groupwise.query.strategies import PairwiseQueries
+from groupwise.teachers import Feedback, PairwiseTeacher
+from groupwise.teachers.noise import perceived_returns, preference
 
 
 def _pool(returns: list[float], k: int = 3) -> BehaviourPool:

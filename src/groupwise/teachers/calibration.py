@@ -13,7 +13,7 @@ wrong with probability `label_error` on average over the pool's pairs,
     mean over untied pairs (i, j) of Φ(−|R_i − R_j| / (√2 · s)) = label_error,
 
 then answers as the wrapped teacher would with σ = s / L. Any strategy's queries can be
-answered this way, and every teacher of `groupwise.oracles` (group decision, pairwise,
+answered this way, and every teacher of `groupwise.teachers` (group decision, pairwise,
 B-Pref imperfections) keeps its own decision rule.
 """
 
@@ -25,9 +25,9 @@ import numpy as np
 from scipy.special import ndtr
 
 from groupwise.behaviour.pool import BehaviourPool
-from groupwise.oracles.base import Teacher
 from groupwise.preferences.judgement import Judgement
 from groupwise.query.strategies import Query
+from groupwise.teachers.base import Teacher
 from groupwise.types import FloatArray
 
 PEOPLE_LABEL_ERROR = 0.12

@@ -1,24 +1,24 @@
-"""The teacher calibrated to people (`oracles.calibration`): its label error on a pool with
+"""The teacher calibrated to people (`teachers.calibration`): its label error on a pool with
 known returns is the one asked for, whatever the pool's scale."""
 
 import math
 
 import numpy as np
 import pytest
-from tests.unit.oracles.conftest import build_pool
+from tests.unit.teachers.conftest import build_pool
 
 from groupwise.config import RunConfig, TeacherConfig
-from groupwise.oracles import ORACLES, calibration
-from groupwise.oracles.calibration import (
+from groupwise.preferences.judgement import EQUAL
+from groupwise.query.strategies import Query
+from groupwise.teachers import DECISION_MAKERS, calibration
+from groupwise.teachers.calibration import (
     PEOPLE_LABEL_ERROR,
     CalibratedTeacher,
     calibrated_noise_sd,
     pair_error,
 )
-from groupwise.oracles.group_decision import Perception, SimulatedTeacher
-from groupwise.oracles.pairwise import PairwiseTeacher
-from groupwise.preferences.judgement import EQUAL
-from groupwise.query.strategies import Query
+from groupwise.teachers.group_decision import Perception, SimulatedTeacher
+from groupwise.teachers.pairwise import PairwiseTeacher
 
 RETURNS = np.random.default_rng(4).gamma(2.0, 3.0, size=60)  # skewed, as trained pools are
 
@@ -70,7 +70,7 @@ def test_a_calibrated_teacher_is_wrong_as_often_as_asked(make):
 def test_every_decision_maker_can_be_calibrated():
     cfg = RunConfig(teacher=TeacherConfig(label_error=PEOPLE_LABEL_ERROR))
     pool = build_pool(RETURNS[:40].tolist())
-    for name, factory in ORACLES.items():
+    for name, factory in DECISION_MAKERS.items():
         feedback = factory(cfg)
         assert isinstance(feedback.teacher, CalibratedTeacher), name
         first = feedback.gather(pool, 8, np.random.default_rng(2))

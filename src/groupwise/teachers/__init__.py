@@ -14,17 +14,17 @@ import dataclasses
 from collections.abc import Callable
 
 from groupwise.config import RunConfig, TeacherConfig
-from groupwise.oracles.base import Feedback, Oracle, Teacher
-from groupwise.oracles.calibration import CalibratedTeacher, calibrated_noise_sd
-from groupwise.oracles.group_decision import Perception, SimulatedTeacher
-from groupwise.oracles.imperfect import TEACHERS, Imperfection
-from groupwise.oracles.pairwise import PairwiseTeacher
 from groupwise.query.strategies import (
     GroupSuggestions,
     InteractiveWalk,
     PairwiseQueries,
     QueryStrategy,
 )
+from groupwise.teachers.base import Feedback, FeedbackSource, Teacher
+from groupwise.teachers.calibration import CalibratedTeacher, calibrated_noise_sd
+from groupwise.teachers.group_decision import Perception, SimulatedTeacher
+from groupwise.teachers.imperfect import TEACHERS, Imperfection
+from groupwise.teachers.pairwise import PairwiseTeacher
 from groupwise.types import FloatArray
 
 
@@ -106,7 +106,7 @@ def _imperfect(kind: str) -> Callable[[TeacherConfig], Teacher]:
     return lambda cfg: TEACHERS[kind](cfg.noise_sigma, _imperfection(cfg))
 
 
-ORACLES: dict[str, Callable[[RunConfig], Feedback]] = {
+DECISION_MAKERS: dict[str, Callable[[RunConfig], Feedback]] = {
     "pairwise": _dm("pairwise", lambda cfg: PairwiseTeacher(sigma=cfg.noise_sigma)),
     # the reference code's pairwise labels: Boltzmann-rational, temperature 1
     "pairwise-boltzmann": _dm(
@@ -126,10 +126,10 @@ ORACLES: dict[str, Callable[[RunConfig], Feedback]] = {
 """Every registered decision-maker, by name (the study's `--dms`), built from a run's config."""
 
 __all__ = [
-    "ORACLES",
+    "DECISION_MAKERS",
     "STRATEGIES",
     "Feedback",
-    "Oracle",
+    "FeedbackSource",
     "PairwiseTeacher",
     "Perception",
     "SimulatedTeacher",

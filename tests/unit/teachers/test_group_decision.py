@@ -1,13 +1,13 @@
 import numpy as np
 import pytest
 
-from groupwise.oracles.group_decision import (
+from groupwise.preferences.judgement import EQUAL, LEFT_BETTER, RIGHT_BETTER
+from groupwise.teachers.group_decision import (
     Perception,
     SimulatedTeacher,
     decide,
     group_decision,
 )
-from groupwise.preferences.judgement import EQUAL, LEFT_BETTER, RIGHT_BETTER
 
 LEFT = (5, 6, 7)
 RIGHT = (8, 9)

@@ -1,11 +1,11 @@
 import numpy as np
 
-from groupwise.oracles import Feedback
-from groupwise.oracles.group_decision import Perception, SimulatedTeacher
 from groupwise.preferences.dataset import wrong_labels
 from groupwise.preferences.pairs import cartesian_pairs, covering_pairs
 from groupwise.query.groups import score_group_pairs, suggestion_order
 from groupwise.query.strategies import GroupSuggestions, pool_candidates
+from groupwise.teachers import Feedback
+from groupwise.teachers.group_decision import Perception, SimulatedTeacher
 
 NOISE_FREE = SimulatedTeacher(Perception(sigma=0.0))
 

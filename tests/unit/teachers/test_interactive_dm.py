@@ -6,14 +6,14 @@ import pytest
 
 from groupwise.behaviour import TreeConfig
 from groupwise.config import RunConfig, TeacherConfig
-from groupwise.oracles import ORACLES, Feedback
-from groupwise.oracles.calibration import calibrated_noise_sd
-from groupwise.oracles.group_decision import Perception, SimulatedTeacher
 from groupwise.preferences.dataset import wrong_labels
 from groupwise.preferences.judgement import LEFT_BETTER
 from groupwise.preferences.pairs import covering_pairs
 from groupwise.query.interactive import chain_pairs, evenly_spaced
 from groupwise.query.strategies import InteractiveWalk, pool_candidates
+from groupwise.teachers import DECISION_MAKERS, Feedback
+from groupwise.teachers.calibration import calibrated_noise_sd
+from groupwise.teachers.group_decision import Perception, SimulatedTeacher
 
 LINEAR = TreeConfig(bands="linear")
 """The cut the hand-built cluster pool was laid out for."""
@@ -227,4 +227,4 @@ def test_clear_walk_of_a_calibrated_teacher_sees_gaps_on_the_pools_scale(make_po
         )
     # the registered DM reads the noise from a calibrated teacher's config
     cfg = RunConfig(teacher=TeacherConfig(label_error=0.12))
-    assert ORACLES["interactive-clear"](cfg).queries.propose(small, 40, None) == queries
+    assert DECISION_MAKERS["interactive-clear"](cfg).queries.propose(small, 40, None) == queries

@@ -4,19 +4,19 @@ import pytest
 from groupwise.behaviour.pool import BehaviourPool
 from groupwise.config import RunConfig
 from groupwise.episodes.fragments import Fragment
-from groupwise.oracles import ORACLES, Feedback
-from groupwise.oracles.group_decision import Perception, SimulatedTeacher, decide
-from groupwise.oracles.imperfect import (
+from groupwise.preferences.dataset import wrong_labels
+from groupwise.preferences.judgement import EQUAL, LEFT_BETTER, RIGHT_BETTER, Judgement
+from groupwise.preferences.pairs import covering_pairs
+from groupwise.query.strategies import PairwiseQueries
+from groupwise.teachers import DECISION_MAKERS, Feedback
+from groupwise.teachers.group_decision import Perception, SimulatedTeacher, decide
+from groupwise.teachers.imperfect import (
     TEACHERS,
     EqualWhenClose,
     Imperfection,
     Mistake,
     SkipWhenBothBelow,
 )
-from groupwise.preferences.dataset import wrong_labels
-from groupwise.preferences.judgement import EQUAL, LEFT_BETTER, RIGHT_BETTER, Judgement
-from groupwise.preferences.pairs import covering_pairs
-from groupwise.query.strategies import PairwiseQueries
 
 
 def _error_rate(pool, judgements):
@@ -118,10 +118,10 @@ def test_registry_builds_every_oracle_and_each_is_seeded(make_pool):
     expected |= {
         f"{dm}-{kind}" for dm in ("pairwise", "groupwise", "interactive") for kind in TEACHERS
     }
-    assert set(ORACLES) == expected
+    assert set(DECISION_MAKERS) == expected
     pool = make_pool(np.random.default_rng(0).uniform(0, 30, size=40).tolist())
     cfg = RunConfig()
-    for name, factory in ORACLES.items():
+    for name, factory in DECISION_MAKERS.items():
         oracle = factory(cfg)
         first = oracle.gather(pool, 10, np.random.default_rng(3))
         assert len(first) <= 10, name

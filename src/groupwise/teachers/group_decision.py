@@ -33,9 +33,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from groupwise.behaviour.pool import BehaviourPool
-from groupwise.oracles.noise import perceived_returns
 from groupwise.preferences.judgement import EQUAL, LEFT_BETTER, RIGHT_BETTER, Judgement, Source
 from groupwise.query.strategies import Query
+from groupwise.teachers.noise import perceived_returns
 from groupwise.types import FloatArray
 
 

@@ -6,9 +6,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from groupwise.behaviour.pool import BehaviourPool
-from groupwise.oracles.noise import perceived_returns, preference
 from groupwise.preferences.judgement import Judgement, Source
 from groupwise.query.strategies import Query
+from groupwise.teachers.noise import perceived_returns, preference
 
 
 @dataclass(frozen=True)
