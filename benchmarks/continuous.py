@@ -52,6 +52,7 @@ from benchmarks.submit_latency import start_server, wait_for
 from groupwise.storage.sessions import round_directory
 
 SETTINGS = {
+    "recipe": "paper",  # the infrastructure as measured before: no pre-training, no variants
     "pool_size": 100,
     "round_seconds": 0,
     "comparisons_per_round": 0,

@@ -68,6 +68,7 @@ from groupwise.storage import default_url
 URL = re.compile(r"open (http://\S+?)/\?session=(s-[0-9a-f]+)")
 POOL = 16
 SETTINGS = {
+    "recipe": "paper",  # the infrastructure as measured before: no pre-training, no variants
     "frame_size": 32,
     "render_workers": 0,
     "eval_episodes": 1,

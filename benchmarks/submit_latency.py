@@ -63,6 +63,7 @@ from benchmarks.database import database
 
 URL = re.compile(r"open (http://\S+?)/\?session=(s-[0-9a-f]+)")
 SETTINGS = {
+    "recipe": "paper",  # the infrastructure as measured before: no pre-training, no variants
     "pool_size": 50,
     "fragment_length": 30,
     "round_seconds": 0,

@@ -1315,7 +1315,7 @@ export interface components {
             comparisons_per_round: number;
             /**
              * Dataset
-             * @description a recorded dataset to label, with no agent: minari:<id> or a path on the server. A minari:<id> is a dataset of the server's local Minari store (never downloaded); a path names a Minari dataset directory or a D4RL-style .hdf5 file
+             * @description a recorded dataset to label, no agent: minari:<id> (local store) or a Minari directory or .hdf5 path on the server
              */
             dataset?: string | null;
             /**

@@ -228,7 +228,8 @@ def test_pairwise_next_gives_the_pair_and_the_following_one(prepared):
 
 
 def test_end_round_then_training_then_the_next_round(client):
-    sid = new_session(client)["id"]
+    """Rounds training: the ended round trains, then the next one is prepared."""
+    sid = new_session(client, training="rounds")["id"]
     run_worker_once(client)
     assert judge(client, sid, ["b1", "b2"], ["b3"]).status_code == 201
     ended = client.post(f"/api/sessions/{sid}/end-round").json()
@@ -246,6 +247,19 @@ def test_end_round_then_training_then_the_next_round(client):
     assert (
         old.status_code == 409 and old.json()["detail"] == "round 0 is closed; the open round is 1"
     )
+
+
+def test_continuous_training_opens_the_next_round_with_the_ended_ones_training(client):
+    """Continuous training: the job that commits the ended round cuts the next round's pool
+    from PPO's latest rollouts and opens it (no preparing phase)."""
+    sid = new_session(client, training="continuous")["id"]
+    run_worker_once(client)
+    assert judge(client, sid, ["b1", "b2"], ["b3"]).status_code == 201
+    assert client.post(f"/api/sessions/{sid}/end-round").json()["phase"] == "training"
+    run_worker_once(client)
+    state = client.get(f"/api/sessions/{sid}").json()
+    assert (state["phase"], state["round"]) == ("ready", 1)
+    assert state["counts"]["comparisons_total"] == 1 and state["counts"]["comparisons_round"] == 0
 
 
 def test_next_suggestion_is_409_for_any_round_but_the_open_one(client):

@@ -150,7 +150,7 @@ def test_finish_now_ends_the_open_round_then_the_final_phase(client):
 
 
 def test_finish_now_while_a_round_is_prepared_drops_that_round(client):
-    sid = new_session(client, rounds=3, final_steps=32)["id"]
+    sid = new_session(client, rounds=3, final_steps=32, training="rounds")["id"]
     run_worker_once(client)
     judge(client, sid)
     client.post(f"/api/sessions/{sid}/end-round")
