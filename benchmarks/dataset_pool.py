@@ -68,7 +68,7 @@ def main(argv: list[str] | None = None) -> None:
             static_dir=root / "no-web",
         )  # fmt: skip
         with TestClient(create_app(config)) as client:
-            context = client.app.state.context  # type: ignore[attr-defined]
+            context = client.app.state.context  # type: ignore[attr-defined]  # untyped state
             worker = Worker(context.db, context.data_dir, poll_s=0.1)
 
             def session(n: int) -> tuple[str, float]:

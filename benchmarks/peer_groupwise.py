@@ -138,7 +138,7 @@ def main(spec: dict) -> dict:
         learn(*args, **kwargs)
         ppo_seconds[0] += time.perf_counter() - tick
 
-    agent.learn = timed_learn  # type: ignore[method-assign]
+    agent.learn = timed_learn  # type: ignore[method-assign]  # timed in place
     if spec.get("noise", "boltzmann") == "spec":  # SPEC §7: perceived returns, the higher wins
         teacher = PairwiseTeacher(sigma=spec["sigma"])
     else:

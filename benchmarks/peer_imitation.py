@@ -101,7 +101,7 @@ def main(spec: dict) -> dict:
         learn(steps, **kwargs)
         ppo_seconds[0] += time.perf_counter() - tick
 
-    trainer.train = timed_learn  # type: ignore[method-assign]
+    trainer.train = timed_learn  # type: ignore[method-assign]  # timed in place
     preference_model = pc.PreferenceModel(ensemble)
     fragmenter = pc.ActiveSelectionFragmenter(
         preference_model,

@@ -107,7 +107,7 @@ class PostgresCluster:
             check=True,
             capture_output=True,
             cwd=self.root,
-            **self._as,  # type: ignore[arg-type]  # user/group/extra_groups of Popen
+            **self._as,  # type: ignore[arg-type]  # user/group keywords  # user/group/extra_groups of Popen
         )  # fmt: skip
         options = [f"-c{key}={value}" for key, value in self.settings.items()]
         log = open(self.root / "postgres.log", "wb")  # the server's stdout, closed below
@@ -121,7 +121,7 @@ class PostgresCluster:
                 stdout=log,
                 stderr=subprocess.STDOUT,
                 cwd=self.root,
-                **self._as,  # type: ignore[arg-type]
+                **self._as,  # type: ignore[arg-type]  # user/group keywords
             )  # fmt: skip
         self._wait_ready()
         return self

@@ -245,7 +245,7 @@ def set_kernel_threads(n: int) -> int:
     """
     with threadpool_limits(limits=None, user_api="openmp"):  # starting the layer resets it
         before = numba.get_num_threads()
-        most = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]
+        most = numba.config.NUMBA_NUM_THREADS  # type: ignore[attr-defined]  # set at numba's import
         numba.set_num_threads(max(1, min(n, most)))
     return before
 

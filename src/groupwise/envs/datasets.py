@@ -273,7 +273,7 @@ class RecordedStates(Mapping[int, FloatArray]):
         if not 0 <= step < len(self.qpos):
             raise KeyError(step)
         base = _state_env(self.env).unwrapped
-        base.set_state(self.qpos[step], self.qvel[step])  # type: ignore[attr-defined]
+        base.set_state(self.qpos[step], self.qvel[step])  # type: ignore[attr-defined]  # a MujocoEnv
         state = physics_state(base)
         assert state is not None
         return state
@@ -299,7 +299,8 @@ def episode_states(episode: RecordedEpisode, env: str) -> RecordedStates:
     if episode.qpos is not None and episode.qvel is not None:
         return RecordedStates(env, episode.qpos, episode.qvel)
     base = _state_env(env).unwrapped
-    qpos, qvel = rebuilt_positions(episode.obs, base.model.nq, base.model.nv, base.dt)  # type: ignore[attr-defined]
+    model, dt = base.model, base.dt  # type: ignore[attr-defined]  # a MujocoEnv (as above)
+    qpos, qvel = rebuilt_positions(episode.obs, model.nq, model.nv, dt)
     return RecordedStates(env, qpos, qvel)
 
 

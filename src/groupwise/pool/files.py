@@ -108,8 +108,9 @@ def write_pool(
     predictions = {"predicted_returns": sampled.predicted_returns}
     if sampled.step_variance is not None:
         predictions["step_variance"] = sampled.step_variance
+    # numpy's stub: **kwds may hit allow_pickle (a bool), so a dict of arrays fails to type
     np.savez(out / "predictions.npz", **predictions)  # type: ignore[arg-type]
-    np.savez(out / "episodes.npz", **episode_arrays(trajectories))  # type: ignore[arg-type]
+    np.savez(out / "episodes.npz", **episode_arrays(trajectories))  # type: ignore[arg-type]  # as above
     np.save(out / "distances.npy", pool.distances)
     behaviours = [
         {

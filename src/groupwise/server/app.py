@@ -118,7 +118,7 @@ def create_app(config: AppConfig) -> FastAPI:
         agent,
     ):
         app.include_router(module.router)
-    app.openapi = _with_guard_responses(app.openapi)  # type: ignore[method-assign]
+    app.openapi = _with_guard_responses(app.openapi)  # type: ignore[method-assign]  # FastAPI's documented override
     app.add_middleware(
         GuardMiddleware,
         token=config.token,
@@ -130,9 +130,9 @@ def create_app(config: AppConfig) -> FastAPI:
     app.add_middleware(
         TrustedHostMiddleware, allowed_hosts=trusted_hosts(config.allowed_hosts), www_redirect=False
     )
-    app.add_exception_handler(StorageError, _storage_error)  # type: ignore[arg-type]
-    app.add_exception_handler(RequestValidationError, _validation_error)  # type: ignore[arg-type]
-    app.add_exception_handler(HTTPException, _http_error)  # type: ignore[arg-type]
+    app.add_exception_handler(StorageError, _storage_error)  # type: ignore[arg-type]  # Starlette types handlers on Exception
+    app.add_exception_handler(RequestValidationError, _validation_error)  # type: ignore[arg-type]  # as above
+    app.add_exception_handler(HTTPException, _http_error)  # type: ignore[arg-type]  # as above
     app.add_exception_handler(Exception, _unexpected_error)
     mount_frontend(app, config.static_root)
     return app

@@ -137,7 +137,7 @@ def export_session(
                 left=list(j.left),
                 right=list(j.right),
                 label=j.label,  # type: ignore[arg-type]  # validated on storing
-                source=j.source,  # type: ignore[arg-type]
+                source=j.source,  # type: ignore[arg-type]  # validated on storing
                 seconds=j.seconds,
                 edits=j.edits,
                 annotator=(j.annotator or names[OWNER])

@@ -330,7 +330,7 @@ def _with_states(table: pa.Table, export: SessionExport) -> pa.Table:
             groups["obs"].append(states.obs[rows])
             groups["acts"].append(states.acts[rows])
             if rewards:
-                groups["true_rewards"].append(states.true_rewards[rows])  # type: ignore[index]
+                groups["true_rewards"].append(states.true_rewards[rows])  # type: ignore[index]  # set when rewards
         for name, value_type in _STATE_COLUMNS.items():
             if name != "true_rewards" or rewards:
                 column = _nested(groups[name], value_type)

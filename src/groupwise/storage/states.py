@@ -131,7 +131,7 @@ def write_round_states(directory: Path, states: BehaviourStates) -> None:
     if states.true_rewards is not None:
         arrays["true_rewards"] = states.true_rewards
     tmp = directory / f"{STATES_FILE}.tmp.npz"
-    np.savez(tmp, **arrays)  # type: ignore[arg-type]
+    np.savez(tmp, **arrays)  # type: ignore[arg-type]  # numpy's stub: **kwds may hit allow_pickle
     tmp.replace(directory / STATES_FILE)
 
 

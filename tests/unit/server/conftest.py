@@ -46,7 +46,7 @@ def make_client(data_dir: Path, **config: object) -> TestClient:
 
 
 def context_of(client: TestClient) -> AppContext:
-    return client.app.state.context  # type: ignore[attr-defined]
+    return client.app.state.context  # type: ignore[attr-defined]  # app.state is untyped
 
 
 def run_worker_once(client: TestClient) -> None:

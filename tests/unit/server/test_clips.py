@@ -122,5 +122,5 @@ def test_a_served_app_starts_its_clip_renderer_with_it(tmp_path):
     from tests.unit.server.conftest import make_client
 
     with make_client(tmp_path, start_worker=True) as client:
-        backend = client.app.state.clip_renderer.backend  # type: ignore[attr-defined]
+        backend = client.app.state.clip_renderer.backend  # type: ignore[attr-defined]  # app.state is untyped
         assert backend._executor is not None  # started, not waiting for a first request
