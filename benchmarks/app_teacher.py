@@ -30,13 +30,10 @@ at the moment of the judgement: median / max) and End round → next round open 
 
 import argparse
 import dataclasses
-import json
 import shutil
 import statistics
-import subprocess
 import sys
 import tempfile
-import threading
 import time
 import uuid
 from collections.abc import Sequence
@@ -46,7 +43,7 @@ from pathlib import Path
 import httpx
 import numpy as np
 
-from benchmarks.submit_latency import URL, wait_listening
+from benchmarks.submit_latency import start_server
 from groupwise.config import RunConfig, TeacherConfig
 from groupwise.envs import TARGETS, make_env
 from groupwise.episodes.ids import behaviour_id, behaviour_index
@@ -81,26 +78,6 @@ class Cell:
     pool_ages: list[int] = field(default_factory=list)
     waits: list[float] = field(default_factory=list)
     judgements: int = 0
-
-
-def start_server(data: Path, env: str, settings: dict, log: Path | None) -> tuple:
-    """`groupwise serve` on a free port with one session of `env`; (process, URL, id)."""
-    process = subprocess.Popen(
-        [
-            sys.executable, "-m", "groupwise.cli", "serve", "--env", env, "--data", str(data),
-            "--port", "0", "--settings", json.dumps(settings),
-        ],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.DEVNULL if log is None else log.open("a"),
-        text=True,
-    )  # fmt: skip
-    assert process.stdout is not None
-    for line in process.stdout:
-        if found := URL.search(line):
-            threading.Thread(target=process.stdout.read, daemon=True).start()
-            wait_listening(found.group(1))
-            return process, found.group(1), found.group(2)
-    raise RuntimeError("the server did not start")
 
 
 def teacher_of(dm: str, label_error: float):
@@ -158,7 +135,7 @@ def teach(
     cell = Cell(target, seed)
     with tempfile.TemporaryDirectory() as tmp:
         data = Path(tmp) / "data"
-        process, url, session = start_server(data, env, settings, args.log)
+        process, url, session = start_server(data, env, None, args.log, settings)
         try:
             with httpx.Client(base_url=url, timeout=120) as http:
                 if not wait_open(http, session, 0, time.monotonic() + 1800):

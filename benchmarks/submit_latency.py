@@ -92,15 +92,21 @@ class Run:
 
 
 def start_server(
-    data: Path, env: str, db: str | None, log: Path | None = None
+    data: Path,
+    env: str,
+    db: str | None,
+    log: Path | None = None,
+    settings: dict | None = None,
 ) -> tuple[subprocess.Popen, str, str]:
-    """`groupwise serve` on a free port; (process, base URL, session id). The server's and
-    its worker's log go to `log`, or nowhere."""
+    """`groupwise serve` on a free port with one session of `env` and `settings` (default:
+    `SETTINGS`); (process, base URL, session id). The server's and its worker's log go to
+    `log`, or nowhere."""
+    settings = SETTINGS if settings is None else settings
     process = subprocess.Popen(
         [
             sys.executable, "-m", "groupwise.cli", "serve",
             "--env", env, "--data", str(data), "--port", "0",
-            "--settings", json.dumps(SETTINGS), *(["--db", db] if db else []),
+            "--settings", json.dumps(settings), *(["--db", db] if db else []),
         ],
         stdout=subprocess.PIPE,
         stderr=subprocess.DEVNULL if log is None else log.open("a"),
