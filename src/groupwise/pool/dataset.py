@@ -26,12 +26,12 @@ from groupwise.envs.datasets import (
     open_dataset,
 )
 from groupwise.episodes.fragments import Trajectory
-from groupwise.pool.sources import PoolSource, SourceContext
+from groupwise.pool.sources import FixedSource, PoolSource, SourceContext
 from groupwise.types import ProgressFn
 
 
 @dataclass(frozen=True)
-class RecordedEpisodes:
+class RecordedEpisodes(FixedSource):
     """Windows of a recorded dataset (`reference`, `envs.datasets.open_dataset`) shown in
     env `env` (module docstring)."""
 
@@ -39,9 +39,6 @@ class RecordedEpisodes:
     env: str
     share: float | None = None
     tags: int = 1
-
-    def for_round(self, ctx: SourceContext, rng: np.random.Generator) -> "RecordedEpisodes":
-        return self
 
     def sample(
         self,

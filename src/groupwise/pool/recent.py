@@ -17,14 +17,20 @@ import numpy as np
 from groupwise.behaviour.pool import BehaviourPool
 from groupwise.config import LoopConfig
 from groupwise.episodes.fragments import Trajectory
-from groupwise.pool.sources import PoolSource, SourceContext, pool_sources
+from groupwise.pool.sources import (
+    FixedSource,
+    PoolSource,
+    SourceContext,
+    pool_sources,
+    sample_policy,
+    shifted_progress,
+)
 from groupwise.rl.recording import RolloutRecorder, recorder_of_agent
-from groupwise.rl.rollout import sample_episodes_for_windows
 from groupwise.types import IntArray, ProgressFn
 
 
 @dataclass(frozen=True)
-class RecentRollouts:
+class RecentRollouts(FixedSource):
     """The learner's latest recorded episodes (`rl.recording.record_rollouts` on its envs),
     the rest sampled from the policy with `exploration` random actions when they hold
     fewer windows than asked. Recorded episodes have no random actions: PPO's own
@@ -33,9 +39,6 @@ class RecentRollouts:
     exploration: float = 0.0
     share: float | None = None
     tags: int = 1
-
-    def for_round(self, ctx: SourceContext, rng: np.random.Generator) -> "RecentRollouts":
-        return self
 
     def sample(
         self,
@@ -52,24 +55,11 @@ class RecentRollouts:
         if progress is not None:
             progress(min(held, windows) * ctx.length, total)
         if held < windows:
-            before = held * ctx.length
-            shifted = None if progress is None else _shifted(progress, before, total)
-            episodes += sample_episodes_for_windows(
-                ctx.make_env,
-                ctx.policy,
-                windows - held,
-                ctx.length,
-                rng,
-                self.exploration,
-                progress=shifted,
-                snapshot_offsets=ctx.snapshot_offsets,
-                processes=ctx.processes,
+            shifted = shifted_progress(progress, held * ctx.length, total)
+            episodes += sample_policy(
+                ctx, ctx.policy, windows - held, rng, self.exploration, shifted
             )
         return episodes
-
-
-def _shifted(progress: ProgressFn, before: int, total: int) -> ProgressFn:
-    return lambda done, _: progress(before + done, total)
 
 
 def fresh_sources(loop: LoopConfig) -> tuple[PoolSource, ...]:

@@ -23,7 +23,13 @@ from groupwise.episodes.fragments import (
     stack_fragments,
     tile_fragments,
 )
-from groupwise.pool.sources import CurrentPolicy, PoolSource, SourceContext, split_windows
+from groupwise.pool.sources import (
+    CurrentPolicy,
+    PoolSource,
+    SourceContext,
+    shifted_progress,
+    split_windows,
+)
 from groupwise.query.groups import step_variance
 from groupwise.reward import RewardEnsemble
 from groupwise.rl.agents import Agent
@@ -109,7 +115,7 @@ def sample_pool(
                 ctx,
                 count,
                 rng,
-                None if progress is None else _shifted(progress, sampled, total),
+                shifted_progress(progress, sampled, total),
             )
             episodes += [
                 dataclasses.replace(e, episode=len(episodes) + i, source=first_tag + e.source)
@@ -152,11 +158,6 @@ def windows_to_sample(size: int, oversample: float, max_windows: int | None = No
         )
     wanted = math.ceil(size * oversample)
     return wanted if max_windows is None else max(size, min(wanted, max_windows))
-
-
-def _shifted(progress: ProgressFn, before: int, total: int) -> ProgressFn:
-    """`progress` hearing one policy's steps as steps of the whole pool's sampling."""
-    return lambda done, _: progress(before + done, total)
 
 
 def _random_subset(n: int, size: int, rng: np.random.Generator) -> IntArray:

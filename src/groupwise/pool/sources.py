@@ -17,7 +17,7 @@ finds them through `SourceContext.agent` and returns them from `sample`.
 
 from collections.abc import Sequence
 from dataclasses import dataclass, replace
-from typing import Protocol
+from typing import Protocol, Self
 
 import gymnasium as gym
 import numpy as np
@@ -93,17 +93,22 @@ class PoolSource(Protocol):
         ...
 
 
+class FixedSource:
+    """A source that draws nothing for the whole round: `for_round` returns it as it is
+    (a base for sources such as `CurrentPolicy`, `pool.recent.RecentRollouts`)."""
+
+    def for_round(self, ctx: SourceContext, rng: np.random.Generator) -> Self:
+        return self
+
+
 @dataclass(frozen=True)
-class CurrentPolicy:
+class CurrentPolicy(FixedSource):
     """The round's policy, with random actions on a share `exploration` of the steps in
     stretches (`rl.rollout.exploration_mask`; SPEC §3.1): the pool's own source."""
 
     exploration: float = 0.0
     share: float | None = None
     tags: int = 1
-
-    def for_round(self, ctx: SourceContext, rng: np.random.Generator) -> "CurrentPolicy":
-        return self
 
     def sample(
         self,
@@ -112,17 +117,7 @@ class CurrentPolicy:
         rng: np.random.Generator,
         progress: ProgressFn | None = None,
     ) -> list[Trajectory]:
-        return sample_episodes_for_windows(
-            ctx.make_env,
-            ctx.policy,
-            windows,
-            ctx.length,
-            rng,
-            self.exploration,
-            progress=progress,
-            snapshot_offsets=ctx.snapshot_offsets,
-            processes=ctx.processes,
-        )
+        return sample_policy(ctx, ctx.policy, windows, rng, self.exploration, progress)
 
 
 @dataclass(frozen=True)
@@ -176,17 +171,8 @@ class PolicyVariants:
             count = each + (tag < extra)
             if count == 0:
                 continue
-            own = sample_episodes_for_windows(
-                ctx.make_env,
-                variant,
-                count,
-                ctx.length,
-                rng,
-                self.exploration,
-                progress=None if progress is None else _shifted(progress, done, windows, ctx),
-                snapshot_offsets=ctx.snapshot_offsets,
-                processes=ctx.processes,
-            )
+            shifted = shifted_progress(progress, done, windows * ctx.length)
+            own = sample_policy(ctx, variant, count, rng, self.exploration, shifted)
             episodes += [_tagged(e, tag) for e in own]
             done += count * ctx.length
         return episodes
@@ -239,7 +225,32 @@ def _tagged(episode: Trajectory, tag: int) -> Trajectory:
     return replace(episode, source=tag)
 
 
-def _shifted(progress: ProgressFn, before: int, windows: int, ctx: SourceContext) -> ProgressFn:
-    """`progress` hearing one variant's steps as steps of the whole source's sampling."""
-    total = windows * ctx.length
+def sample_policy(
+    ctx: SourceContext,
+    policy: Policy,
+    windows: int,
+    rng: np.random.Generator,
+    exploration: float,
+    progress: ProgressFn | None,
+) -> list[Trajectory]:
+    """Episodes of `policy` for `windows` windows of `ctx.length` steps, with `exploration`
+    random actions, sampled where and as `ctx` says (`rl.rollout.sample_episodes_for_windows`)."""
+    return sample_episodes_for_windows(
+        ctx.make_env,
+        policy,
+        windows,
+        ctx.length,
+        rng,
+        exploration,
+        progress=progress,
+        snapshot_offsets=ctx.snapshot_offsets,
+        processes=ctx.processes,
+    )
+
+
+def shifted_progress(progress: ProgressFn | None, before: int, total: int) -> ProgressFn | None:
+    """`progress` hearing one part's steps as steps `before` + done of a whole of `total`
+    (None when `progress` is None)."""
+    if progress is None:
+        return None
     return lambda done, _: progress(before + done, total)
