@@ -31,13 +31,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from groupwise.config import (
-    RECIPES,
     LoopConfig,
     PPOConfig,
-    RecipeName,
     RewardConfig,
     RunConfig,
 )
+from groupwise.recipes import RECIPES, RecipeName
 from groupwise.study.simulation.ablations import ablate
 
 
@@ -108,20 +107,26 @@ class StudyProfile:
             "seed": seed,
         }
         loop = dataclasses.replace(LoopConfig(), **values)  # type: ignore[arg-type]  # mixed value types
-        # SPEC §8's protocol by name (config.RECIPES), then the profile's own reward and PPO
+        # SPEC §8's protocol by name (recipes.RECIPES), then the profile's own reward and PPO
         config = RECIPES[STUDY_RECIPE].apply(RunConfig(loop=loop), env)
         config = dataclasses.replace(config, reward=self.reward, ppo=self.ppo)
         return ablate(config, ablation)
 
 
 STUDY_RECIPE: RecipeName = "paper"
-"""The recipe of every study cell (`config.RECIPES`): SPEC §8's protocol, whatever the CLI's
+"""The recipe of every study cell (`recipes.RECIPES`): SPEC §8's protocol, whatever the CLI's
 and the app's default recipe is."""
 
 PAPER_DMS = ("pairwise", "groupwise", "interactive")
 """The paper's three decision-makers (SPEC §7); any other registered DM can be asked for."""
 _SMALL_ENVS = ("GridWorld", "MountainCarContinuous")
 _ALL_ENVS = ("Hopper", "HalfCheetah", "Walker2d", "Reacher", "MountainCarContinuous", "GridWorld")
+
+
+def _budgets(steps: Mapping[str, tuple[int, int]]) -> dict[str, EnvBudget]:
+    """`EnvBudget`s by env from (steps, final_steps) pairs."""
+    return {env: EnvBudget(steps=s, final_steps=f) for env, (s, f) in steps.items()}
+
 
 PAPER = StudyProfile(
     name="paper",
@@ -131,35 +136,37 @@ PAPER = StudyProfile(
     seeds=5,
     comparisons=400,
     rounds=5,
-    budgets={
-        "Hopper": EnvBudget(steps=500_000, final_steps=4_500_000),
-        "HalfCheetah": EnvBudget(steps=500_000, final_steps=6_500_000),
-        "Walker2d": EnvBudget(steps=500_000, final_steps=4_500_000),
-        "Reacher": EnvBudget(steps=500_000, final_steps=1_500_000),
-        "MountainCarContinuous": EnvBudget(steps=200_000, final_steps=800_000),
-        "GridWorld": EnvBudget(steps=200_000, final_steps=800_000),
-    },
+    budgets=_budgets(
+        {
+            "Hopper": (500_000, 4_500_000),
+            "HalfCheetah": (500_000, 6_500_000),
+            "Walker2d": (500_000, 4_500_000),
+            "Reacher": (500_000, 1_500_000),
+            "MountainCarContinuous": (200_000, 800_000),
+            "GridWorld": (200_000, 800_000),
+        }
+    ),
     default_budget=EnvBudget(steps=500_000, final_steps=4_500_000),
     eval_episodes=10,
 )
 
-LOCAL = StudyProfile(
+# The profiles below run the paper's protocol (its envs, DMs, seeds, 400 comparisons in 5
+# rounds) at smaller budgets: copies of PAPER with what they change.
+LOCAL = dataclasses.replace(
+    PAPER,
     name="local",
     summary="the paper's 90 cells in a night (8–9 h) on 2 cores: 400 comparisons, "
     "0.4–1.5 M PPO steps per cell",
-    envs=_ALL_ENVS,
-    dms=PAPER_DMS,
-    seeds=5,
-    comparisons=400,
-    rounds=5,
-    budgets={
-        "Hopper": EnvBudget(steps=300_000, final_steps=900_000),
-        "HalfCheetah": EnvBudget(steps=400_000, final_steps=1_100_000),
-        "Walker2d": EnvBudget(steps=400_000, final_steps=1_100_000),
-        "Reacher": EnvBudget(steps=200_000, final_steps=600_000),
-        "MountainCarContinuous": EnvBudget(steps=100_000, final_steps=300_000),
-        "GridWorld": EnvBudget(steps=100_000, final_steps=300_000),
-    },
+    budgets=_budgets(
+        {
+            "Hopper": (300_000, 900_000),
+            "HalfCheetah": (400_000, 1_100_000),
+            "Walker2d": (400_000, 1_100_000),
+            "Reacher": (200_000, 600_000),
+            "MountainCarContinuous": (100_000, 300_000),
+            "GridWorld": (100_000, 300_000),
+        }
+    ),
     default_budget=EnvBudget(steps=300_000, final_steps=900_000),
     eval_episodes=5,
 )
@@ -177,15 +184,12 @@ tail. A quarter of each budget is spent in the feedback rounds. Other processes 
 machine slow it down in proportion.
 """
 
-SESSION = StudyProfile(
+SESSION = dataclasses.replace(
+    PAPER,
     name="session",
     summary="GridWorld, MountainCarContinuous and Reacher, 5 seeds, 400 comparisons, "
     "80–160 k PPO steps per cell: about an hour on 2 cores",
     envs=("GridWorld", "MountainCarContinuous", "Reacher"),
-    dms=PAPER_DMS,
-    seeds=5,
-    comparisons=400,
-    rounds=5,
     budgets={
         "Reacher": EnvBudget(steps=80_000, final_steps=80_000),
     },
@@ -198,15 +202,12 @@ rounds, three DMs, five seeds) on the three cheapest envs, with a fifth of `LOCA
 budgets. 45 cells × (80–160 k steps) = 4.8 M steps. Measured: 74 min for the 45 cells on 2
 workers, on a machine shared with other test runs."""
 
-MUJOCO = StudyProfile(
+MUJOCO = dataclasses.replace(
+    PAPER,
     name="mujoco",
     summary="Hopper, HalfCheetah and Walker2d, 400 comparisons in 5 rounds, 120 k + 120 k "
     "PPO steps per cell",
     envs=("Hopper", "HalfCheetah", "Walker2d"),
-    dms=PAPER_DMS,
-    seeds=5,
-    comparisons=400,
-    rounds=5,
     budgets={},
     default_budget=EnvBudget(steps=120_000, final_steps=120_000),
     eval_episodes=5,
