@@ -27,10 +27,9 @@ from dataclasses import dataclass, field
 import numpy as np
 import torch
 from torch import Tensor
-from torch.nn.functional import binary_cross_entropy_with_logits
 
 from groupwise.reward.network import RewardNet
-from groupwise.reward.objective import BradleyTerryLoss, Objective
+from groupwise.reward.objective import BradleyTerryLoss, Objective, pair_cross_entropy
 from groupwise.types import FloatArray
 
 CROP_SHARE = (0.7, 0.9)
@@ -96,12 +95,7 @@ class TemporalCrops:
         *batch, _, length = rewards.shape
         masks = crop_masks(self.count, tuple(batch), length, self.share, rng)
         cropped = (rewards.unsqueeze(0) * torch.from_numpy(masks).to(rewards.dtype)).sum(-1)
-        logits = cropped[..., 0] - cropped[..., 1]  # (count, K, b)
-        target = labels.expand_as(logits)
-        ce = binary_cross_entropy_with_logits(logits, target, reduction="none")
-        if weights is not None:
-            ce = ce * weights
-        return ce.mean(dim=(0, 2))
+        return pair_cross_entropy(cropped, labels, weights).mean(dim=(0, 2))  # of (count, K, b)
 
 
 def confident_labels(p: Tensor, threshold: float) -> tuple[Tensor, Tensor]:

@@ -50,7 +50,13 @@ class BradleyTerryLoss:
         weights: Tensor | None = None,
     ) -> Tensor:
         del net, rng  # nothing outside the minibatch, nothing drawn
-        returns = rewards.sum(dim=-1)
-        logits = returns[..., 0] - returns[..., 1]
-        ce = binary_cross_entropy_with_logits(logits, labels, reduction="none")
-        return (ce if weights is None else ce * weights).mean(dim=1)
+        return pair_cross_entropy(rewards.sum(dim=-1), labels, weights).mean(dim=1)
+
+
+def pair_cross_entropy(returns: Tensor, labels: Tensor, weights: Tensor | None) -> Tensor:
+    """Each pair's cross-entropy of σ(R(a) − R(b)) against its label, times its weight when
+    `weights` is given: `returns` (…, 2) the pairs' two returns, `labels` and `weights`
+    broadcast to their shape (…)."""
+    logits = returns[..., 0] - returns[..., 1]
+    ce = binary_cross_entropy_with_logits(logits, labels.expand_as(logits), reduction="none")
+    return ce if weights is None else ce * weights
