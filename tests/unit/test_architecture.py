@@ -22,7 +22,7 @@ LAYERS: list[set[str]] = [
     # leaves: the data types every layer shares (the package's own API loads lazily)
     {"groupwise", "groupwise.types", "groupwise.episodes"},
     {"groupwise.envs", "groupwise.preferences"},
-    {"groupwise.config", "groupwise.agent_file"},
+    {"groupwise.config", "groupwise.recipes", "groupwise.agent_file"},
     # the core's computations: no SB3, FastAPI or matplotlib
     {"groupwise.behaviour", "groupwise.clips", "groupwise.reward"},
     # the app's database: below everything RL, so the server can load it without them

@@ -1,4 +1,4 @@
-"""Teaching recipes (`config.RECIPES`, issue 39): "teach" is the default of `train`,
+"""Teaching recipes (`recipes.RECIPES`, issue 39): "teach" is the default of `train`,
 `case-study` and the app's New session, "paper" is SPEC §8's protocol and today's defaults,
 each part changeable on its own, and old configs and stored sessions unchanged."""
 
@@ -11,7 +11,11 @@ import pytest
 from groupwise.cli import build_parser
 from groupwise.commands.arguments import with_recipe
 from groupwise.commands.case_study import case_config
-from groupwise.config import DEFAULT_RECIPE, PPO_PRESETS, RECIPES, RunConfig
+from groupwise.config import (
+    PPO_PRESETS,
+    RunConfig,
+)
+from groupwise.recipes import DEFAULT_RECIPE, RECIPES
 from groupwise.storage.settings import SessionSettings
 from groupwise.study.simulation.profiles import PROFILES
 

@@ -165,14 +165,15 @@ def add_pool_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def add_recipe_arguments(parser: argparse.ArgumentParser) -> None:
-    """--recipe and --ppo (`groupwise.config.RECIPES`, `PPO_PRESETS`): the recipe, and its PPO
+    """--recipe and --ppo (`groupwise.recipes.RECIPES`, `PPO_PRESETS`): the recipe, and its PPO
     part on its own (its other parts: `add_pool_arguments`)."""
-    from groupwise.config import DEFAULT_RECIPE, PPO_PRESETS, RECIPES
+    from groupwise.config import PPO_PRESETS
+    from groupwise.recipes import DEFAULT_RECIPE, RECIPES
 
     parser.add_argument(
         "--recipe",
         choices=sorted(RECIPES),
-        help="how to teach (config.RECIPES): "
+        help="how to teach (recipes.RECIPES): "
         + "; ".join(f"{r.name}: {r.description}" for r in RECIPES.values())
         + f" (default {DEFAULT_RECIPE}); --pretrain-steps, --pool-variants, --ppo and "
         "--config change its parts",
@@ -188,7 +189,8 @@ def add_recipe_arguments(parser: argparse.ArgumentParser) -> None:
 
 def with_recipe(cfg: "RunConfig", args: argparse.Namespace, env: str) -> "RunConfig":
     """`cfg` with --recipe's parts for `env` and --ppo's preset, when given."""
-    from groupwise.config import DEFAULT_RECIPE, PPO_PRESETS, RECIPES
+    from groupwise.config import PPO_PRESETS
+    from groupwise.recipes import DEFAULT_RECIPE, RECIPES
 
     cfg = RECIPES[args.recipe or DEFAULT_RECIPE].apply(cfg, env)
     return cfg if args.ppo is None else dataclasses.replace(cfg, ppo=PPO_PRESETS[args.ppo])

@@ -158,7 +158,7 @@ def is_mujoco(name: str) -> bool:
     """Whether `name` is a MuJoCo env: a groupwise one made in `MUJOCO_MODULES` (Hopper,
     HalfCheetah, Walker2d, Reacher and the case studies' targets), a registered Gymnasium id
     made there (e.g. "Hopper-v5"), or a dm_control id; False for anything else, unknown
-    names included (`config.Recipe.parts` reads it)."""
+    names included (`recipes.Recipe.parts` reads it)."""
     if (entry := env_entry(name)) is not None:
         entry_point: object = entry.entry_point
     elif dmc.is_dmc_id(name):

@@ -28,22 +28,19 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from groupwise.clips.timing import ClipTiming, default_clip_seconds, env_clip_timing
 from groupwise.config import (
-    DEFAULT_RECIPE,
     PPO_PRESETS,
-    RECIPES,
     ExplorationFraction,
     LoopConfig,
     PairCap,
     PairDerivation,
     PairOversample,
     PPOPreset,
-    RecipeName,
-    RecipeParts,
     RunConfig,
     Seed,
     TrainingConfig,
 )
 from groupwise.preferences.judgement import MAX_GROUP
+from groupwise.recipes import DEFAULT_RECIPE, RECIPES, RecipeName, RecipeParts
 
 __all__ = [
     "HUMAN",
@@ -93,7 +90,7 @@ LIBRARY = "library"
 class SessionSettings(BaseModel):
     """What a session does each round; every number is a default, not a constant.
 
-    `recipe` (`config.RECIPES`, default "teach") gives the parts `ppo_preset`,
+    `recipe` (`recipes.RECIPES`, default "teach") gives the parts `ppo_preset`,
     `pretrain_steps` and `pool_variants` left empty; `for_env` stores them resolved. A
     session stored before recipes has none (`stored`): it keeps the parts it stored."""
 
@@ -262,7 +259,7 @@ class SessionSettings(BaseModel):
 
     def recipe_parts(self, env: str) -> RecipeParts:
         """The pre-training, pool variants and PPO preset of a session on `env`: each set
-        here, else the recipe's (`config.RECIPES`; none: the paper's, the defaults before
+        here, else the recipe's (`recipes.RECIPES`; none: the paper's, the defaults before
         recipes)."""
         parts = RECIPES[self.recipe or "paper"].parts(env)
         return RecipeParts(

@@ -42,7 +42,7 @@ def test_resolve_gives_the_envs_defaults_with_l_in_steps(client):
     assert (hopper["clip_seconds"], hopper["fragment_length"]) == (1.5, 188)
     assert hopper["final_steps"] == 2 * hopper["ppo_steps_per_round"] == 40_000
     assert hopper["pool_size"] == 100 and hopper["recipe"] == "teach"
-    # the teach recipe's parts on a MuJoCo env (config.RECIPES)
+    # the teach recipe's parts on a MuJoCo env (recipes.RECIPES)
     assert (hopper["ppo_preset"], hopper["pretrain_steps"], hopper["pool_variants"]) == (
         "mujoco",
         100_000,

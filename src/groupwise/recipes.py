@@ -1,0 +1,107 @@
+"""Named teaching recipes (issue 39): the parts a recipe sets in a run (pre-training, pool
+variants, the PPO preset), per kind of env, and what each measured. A recipe applies to a
+`config.RunConfig` as a pure function; every part can still be changed on its own after it.
+"""
+
+import dataclasses
+from typing import Annotated, Literal
+
+from pydantic import Field
+from pydantic.dataclasses import dataclass
+
+from groupwise.config import _STRICT, PPO_PRESETS, PPOPreset, RunConfig
+
+RecipeName = Literal["teach", "paper"]
+"""A key of `RECIPES`."""
+
+
+@dataclass(frozen=True, config=_STRICT)
+class RecipeParts:
+    """What a recipe sets in a run: pre-training, pool variants and the PPO preset."""
+
+    pretrain_steps: Annotated[int, Field(ge=0)]
+    """`TrainingConfig.pretrain_steps`: state-entropy pre-training before round 0."""
+    pool_variants: Annotated[int, Field(ge=0)]
+    """`LoopConfig.pool_variants`: pushed copies of the policy half of each pool comes from."""
+    ppo: PPOPreset
+    """The PPO settings, a key of `PPO_PRESETS`."""
+
+
+_PAPER_PARTS = RecipeParts(pretrain_steps=0, pool_variants=0, ppo="study")
+
+
+@dataclass(frozen=True, config=_STRICT)
+class Recipe:
+    """A named way to teach: the parts it sets in a run, per kind of env, and what it
+    measured. `apply` is a pure function of a config; every part can still be changed on
+    its own after it (the CLI's options, the app's settings)."""
+
+    name: RecipeName
+    """Its key in `RECIPES`."""
+    description: str
+    """One line for people."""
+    mujoco: RecipeParts
+    """Its parts on a MuJoCo env (`envs.registry.is_mujoco`: Hopper, HalfCheetah, Walker2d,
+    Reacher, their targets, Gymnasium's and dm_control's MuJoCo ids)."""
+    other: RecipeParts
+    """Its parts on any other env (GridWorld, MountainCar, Pendulum, ...)."""
+    measured: str
+    """Its measured success, in words."""
+    source: str
+    """The results page the measurement comes from."""
+
+    def parts(self, env: str) -> RecipeParts:
+        """The parts this recipe sets on `env`."""
+        from groupwise.envs.registry import is_mujoco  # gymnasium; only when asked
+
+        return self.mujoco if is_mujoco(env) else self.other
+
+    def apply(self, cfg: RunConfig, env: str | None = None) -> RunConfig:
+        """`cfg` with this recipe's parts for `env` (default: `cfg.loop.env`): its
+        pre-training steps, pool variants and PPO preset (the whole `PPOConfig`)."""
+        parts = self.parts(env or cfg.loop.env)
+        return dataclasses.replace(
+            cfg,
+            loop=dataclasses.replace(cfg.loop, pool_variants=parts.pool_variants),
+            training=dataclasses.replace(cfg.training, pretrain_steps=parts.pretrain_steps),
+            ppo=PPO_PRESETS[parts.ppo],
+        )
+
+    def summary(self) -> str:
+        """One line: "Teach (measured: stand-up 5/5, ...; docs/results/case-studies)"."""
+        return f"{self.name.capitalize()} (measured: {self.measured}; {self.source})"
+
+
+RECIPES: dict[RecipeName, Recipe] = {
+    recipe.name: recipe
+    for recipe in (
+        Recipe(
+            name="teach",
+            description="state-entropy pre-training (100,000 steps), 8 pool variants and PPO's "
+            "MuJoCo settings on MuJoCo envs; the paper's parts elsewhere",
+            mujoco=RecipeParts(pretrain_steps=100_000, pool_variants=8, ppo="mujoco"),
+            other=_PAPER_PARTS,
+            measured="stand-up 5/5, backflip 4/5, splits 2/5 seeds",
+            source="docs/results/case-studies",
+        ),
+        Recipe(
+            name="paper",
+            description="SPEC §8's study protocol: no pre-training, no pool variants, the "
+            "study's PPO (SPEC §3)",
+            mujoco=_PAPER_PARTS,
+            other=_PAPER_PARTS,
+            measured="stand-up 3/5, backflip 1/5, splits 1/5 seeds with its pool and MuJoCo PPO",
+            source="docs/results/case-studies",
+        ),
+    )
+}
+"""Named teaching recipes (issue 39). "teach", the default of the app's New session,
+`groupwise train` and `groupwise case-study`: what measured best on the case studies (the
+calibrated teacher, seeds 0–4; docs/results/case-studies/README.md, first section). On other
+envs it sets the paper's parts: pre-training and pool variants were measured only as ways to
+show rare behaviours of 1,000-step locomotion, the MuJoCo PPO settings only there, and the
+study's PPO is SPEC §3's for its small envs; 100,000 pre-training steps would also double a
+GridWorld run of 100,000 steps. "paper": SPEC §8's protocol, the `RunConfig` defaults, which
+the simulation study (`groupwise study`) keeps."""
+DEFAULT_RECIPE: RecipeName = "teach"
+"""The recipe a run gets when none is named."""
