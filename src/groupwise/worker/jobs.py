@@ -3,10 +3,10 @@ in between (`groupwise.run.round`), on the session's `Run` in ``DIR/sessions/<se
 
 prepare round r: the run as round r − 1 left it (`Run.restore`) → `begin_round` with the
     session's query strategy (the Groupwise-DM's group suggestions, or the Pairwise-DM's
-    queries in pairwise mode) → `publishing.publish_offer`: clips into the shared store
+    queries in pairwise mode) → `publishing.published_round`: clips into the shared store
     ``DIR/clips``, the tree and candidates (`pool.publish.publish_pool`), the queries as the
-    page's suggestions and pairwise queue (`offers`), stored in one transaction that opens
-    the round.
+    page's suggestions and pairwise queue (`offers`) → `publishing.publish_offer` stores
+    them in one transaction that opens the round.
 train after round r: the run as round r − 1 left it → the round's stored judgements (not
     undone, each keyed by its place in the round) → `end_round`: pairs, dataset, reward fit,
     PPO for `ppo_steps_per_round`, evaluation, checkpoint and ``rounds.csv`` → round r + 1
@@ -76,19 +76,11 @@ def prepare(
             sources=recorded,
         )
         steps = run.agent.num_timesteps
-    publish_offer(
-        db,
-        data_dir,
-        job.session_id,
-        job.env,
-        settings,
-        offer.pool,
-        offer.queries,
-        render,
-        progress=progress,
-        sample_s=offer.sample_s,
-        ppo_steps=steps,
-    )
+    prepared = published_round(
+        data_dir, job.session_id, job.env, settings, offer.pool, offer.queries, render,
+        progress, offer.sample_s, steps,
+    )  # fmt: skip
+    publish_offer(db, job.session_id, offer.pool.round, prepared)
     log.info(
         "session %s: round %d ready (%d behaviours)", job.session_id, job.round, len(offer.pool)
     )

@@ -29,30 +29,14 @@ from groupwise.worker.progress import JobProgress
 log = logging.getLogger(__name__)
 
 
-def publish_offer(
-    db: Database,
-    data_dir: Path,
-    session_id: str,
-    env: str,
-    settings: SessionSettings,
-    pool: BehaviourPool,
-    queries: Sequence[Query],
-    render: RenderPool,
-    *,
-    progress: JobProgress | None = None,
-    sample_s: float = 0.0,
-    ppo_steps: int | None = None,
-) -> bool:
-    """Publish `pool` as round `pool.round` of a session and open the round: clips, tree
-    and candidates (`pool.publish.publish_pool`), then `queries` as the page's suggestions
-    and pairwise queue, stored in one transaction. False (nothing opened) when the session
+def publish_offer(db: Database, session_id: str, round_index: int, prepared: PreparedRound) -> bool:
+    """Open round `round_index` of a session with its offer published by `published_round`
+    (clips, tree and candidates in its directory; its queries as the page's suggestions and
+    pairwise queue), stored in one transaction. False (nothing opened) when the session
     moved on meanwhile."""
-    prepared = published_round(
-        data_dir, session_id, env, settings, pool, queries, render, progress, sample_s, ppo_steps
-    )
     with db.write() as s:
-        if not store_prepared_round(s, session_id, pool.round, prepared):
-            log.warning("session %s moved on while round %d was prepared", session_id, pool.round)
+        if not store_prepared_round(s, session_id, round_index, prepared):
+            log.warning("session %s moved on while round %d was prepared", session_id, round_index)
             return False
     return True
 

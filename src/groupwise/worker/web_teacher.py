@@ -35,7 +35,7 @@ from groupwise.storage.phases import FAILED, FINISHED, PREPARING, READY, TRAININ
 from groupwise.storage.progress import set_progress
 from groupwise.storage.sessions import create_session, get_session
 from groupwise.storage.settings import LIBRARY
-from groupwise.worker.publishing import publish_offer
+from groupwise.worker.publishing import publish_offer, published_round
 
 log = logging.getLogger(__name__)
 
@@ -101,9 +101,10 @@ class WebTeacher:
         """
         sid = self._session_for(pool.round)
         self._render = self._render or RenderPool(self.settings.render_workers)
-        opened = publish_offer(
-            self.db, self.data_dir, sid, self.env, self.settings, pool, queries, self._render
+        prepared = published_round(
+            self.data_dir, sid, self.env, self.settings, pool, queries, self._render
         )
+        opened = publish_offer(self.db, sid, pool.round, prepared)
         if not opened:
             raise SessionGoneError(f"session {sid} moved on while round {pool.round} was published")
         log.info("round %d is open for judgements: %s", pool.round, self.url_path)

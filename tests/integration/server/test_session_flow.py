@@ -119,7 +119,11 @@ def test_a_full_round_with_its_events(server):
         assert http.get(f"/api/sessions/{sid}/rounds/1/tree").status_code == 200
     events.stopped = True
     checkpoint = server.data / "sessions" / sid / "checkpoints" / "round-0000"
-    assert (checkpoint / "policy.zip").is_file() and (checkpoint / "reward.pt").is_file()
+    # the job opens round 1 first (cut from the latest rollouts), then commits round 0
+    assert wait_until(
+        lambda: (checkpoint / "policy.zip").is_file() and (checkpoint / "reward.pt").is_file(),
+        timeout=60,
+    )
     manifest = json.loads((server.data / round_directory(sid, 0) / "pool.json").read_text())
     assert manifest["config"]["oversample"] == 2.0  # 16 behaviours of 32 windows, as sampled
 
