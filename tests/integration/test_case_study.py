@@ -96,6 +96,7 @@ def _rows(out) -> list[dict[str, str]]:
         return list(reader)
 
 
+@pytest.mark.slow  # a whole case study with its film (40 s); make test-slow runs it
 def test_backflip_case_study_writes_rounds_video_and_strip(tmp_path, capsys):
     out = tmp_path / "backflip"
     assert _case_study(out, "hopper-backflip", "groupwise", "0.24") == 0

@@ -112,6 +112,7 @@ def test_a_study_directory_keeps_its_profile(study, capsys):
     assert "smoke" in capsys.readouterr().err
 
 
+@pytest.mark.slow  # a local Ray cluster starts (2 min on 2 cores); make test-slow runs it
 def test_cells_run_on_a_local_ray(study, tmp_path):
     pytest.importorskip("ray", reason="Ray is not installed (pip install groupwise[ray])")
     root, _, _, _ = study

@@ -24,7 +24,12 @@ from groupwise.storage.rounds import BehaviourInput, PreparedRound, store_prepar
 
 @pytest.mark.parametrize(
     ("db_backend", "training"),
-    [("sqlite", "continuous"), ("sqlite", "rounds"), ("postgresql", "continuous")],
+    [
+        ("sqlite", "continuous"),
+        # the other backend and mode in make test-slow (about 45 s each on 2 cores)
+        pytest.param("sqlite", "rounds", marks=pytest.mark.slow),
+        pytest.param("postgresql", "continuous", marks=pytest.mark.slow),
+    ],
 )
 def test_kills_of_server_and_worker_lose_duplicate_and_half_store_nothing(
     database_url, db_backend, training

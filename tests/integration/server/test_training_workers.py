@@ -2,11 +2,13 @@
 the sessions of its shard, so two sessions' continuous rounds train on two cores."""
 
 import httpx
+import pytest
 from tests.integration.server.conftest import TINY_FLAGS, TINY_SETTINGS, judgement, wait_until
 
 from groupwise.worker.process import shard_of
 
 
+@pytest.mark.slow  # two workers training side by side (40 s); make test-slow runs it
 def test_two_training_workers_serve_the_sessions_of_their_shards(serve):
     server = serve(
         "--env", "GridWorld", *TINY_FLAGS, "--training-workers", "2", settings=TINY_SETTINGS
