@@ -582,33 +582,20 @@ def marked_files(paths: Sequence[Path]) -> Iterator[Path]:
 def curves_figure(runs: Sequence[Run], path: Path, colour: str = "dm") -> Path:
     """Target score (mean over the evaluation episodes) against the preference pairs so far,
     one line per run, one panel per target, coloured by the `colour` column; the success
-    threshold dashed. Needs Matplotlib (the `study` extra)."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
+    threshold dashed. Needs Matplotlib (the `study` extra) and groupwise, imported here."""
+    from groupwise.study.case_studies.table import Curve, target_curves_figure
 
-    targets = {run.get("target"): _number(run.get("summary.target.threshold")) for run in runs}
-    keys = list(dict.fromkeys(run.get(colour) for run in runs))
-    figure = Figure(figsize=(4.2 * len(targets), 3.4), dpi=120, layout="constrained")
-    FigureCanvasAgg(figure)
-    axes = figure.subplots(1, len(targets), squeeze=False)[0]
-    for ax, (target, threshold) in zip(axes, targets.items(), strict=True):
-        shown: set[str] = set()
-        for run in runs:
-            if run.get("target") != target:
-                continue
-            key = run.get(colour)
-            pairs = [_number(r["pairs_total"]) for r in run.rows]
-            scores = [_number(r["target_score_mean"]) for r in run.rows]
-            ax.plot(pairs, scores, marker="o", ms=3, color=f"C{keys.index(key)}",
-                    label=None if key in shown else key)  # fmt: skip
-            shown.add(key)
-        ax.axhline(threshold, color="0.4", ls="--", lw=0.8)
-        ax.set_title(target)
-        ax.set_xlabel("preference pairs")
-        ax.set_ylabel("target score (greedy policy)")
-        ax.legend(frameon=False, fontsize=8)
-    figure.savefig(path)
-    return path
+    curves = [
+        Curve(
+            run.get("target"),
+            _number(run.get("summary.target.threshold")),
+            run.get(colour),
+            [_number(r["pairs_total"]) for r in run.rows],
+            [_number(r["target_score_mean"]) for r in run.rows],
+        )
+        for run in runs
+    ]
+    return target_curves_figure(curves, path, "preference pairs")
 
 
 # --- command line --------------------------------------------------------------------------

@@ -22,6 +22,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
+from groupwise.study.case_studies.table import Curve, target_curves_figure
+
 SUCCESS_SHARE = 0.6
 """A round passes when at least this share of its evaluation episodes reach the threshold
 (3 of 5, as `case_study_table` counts success)."""
@@ -136,28 +138,8 @@ def summary_rows(runs: Sequence[TimedRun]) -> list[str]:
 def figure(runs: Sequence[TimedRun], path: Path) -> Path:
     """Target score against the teacher's minutes, one panel per target, one line per run
     (colour: training mode), the success threshold dashed. Needs Matplotlib."""
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    targets = list(dict.fromkeys(run.target for run in runs))
-    modes = list(dict.fromkeys(run.mode for run in runs))
-    fig = Figure(figsize=(4.2 * len(targets), 3.4), dpi=120, layout="constrained")
-    FigureCanvasAgg(fig)
-    axes = fig.subplots(1, len(targets), squeeze=False)[0]
-    for ax, target in zip(axes, targets, strict=True):
-        shown: set[str] = set()
-        for run in (r for r in runs if r.target == target):
-            colour = f"C{modes.index(run.mode)}"
-            label = None if run.mode in shown else run.mode
-            ax.plot(run.minutes, run.scores, marker="o", ms=3, color=colour, label=label)
-            shown.add(run.mode)
-            ax.axhline(run.threshold, color="0.4", ls="--", lw=0.8)
-        ax.set_title(target)
-        ax.set_xlabel("minutes of the teacher's time")
-        ax.set_ylabel("target score (greedy policy)")
-        ax.legend(frameon=False, fontsize=8)
-    fig.savefig(path)
-    return path
+    curves = [Curve(r.target, r.threshold, r.mode, r.minutes, r.scores) for r in runs]
+    return target_curves_figure(curves, path, "minutes of the teacher's time")
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -20,6 +20,7 @@ import argparse
 import csv
 import json
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -153,30 +154,51 @@ def curves_figure(runs: Sequence[Path], path: Path) -> Path:
     """Target score (mean over the evaluation episodes) against preference pairs so far,
     one line per run, one panel per target; the success threshold dashed. Needs
     Matplotlib (the ``study`` extra), imported here so the table alone does not."""
+    curves = []
+    for summary, rows in (_read(run) for run in runs):
+        pairs = [float(r["pairs_total"]) for r in rows]
+        scores = [float(r["target_score_mean"]) for r in rows]
+        target = summary["target"]
+        curves.append(
+            Curve(target["name"], target["threshold"], summary["decision_maker"], pairs, scores)
+        )
+    return target_curves_figure(curves, path, "preference pairs")
+
+
+@dataclass(frozen=True)
+class Curve:
+    """One run's line in `target_curves_figure`: its target's score against `x`."""
+
+    target: str
+    threshold: float
+    """The target's success threshold (dashed)."""
+    key: str
+    """What colours the line (the DM, the training mode): one colour and legend entry a key."""
+    x: Sequence[float]
+    scores: Sequence[float]
+
+
+def target_curves_figure(curves: Sequence[Curve], path: Path, xlabel: str) -> Path:
+    """Target score against `xlabel`, one panel per target (in the order they first come),
+    one line per curve coloured by its key, the target's success threshold dashed, written
+    to `path`. Needs Matplotlib (the ``study`` extra), imported here."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    read = [_read(run) for run in runs]
-    targets = {s["target"]["name"]: s["target"]["threshold"] for s, _ in read}
-    dms = list(dict.fromkeys(s["decision_maker"] for s, _ in read))
+    targets = {curve.target: curve.threshold for curve in curves}
+    keys = list(dict.fromkeys(curve.key for curve in curves))
     figure = Figure(figsize=(4.2 * len(targets), 3.4), dpi=120, layout="constrained")
     FigureCanvasAgg(figure)
     axes = figure.subplots(1, len(targets), squeeze=False)[0]
-    colours = {dm: f"C{k}" for k, dm in enumerate(dms)}
     for ax, (target, threshold) in zip(axes, targets.items(), strict=True):
         shown: set[str] = set()
-        for summary, rows in read:
-            dm = summary["decision_maker"]
-            if summary["target"]["name"] != target:
-                continue
-            pairs = [float(r["pairs_total"]) for r in rows]
-            scores = [float(r["target_score_mean"]) for r in rows]
-            ax.plot(pairs, scores, marker="o", ms=3, color=colours[dm],
-                    label=None if dm in shown else dm)  # fmt: skip
-            shown.add(dm)
+        for curve in (c for c in curves if c.target == target):
+            ax.plot(curve.x, curve.scores, marker="o", ms=3, color=f"C{keys.index(curve.key)}",
+                    label=None if curve.key in shown else curve.key)  # fmt: skip
+            shown.add(curve.key)
         ax.axhline(threshold, color="0.4", ls="--", lw=0.8)
         ax.set_title(target)
-        ax.set_xlabel("preference pairs")
+        ax.set_xlabel(xlabel)
         ax.set_ylabel("target score (greedy policy)")
         ax.legend(frameon=False, fontsize=8)
     figure.savefig(path)
