@@ -22,24 +22,14 @@ import time
 import warnings
 from pathlib import Path
 
-import gymnasium as gym
-import numpy as np
-
 
 def record(root: Path, steps: int, seed: int = 0) -> str:
-    """A Minari dataset of `steps` random Hopper-v5 steps in the store `root`; its id."""
-    from minari import DataCollector
+    """A Minari dataset of `steps` random Hopper-v5 steps (episodes of 1,000 steps) in the
+    store `root`, recorded as the tests record theirs (`tests.datasets`); its id."""
+    from tests.datasets import build_hopper_dataset
 
     dataset_id = "bench/hopper-random-v0"
-    env = DataCollector(gym.make("Hopper-v5", terminate_when_unhealthy=False), data_format="arrow")
-    rng = np.random.default_rng(seed)
-    env.reset(seed=seed)
-    for _ in range(steps):
-        _, _, terminated, truncated, _ = env.step(rng.uniform(-1, 1, 3).astype(np.float32))
-        if terminated or truncated:
-            env.reset()
-    env.create_dataset(dataset_id=dataset_id, algorithm_name="random")
-    env.close()
+    build_hopper_dataset(root, dataset_id, steps, seed, terminate_when_unhealthy=False)
     return dataset_id
 
 

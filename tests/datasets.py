@@ -9,17 +9,21 @@ import numpy as np
 HOPPER = "Hopper-v5"
 
 
-def build_hopper_dataset(root: Path, dataset_id: str, steps: int, seed: int = 0) -> Path:
-    """A Minari dataset of `steps` random-action steps of Hopper-v5, recorded by Minari's own
-    `DataCollector` (arrow format) into the Minari store `root` (MINARI_DATASETS_PATH is
-    `root` meanwhile, then as it was). Episode 0 is the env reset with `seed`, then the actions of
-    `np.random.default_rng(seed)`. Returns the dataset's directory."""
+def build_hopper_dataset(
+    root: Path, dataset_id: str, steps: int, seed: int = 0, **make_kwargs: object
+) -> Path:
+    """A Minari dataset of `steps` random-action steps of Hopper-v5 (made with `make_kwargs`,
+    e.g. ``terminate_when_unhealthy=False``), recorded by Minari's own `DataCollector` (arrow
+    format) into the Minari store `root` (MINARI_DATASETS_PATH is `root` meanwhile, then as
+    it was). Episode 0 is the env reset with `seed`, then the actions of
+    `np.random.default_rng(seed)`. Returns the dataset's directory (benchmarks/dataset_pool.py
+    records its dataset with it too)."""
     from minari import DataCollector
 
     before = os.environ.get("MINARI_DATASETS_PATH")
     os.environ["MINARI_DATASETS_PATH"] = str(root)
     try:
-        env = DataCollector(gym.make(HOPPER), data_format="arrow")
+        env = DataCollector(gym.make(HOPPER, **make_kwargs), data_format="arrow")
         rng = np.random.default_rng(seed)
         env.reset(seed=seed)
         for _ in range(steps):
