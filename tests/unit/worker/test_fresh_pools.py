@@ -105,7 +105,9 @@ def test_the_step_counter_moves_with_each_rollout_and_pause_stops_ppo(client, mo
     assert training.run.agent.num_timesteps == 3 * ROLLOUT
 
 
-def test_a_worker_killed_between_opening_and_committing_commits_on_resume(client):
+def _opened_not_committed(client):
+    """A session whose round 0 ended and whose round 1 `jobs.open_fresh` opened from round
+    0's rollouts, round 0 not yet committed: (sid, worker, context, job, the live training)."""
     sid, worker = _training_session(client, slices=2)
     client.post(f"/api/sessions/{sid}/end-round")
     context = context_of(client)
@@ -115,8 +117,15 @@ def test_a_worker_killed_between_opening_and_committing_commits_on_resume(client
     render = worker._render_pool(job.settings.render_workers)
     try:
         assert jobs.open_fresh(job, context.db, context.data_dir, training.live, render)
-    finally:
+    except BaseException:
         training.run.close()
+        raise
+    return sid, worker, context, job, training
+
+
+def test_a_worker_killed_between_opening_and_committing_commits_on_resume(client):
+    sid, worker, context, _job, training = _opened_not_committed(client)
+    training.run.close()
     worker.live.close()  # killed here: round 1 open, round 0 not committed
     assert _round_stats(client, sid, 0) is None
 
@@ -134,14 +143,7 @@ def test_a_round_checkpointed_but_not_recorded_keeps_its_checkpoint_on_resume(cl
     """Killed after `end_round` wrote round 0's checkpoint (and dropped the live one) but
     before its record was stored: the resumed worker records it from the checkpoint instead
     of training round 0 again from round −1 (which would lose its PPO steps)."""
-    sid, worker = _training_session(client, slices=2)
-    client.post(f"/api/sessions/{sid}/end-round")
-    context = context_of(client)
-    job = job_of(context.db, sid)
-    assert job is not None
-    training = worker.live.take(job)
-    render = worker._render_pool(job.settings.render_workers)
-    assert jobs.open_fresh(job, context.db, context.data_dir, training.live, render)
+    sid, _worker, context, job, training = _opened_not_committed(client)
     ended = dataclasses.replace(job, round=0, phase="training")
     record = jobs.commit_round(ended, context.db, context.data_dir, None, training.live)
     training.run.close()
