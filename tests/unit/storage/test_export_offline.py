@@ -8,14 +8,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from tests.unit.storage.test_export_states import L, docs_example, pool_arrays
+from tests.unit.storage.test_export_states import L, docs_example, pool_arrays, write_pool
 
 from groupwise.cli import main as cli
 from groupwise.storage import InvalidError
 from groupwise.storage.export import StatesExport, export_session
 from groupwise.storage.export_offline import env_slug, index_codes, offline_pairs
 from groupwise.storage.judgements import JudgementInput, add_judgement, undo_judgement
-from groupwise.storage.sessions import round_directory
 from groupwise.storage.states import preference_dataset
 
 
@@ -23,10 +22,7 @@ from groupwise.storage.states import preference_dataset
 def judged(db, open_session, tmp_path) -> tuple[str, Path]:
     """b1, b2 ≻ b3; b4 ≻ b5 (said as "right" of b5 v b4); b7 = b8; b9 ≻ b10 undone."""
     sid = open_session()
-    data = tmp_path / "data"
-    pool = data / round_directory(sid, 0)
-    pool.mkdir(parents=True)
-    np.savez(pool / "behaviours.npz", **pool_arrays())
+    data = write_pool(sid, tmp_path / "data")
     with db.write() as s:
         add_judgement(s, sid, JudgementInput("a", 0, ("b1", "b2"), ("b3",), "left", "explored"))
         add_judgement(s, sid, JudgementInput("b", 0, ("b5",), ("b4",), "right", "suggested"))

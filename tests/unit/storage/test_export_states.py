@@ -28,15 +28,21 @@ def pool_arrays() -> dict[str, np.ndarray]:
     }
 
 
+def write_pool(sid: str, data: Path) -> Path:
+    """`pool_arrays` written as session `sid`'s round-0 pool, where the round row says, in
+    the data dir `data`; returns `data`."""
+    pool = data / round_directory(sid, 0)
+    pool.mkdir(parents=True)
+    np.savez(pool / "behaviours.npz", **pool_arrays())
+    return data
+
+
 @pytest.fixture
 def judged(db, open_session, tmp_path) -> tuple[str, Path]:
     """A session with three judgements (one undone) over b1, b2, b3 v b4, b5 v b6 and b7 v
     b8; its round-0 pool written where the round row says. (session id, data dir)"""
     sid = open_session()
-    data = tmp_path / "data"
-    pool = data / round_directory(sid, 0)
-    pool.mkdir(parents=True)
-    np.savez(pool / "behaviours.npz", **pool_arrays())
+    data = write_pool(sid, tmp_path / "data")
     with db.write() as s:
         add_judgement(s, sid, JudgementInput("a", 0, ("b1", "b2"), ("b3",), "left", "explored"))
         add_judgement(s, sid, JudgementInput("b", 0, ("b5",), ("b4",), "right", "suggested"))
