@@ -3,25 +3,17 @@
 edited table."""
 
 import csv
-import importlib.util
 import json
-import sys
 from pathlib import Path
 from types import ModuleType
 
 import pytest
-
-SCRIPT = Path(__file__).parents[2] / "research" / "results_table.py"
+from tests.research.conftest import research_script
 
 
 @pytest.fixture(scope="module")
 def rt() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("results_table", SCRIPT)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses resolve their module by name
-    spec.loader.exec_module(module)
-    return module
+    return research_script("results_table")
 
 
 CASE_STUDY = (

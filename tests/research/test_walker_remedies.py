@@ -2,28 +2,20 @@
 reads run folders as `groupwise case-study` writes them."""
 
 import argparse
-import importlib.util
 import json
-import sys
 from pathlib import Path
 from types import ModuleType
 
 import pytest
+from tests.research.conftest import research_script
 
 from groupwise.cli import build_parser
 from groupwise.config import RunConfig
 
-SCRIPT = Path(__file__).parents[2] / "research" / "walker_remedies.py"
-
 
 @pytest.fixture(scope="module")
 def wr() -> ModuleType:
-    spec = importlib.util.spec_from_file_location("walker_remedies", SCRIPT)
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    return module
+    return research_script("walker_remedies")
 
 
 def test_every_setup_is_a_partial_config_that_switches_its_remedy_on(wr):
