@@ -113,6 +113,19 @@ class Server:
                 raise AssertionError(f"session {sid} stuck in {state['phase']}\n{self.tail()}")
             time.sleep(0.3)
 
+    def leaves(self, sid: str, round_index: int = 0) -> list[str]:
+        """The behaviour ids of a round's tree, in the tree's order."""
+        found: list[str] = []
+
+        def walk(node: dict[str, Any]) -> None:
+            if not node["children"]:
+                found.append(node["id"])
+            for child in node["children"]:
+                walk(child)
+
+        walk(self.api("GET", f"/api/sessions/{sid}/rounds/{round_index}/tree")["tree"])
+        return found
+
     def text(self, path: str) -> str:
         """A GET answered with text (the JSONL export)."""
         with urllib.request.urlopen(self.url + path, timeout=30) as response:
@@ -263,6 +276,23 @@ class UI:
 
     def __init__(self, page: Any) -> None:
         self.page = page
+
+    def settled(self) -> None:
+        """The suggestion the page asks for when it opens has come, or there was none."""
+        _playwright().expect(self.page.locator(".comparison .origin")).to_contain_text(
+            re.compile("Suggested comparison|No suggestions left|Your selection"), timeout=15_000
+        )
+
+    def open_round(self, server: Server, sid: str, leaves: int) -> None:
+        """Opens a session's page, waits for its chart's `leaves` leaves and the opening
+        suggestion, then clears the groups."""
+        expect = _playwright().expect
+        self.page.goto(f"{server.url}/?session={sid}")
+        expect(self.page.locator(".chart-svg .arc.leaf")).to_have_count(leaves, timeout=30_000)
+        self.settled()
+        if self.page.locator(".clip").count():
+            self.page.get_by_role("button", name="Clear groups").click()
+        expect(self.page.locator(".clip")).to_have_count(0)
 
     def point_in(self, node_id: str) -> tuple[float, float]:
         """A point inside an arc's shape (an annulus' bounding-box centre may lie outside it)."""

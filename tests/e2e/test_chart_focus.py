@@ -23,17 +23,6 @@ MAX_GROUP = 8
 VIEWPORT_HEIGHT = 768
 
 
-def _open(page: Page, server: Server, sid: str, leaves: int = POOL) -> None:
-    page.goto(f"{server.url}/?session={sid}")
-    expect(page.locator(".chart-svg .arc.leaf")).to_have_count(leaves, timeout=30_000)
-    expect(page.locator(".comparison .origin")).to_contain_text(
-        re.compile("Suggested comparison|No suggestions left|Your selection"), timeout=15_000
-    )
-    if page.locator(".clip").count():
-        page.get_by_role("button", name="Clear groups").click()
-    expect(page.locator(".clip")).to_have_count(0)
-
-
 class Tree:
     """The round's tree as the server sends it: each node's leaves and parent."""
 
@@ -63,7 +52,7 @@ def test_a_1000_round_centre_pick_single_behaviours_answer_and_export(
     own_server: Server, page: Page, ui: Any, shot: Any
 ) -> None:
     sid = own_server.new_session("groupwise", pool_size=N, frame_size=32, render_workers=2)
-    _open(page, own_server, sid, leaves=N)
+    ui.open_round(own_server, sid, N)
     tree = Tree(own_server, sid)
     crumbs = page.get_by_role("navigation", name="Chart centre")
     expect(crumbs).to_be_hidden()
@@ -123,7 +112,7 @@ def test_keyboard_alone_centres_and_fills_both_groups(
     own_server: Server, page: Page, ui: Any
 ) -> None:
     sid = own_server.new_session("groupwise")
-    _open(page, own_server, sid)
+    ui.open_round(own_server, sid, POOL)
     # Tab reaches the chart (one tab stop), the focus starts on a behaviour.
     for _ in range(40):
         page.keyboard.press("Tab")
@@ -178,7 +167,7 @@ def test_keyboard_alone_centres_and_fills_both_groups(
 
 def test_clicks_do_what_they_say(own_server: Server, page: Page, ui: Any) -> None:
     sid = own_server.new_session("groupwise")
-    _open(page, own_server, sid)
+    ui.open_round(own_server, sid, POOL)
     cluster = page.evaluate(
         """() => [...document.querySelectorAll('.arc.node')].find((e) =>
                  /^cluster of [2-8] behaviours, level \\d+$/.test(e.getAttribute('aria-label'))
@@ -219,11 +208,11 @@ def test_clicks_do_what_they_say(own_server: Server, page: Page, ui: Any) -> Non
 
 
 def test_the_chart_keeps_60_percent_of_the_screen_with_the_people_panel(
-    own_server: Server, page: Page, shot: Any
+    own_server: Server, page: Page, ui: Any, shot: Any
 ) -> None:
     sid = own_server.new_session("groupwise")
     own_server.api("POST", f"/api/sessions/{sid}/annotators", {"name": "Ann Lee"})
-    _open(page, own_server, sid)
+    ui.open_round(own_server, sid, POOL)
     people = page.get_by_role("region", name="Annotators")
     expect(people).to_be_visible()
     expect(people.locator("tr[data-id]")).to_have_count(2)

@@ -5,7 +5,6 @@ page says so and offers the judgements) and the judgements downloaded.
 Screenshot: dataset-session.png (1366 × 768)."""
 
 import json
-import re
 from typing import Any
 
 import pytest
@@ -47,19 +46,8 @@ def test_label_a_dataset_and_download_the_judgements(
 
     page.goto(f"{own_server.url}/?session={sid}")
     expect(page.locator(".arc.leaf")).to_have_count(POOL)
-    expect(page.locator(".comparison .origin")).to_contain_text(
-        re.compile("Suggested comparison|No suggestions left|Your selection"), timeout=15_000
-    )
-    tree = own_server.api("GET", f"/api/sessions/{sid}/rounds/0/tree")["tree"]
-    leaves: list[str] = []
-
-    def walk(node: dict[str, Any]) -> None:
-        if not node["children"]:
-            leaves.append(node["id"])
-        for child in node["children"]:
-            walk(child)
-
-    walk(tree)
+    ui.settled()
+    leaves = own_server.leaves(sid)
     page.get_by_role("button", name="Clear groups").click()
     ui.click_arc(leaves[0])
     ui.click_arc(leaves[-1], modifiers=("Alt",))

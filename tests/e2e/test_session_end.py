@@ -3,7 +3,6 @@ on the frozen reward model → the agent's video plays, its chart shows each rou
 downloads and loads with `groupwise.load_agent`; "Continue training" trains it again.
 Screenshot: session-end.png (1366 × 768)."""
 
-import re
 from typing import Any
 
 import numpy as np
@@ -30,27 +29,11 @@ TRAINING = {
 }
 
 
-def _settled(page: Page) -> None:
-    """The suggestion the page asks for when it opens has come, or there was none."""
-    expect(page.locator(".comparison .origin")).to_contain_text(
-        re.compile("Suggested comparison|No suggestions left|Your selection"), timeout=15_000
-    )
-
-
 def _answer_one(page: Page, ui: Any, server: Server, sid: str) -> None:
     """One judgement: the suggested groups, or two leaves chosen in the chart."""
-    _settled(page)
+    ui.settled()
     if not page.locator(".group-A .clip").count() or not page.locator(".group-B .clip").count():
-        tree = server.api("GET", f"/api/sessions/{sid}/rounds/0/tree")["tree"]
-        leaves: list[str] = []
-
-        def walk(node: dict[str, Any]) -> None:
-            if not node["children"]:
-                leaves.append(node["id"])
-            for child in node["children"]:
-                walk(child)
-
-        walk(tree)
+        leaves = server.leaves(sid)
         page.get_by_role("button", name="Clear groups").click()
         ui.click_arc(leaves[0])
         ui.click_arc(leaves[-1], modifiers=("Alt",))

@@ -7,7 +7,6 @@ GridWorld with 32 × 32 frames keeps the round cheap; the server renders each cl
 asked for from the clip's recipe (`clips.on_demand`).
 """
 
-import re
 from typing import Any
 
 import pytest
@@ -44,14 +43,7 @@ def test_a_round_of_1000_behaviours_with_clips_on_demand(own_server: Any, page: 
         "response",
         lambda r: clips.__setitem__(r.url, r.status) if "/clips/" in r.url else None,
     )
-    page.goto(f"{own_server.url}/?session={sid}")
-    expect(page.locator(".chart-svg .arc.leaf")).to_have_count(N, timeout=30_000)
-    expect(page.locator(".comparison .origin")).to_contain_text(
-        re.compile("Suggested comparison|No suggestions left|Your selection"), timeout=15_000
-    )
-    if page.locator(".clip").count():
-        page.get_by_role("button", name="Clear groups").click()
-    expect(page.locator(".clip")).to_have_count(0)
+    ui.open_round(own_server, sid, N)
 
     # Select a cluster: its clips fill group A, are rendered on demand and play.
     node_a, leaves_a = _cluster(own_server, sid, set())
