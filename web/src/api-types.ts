@@ -1297,7 +1297,7 @@ export interface components {
          * SessionSettings
          * @description What a session does each round; every number is a default, not a constant.
          *
-         *     `recipe` (`config.RECIPES`, default "teach") gives the parts `ppo_preset`,
+         *     `recipe` (`recipes.RECIPES`, default "teach") gives the parts `ppo_preset`,
          *     `pretrain_steps` and `pool_variants` left empty; `for_env` stores them resolved. A
          *     session stored before recipes has none (`stored`): it keeps the parts it stored.
          */
