@@ -65,7 +65,7 @@ def test_the_step_counter_moves_while_ppo_runs_and_the_chart_names_its_axes(
     expect(panel.locator("text.axis-label.y")).to_have_text("true return")
     expect(panel.locator("text.axis-label.x")).to_have_text("session time (m:ss)")
     ticks = panel.locator("text.tick.x").all_text_contents()  # SVG text has no innerText
-    assert len(ticks) == len(set(ticks)), ticks  # never "0:00 0:00 0:00 0:00"
+    assert ticks and len(ticks) == len(set(ticks)), ticks  # never "0:00 0:00 0:00 0:00"
     # no line of the panel is cut off
     cut = page.evaluate(
         "() => [...document.querySelectorAll('.training-text p')]"
