@@ -39,13 +39,6 @@ LAYERS: list[set[str]] = [
 ]
 """Lowest first; a module belongs to the longest entry that is it or a package above it."""
 
-PENDING: set[tuple[str, str]] = {
-    # Edges another engineer is removing now (issue 38: SuggestionRank into config; the
-    # storage and worker cycles broken by moving code). Each must still exist
-    # (`test_pending_edges_are_still_there`), so this set only shrinks.
-}
-"""(importer, imported) edges exempt from both checks until their fix lands."""
-
 
 def _module(path: Path, root: Path = ROOT) -> str:
     parts = path.relative_to(root.parent).with_suffix("").parts
@@ -109,10 +102,6 @@ def _layer(module: str) -> int | None:
     return None if best is None else best[1]
 
 
-def _without_pending(graph: dict[str, set[str]]) -> dict[str, set[str]]:
-    return {a: {b for b in targets if (a, b) not in PENDING} for a, targets in graph.items()}
-
-
 def _upward(graph: dict[str, set[str]]) -> list[str]:
     """Imports of a higher layer than the importer's, as "importer (layer) → imported (layer)"."""
     found = []
@@ -148,7 +137,7 @@ def _cycle(graph: dict[str, set[str]]) -> list[str] | None:
 
 def _violations(root: Path = ROOT) -> list[str]:
     """Everything the layering forbids in the package at `root`, in words; [] when none."""
-    graph = _without_pending(_graph(root))
+    graph = _graph(root)
     found = [f"{m} is in no layer" for m in sorted(graph) if _layer(m) is None]
     found += [f"upward import: {edge}" for edge in _upward(graph)]
     cycle = _cycle(graph)
@@ -159,12 +148,6 @@ def _violations(root: Path = ROOT) -> list[str]:
 
 def test_every_import_points_down_the_layers_and_none_forms_a_cycle():
     assert _violations() == []
-
-
-def test_pending_edges_are_still_there():
-    """A fixed edge leaves `PENDING`, so the exemption never outlives its reason."""
-    graph = _graph()
-    assert {(a, b) for a, b in PENDING if b not in graph.get(a, set())} == set()
 
 
 def _copy(tmp_path: Path) -> Path:
