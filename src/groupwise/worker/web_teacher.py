@@ -136,13 +136,14 @@ class WebTeacher:
 
     def _session_for(self, round_index: int) -> str:
         """The session, waiting to be given round `round_index` (created for round 0)."""
+        if self.session_id is None:
+            if round_index != 0:
+                raise ValueError(f"a new session starts at round 0, not {round_index}")
+            with self.db.write() as s:
+                sid = create_session(s, self.env, self.mode, self.settings, self.annotator).id
+            self.session_id = sid  # published once committed, so others can read it
+            return sid
         with self.db.write() as s:
-            if self.session_id is None:
-                if round_index != 0:
-                    raise ValueError(f"a new session starts at round 0, not {round_index}")
-                row = create_session(s, self.env, self.mode, self.settings, self.annotator)
-                self.session_id = row.id
-                return row.id
             session = get_session(s, self.session_id, lock=True)
             if session.phase in (FINISHED, FAILED):
                 raise SessionGoneError(f"session {session.id} is {session.phase}")
