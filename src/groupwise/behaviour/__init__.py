@@ -17,14 +17,8 @@ from groupwise.behaviour.bands import (
     geometric_thresholds,
     linear_thresholds,
 )
-from groupwise.behaviour.dtw import (
-    band_window,
-    dtw_distance,
-    dtw_matrix,
-    kernel_threads,
-    set_kernel_threads,
-    warm_up,
-)
+from groupwise.behaviour.dtw import band_window, dtw_distance, dtw_matrix, warm_up
+from groupwise.behaviour.dtw_threads import kernel_threads, set_kernel_threads
 from groupwise.behaviour.features import (
     Standardiser,
     fit_standardiser,

@@ -216,21 +216,3 @@ def test_a_band_on_long_equal_windows_matches_dtaidistance(window):
         for j in range(i + 1, len(seqs)):
             want = dtaidistance_dtw(seqs[i], seqs[j], window)
             assert got[i, j] == pytest.approx(want, rel=1e-10)
-
-
-def test_kernel_threads_set_the_count_within_the_block_and_restore_it():
-    import numba
-
-    from groupwise.behaviour import kernel_threads
-
-    seqs = random_pool(np.random.default_rng(3), 24, [9, 12], 3)
-    before = numba.get_num_threads()
-    with kernel_threads(1) as threads:
-        assert threads == numba.get_num_threads() == 1
-        one = dtw_matrix(seqs)
-    assert numba.get_num_threads() == before
-    with kernel_threads(10**6) as threads:  # clamped to numba's NUMBA_NUM_THREADS
-        assert threads == numba.config.NUMBA_NUM_THREADS
-        every = dtw_matrix(seqs)
-    assert numba.get_num_threads() == before
-    np.testing.assert_array_equal(one, every)
