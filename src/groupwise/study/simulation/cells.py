@@ -65,7 +65,7 @@ class Cell:
         return f"{self.env}/{self.dm}/seed-{self.seed}{suffix}"
 
     def directory(self, root: Path) -> Path:
-        return root / self.condition / self.env / self.dm / f"seed-{self.seed}"
+        return root / self.condition / env_directory(self.env) / self.dm / f"seed-{self.seed}"
 
     def to_json(self) -> dict[str, Any]:
         return {"env": self.env, "dm": self.dm, "seed": self.seed, "condition": self.condition}
@@ -73,6 +73,22 @@ class Cell:
     @classmethod
     def from_json(cls, data: dict[str, Any]) -> "Cell":
         return cls(data["env"], data["dm"], int(data["seed"]), data.get("condition", MAIN))
+
+
+ENV_SEPARATOR = "--"
+"""Stands for the ``/`` of a namespaced Gymnasium id (``dm_control/walker-walk-v0``) in a
+cell's directory name, which must be one path component."""
+
+
+def env_directory(env: str) -> str:
+    """The directory name of `env`'s cells: ``dm_control--walker-walk-v0`` for
+    ``dm_control/walker-walk-v0``; a plain name as it is."""
+    return env.replace("/", ENV_SEPARATOR)
+
+
+def env_of_directory(name: str) -> str:
+    """The env whose cells a directory named `name` holds (`env_directory` undone)."""
+    return name.replace(ENV_SEPARATOR, "/")
 
 
 def is_done(directory: Path) -> bool:
@@ -219,7 +235,7 @@ def discover_cells(root: Path) -> list[Cell]:
     found = []
     for condition in CONDITIONS:
         for seed_dir in (root / condition).glob("*/*/seed-*"):
-            env, dm = seed_dir.parent.parent.name, seed_dir.parent.name
+            env, dm = env_of_directory(seed_dir.parent.parent.name), seed_dir.parent.name
             try:
                 seed = int(seed_dir.name.removeprefix("seed-"))
             except ValueError:

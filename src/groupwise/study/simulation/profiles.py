@@ -1,7 +1,7 @@
 """Study profiles: how big each cell of a simulated study is (SPEC §8).
 
 A profile fixes everything of a cell but its env, decision-maker and seed: the comparisons,
-the rounds, the PPO step budgets per env and the evaluation. Six ship:
+the rounds, the PPO step budgets per env and the evaluation. Seven ship:
 
 - ``paper``: SPEC §8 as written, for a cluster (``--ray``). 400 comparisons in 5 rounds,
   then a long PPO run on the frozen learned reward. The paper gives no step budgets; its
@@ -18,6 +18,7 @@ the rounds, the PPO step budgets per env and the evaluation. Six ship:
   fifth of ``local``'s PPO budgets: about an hour on two cores (the study in ``docs/results``).
 - ``mujoco``: Hopper, HalfCheetah and Walker2d at 120 k + 120 k PPO steps per cell, beside
   ``session`` (about 50 min on two cores, minutes on a 16-core machine).
+- ``dmc``: DeepMind Control's Walker-walk and Cheetah-run at 100 preferences (issue 42).
 - ``quick``: GridWorld and MountainCarContinuous, 2 seeds, tiny budgets: a few minutes on two
   cores, for CI and for trying the pipeline.
 - ``smoke`` (hidden): the tiniest cell that still runs every phase, for the tests.
@@ -31,6 +32,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from groupwise.config import (
+    PPO_PRESETS,
     LoopConfig,
     PPOConfig,
     RewardConfig,
@@ -82,6 +84,9 @@ class StudyProfile:
     """PPO settings of every cell."""
     reward: RewardConfig = field(default_factory=RewardConfig)
     """Reward-model settings of every cell."""
+    pair_cap: float | None = None
+    """`LoopConfig.pair_cap` of every cell: 1.0 holds every DM to `comparisons` preference
+    pairs, as benchmarks counted in preferences (labelled pairs) are."""
     hidden: bool = False
     """Left out of the CLI's help (test-only profiles)."""
 
@@ -98,13 +103,14 @@ class StudyProfile:
         budget = self.budget(env)
         values: dict[str, object] = {
             "env": env,
-            "oracle": dm,
+            "decision_maker": dm,
             "comparisons": self.comparisons,
             "rounds": self.rounds,
             "steps": budget.steps,
             "final_steps": budget.final_steps,
             "eval_episodes": self.eval_episodes,
             "seed": seed,
+            "pair_cap": self.pair_cap,
         }
         loop = dataclasses.replace(LoopConfig(), **values)  # type: ignore[arg-type]  # mixed value types
         # SPEC §8's protocol by name (recipes.RECIPES), then the profile's own reward and PPO
@@ -217,6 +223,29 @@ MUJOCO = dataclasses.replace(
 45 cells × 240 k steps = 10.8 M steps. Measured: 36 cells (4 DMs × 3 seeds) took 38 min on
 2 workers of a 2-core machine (106–152 s a cell), so the 45 of five seeds take about 50."""
 
+DMC = dataclasses.replace(
+    PAPER,
+    name="dmc",
+    summary="DeepMind Control's Walker-walk and Cheetah-run at 100 preferences, 2 seeds, "
+    "100 k + 200 k PPO steps per cell",
+    envs=("dm_control/walker-walk-v0", "dm_control/cheetah-run-v0"),
+    seeds=2,
+    comparisons=100,
+    pair_cap=1.0,
+    budgets={},
+    default_budget=EnvBudget(steps=100_000, final_steps=200_000),
+    eval_episodes=5,
+    ppo=dataclasses.replace(PPO_PRESETS["mujoco"], tensorboard=False),
+)
+"""The paper's protocol on two DeepMind Control tasks (the ``[dmc]`` extra), counted as the
+preference-based RL literature counts (issue 42): 100 preferences, i.e. 100 comparisons with
+every DM held to one preference pair per comparison (`pair_cap` 1.0), in 5 rounds, then PPO
+on the frozen learned reward; PPO's MuJoCo settings (both are MuJoCo bodies with 1,000-step
+episodes). 300 k PPO steps per cell: a fraction of the 0.5–1 M SAC steps the published
+tables (PEBBLE, SURF, QPA, PPE) run, sized so that the 12 cells and their 4 true-reward
+references (`reference.train_on_true_reward`) fit in a session on two cores
+(`research/dmc_study.py`). Measured: PPO runs at ~1,500 env steps/s on Walker-walk, one core."""
+
 QUICK = StudyProfile(
     name="quick",
     summary="GridWorld and MountainCarContinuous, 2 seeds, tiny budgets: ~2 min on 2 cores",
@@ -250,6 +279,6 @@ SMOKE = StudyProfile(
 )
 
 PROFILES: dict[str, StudyProfile] = {
-    p.name: p for p in (PAPER, LOCAL, SESSION, MUJOCO, QUICK, SMOKE)
+    p.name: p for p in (PAPER, LOCAL, SESSION, MUJOCO, DMC, QUICK, SMOKE)
 }
 """Every profile by name; `StudyProfile.hidden` ones are for tests."""
