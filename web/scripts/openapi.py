@@ -11,7 +11,7 @@ from pathlib import Path
 
 from groupwise.server.app import create_app
 from groupwise.server.config import AppConfig
-from groupwise.server.schemas import limits
+from groupwise.server.schemas.base import limits
 
 with tempfile.TemporaryDirectory() as tmp:
     app = create_app(AppConfig(data_dir=Path(tmp), start_worker=False))

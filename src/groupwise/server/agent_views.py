@@ -8,15 +8,23 @@ from typing import cast
 from groupwise.agent_file.summary import AGENT_VIDEO, AGENT_ZIP, AgentSummary, read_summary
 from groupwise.run.agent_package import NoCheckpointError, UnknownRoundError, pick_round
 from groupwise.run.checkpoint import checkpoint_dir
-from groupwise.server import schemas
 from groupwise.server.context import AppContext
+from groupwise.server.schemas.agent import (
+    AgentOut,
+    AgentRound,
+    AgentTarget,
+    AgentVideo,
+    ChosenBy,
+    ContinueIn,
+)
+from groupwise.server.schemas.sessions import SessionState
 from groupwise.server.state import read_state
 from groupwise.storage import ConflictError, NotFoundError, ending
 from groupwise.storage.phases import FINISHED
 from groupwise.storage.sessions import get_session, session_directory
 
 
-def finish_now(context: AppContext, session_id: str) -> schemas.SessionState:
+def finish_now(context: AppContext, session_id: str) -> SessionState:
     """No more rounds after the current one (`storage.ending.finish_now`). Raises
     NotFoundError, ConflictError."""
     with context.db.write() as s:
@@ -25,9 +33,7 @@ def finish_now(context: AppContext, session_id: str) -> schemas.SessionState:
     return read_state(context.db, session_id, context.viewer())
 
 
-def continue_training(
-    context: AppContext, session_id: str, request: schemas.ContinueIn
-) -> schemas.SessionState:
+def continue_training(context: AppContext, session_id: str, request: ContinueIn) -> SessionState:
     """More PPO steps or more rounds for a finished session. Raises NotFoundError,
     ConflictError, InvalidError."""
     with context.db.write() as s:
@@ -54,13 +60,13 @@ def _summary(context: AppContext, session_id: str) -> tuple[AgentSummary, Path]:
     return summary, directory
 
 
-def agent(context: AppContext, session_id: str) -> schemas.AgentOut:
+def agent(context: AppContext, session_id: str) -> AgentOut:
     """The finished session's agent summary. Raises NotFoundError, ConflictError."""
     summary, directory = _summary(context, session_id)
     return _agent_out(summary, directory)
 
 
-def pick(context: AppContext, session_id: str, round_index: int) -> schemas.AgentOut:
+def pick(context: AppContext, session_id: str, round_index: int) -> AgentOut:
     """Hand over round `round_index`'s policy (`agent_package.pick_round`). Raises
     NotFoundError (no such round), ConflictError (not finished, or no checkpoint)."""
     _, directory = _summary(context, session_id)
@@ -82,28 +88,28 @@ def round_video(context: AppContext, session_id: str, round_index: int) -> Path:
     return directory / video.file
 
 
-def _agent_out(summary: AgentSummary, directory: Path) -> schemas.AgentOut:
+def _agent_out(summary: AgentSummary, directory: Path) -> AgentOut:
     data = asdict(summary)
-    return schemas.AgentOut(
+    return AgentOut(
         env=summary.env,
         round=summary.round,
         env_steps=summary.env_steps,
         measure=summary.measure,
         true_return_mean=summary.true_return_mean,
         true_return_std=summary.true_return_std,
-        target=None if summary.target is None else schemas.AgentTarget(**data["target"]),
+        target=None if summary.target is None else AgentTarget(**data["target"]),
         target_score_mean=summary.target_score_mean,
         target_score_std=summary.target_score_std,
-        video=None if summary.video is None else schemas.AgentVideo(**data["video"]),
+        video=None if summary.video is None else AgentVideo(**data["video"]),
         rounds=[
-            schemas.AgentRound(
+            AgentRound(
                 **{k: v for k, v in r.items() if k != "video"},
                 video=r["video"] is not None,
                 checkpoint=(checkpoint_dir(directory, r["round"]) / "policy.zip").is_file(),
             )
             for r in data["rounds"]
         ],
-        chosen_by=cast(schemas.ChosenBy, summary.chosen_by),
+        chosen_by=cast(ChosenBy, summary.chosen_by),
     )
 
 

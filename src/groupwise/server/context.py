@@ -7,7 +7,7 @@ from threading import Lock
 
 from groupwise.clips.store import ClipStore
 from groupwise.server.config import AppConfig
-from groupwise.server.schemas import TreeNodeOut
+from groupwise.server.schemas.rounds import TreeNodeOut
 from groupwise.storage import Database
 from groupwise.storage.annotators import OWNER_CALLER, Caller, by_token
 from groupwise.storage.team import ScoreSource, pool_scores

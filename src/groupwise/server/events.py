@@ -30,7 +30,8 @@ import anyio
 from pydantic import BaseModel
 
 from groupwise.server.context import Viewer
-from groupwise.server.schemas import RoundEvent, SessionState
+from groupwise.server.schemas.rounds import RoundEvent
+from groupwise.server.schemas.sessions import SessionState
 from groupwise.server.state import close_if_due, judgement_out, read_state
 from groupwise.server.training_views import point_out
 from groupwise.storage import Database

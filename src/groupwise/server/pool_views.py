@@ -12,8 +12,16 @@ from pathlib import Path
 from typing import Any
 
 from groupwise.episodes.ids import behaviour_id
-from groupwise.server import schemas
 from groupwise.server.context import AppContext
+from groupwise.server.schemas.pairwise import PairQuery, PairSkip, PairwiseNext
+from groupwise.server.schemas.rounds import (
+    ClipTiming,
+    Edge,
+    RoundTree,
+    Suggestion,
+    SuggestionOut,
+    TreeNodeOut,
+)
 from groupwise.storage import ConflictError, Database, InvalidError, NotFoundError
 from groupwise.storage import rounds as repo
 from groupwise.storage.annotators import OWNER_CALLER, Caller, list_annotators
@@ -43,18 +51,18 @@ def _pool_directory(context: AppContext, row: RoundRow) -> Path:
     return directory
 
 
-def clip_timing(directory: Path) -> schemas.ClipTiming | None:
+def clip_timing(directory: Path) -> ClipTiming | None:
     """The clip timing a pool's ``pool.json`` records (None for pools from before it)."""
     try:
         clip = json.loads((directory / "pool.json").read_text()).get("clip")
-        return schemas.ClipTiming.model_validate(clip) if clip else None
+        return ClipTiming.model_validate(clip) if clip else None
     except (OSError, ValueError):
         return None
 
 
-def _node(obj: dict[str, Any]) -> schemas.TreeNodeOut:
+def _node(obj: dict[str, Any]) -> TreeNodeOut:
     extra = obj.get("extra") or {}
-    return schemas.TreeNodeOut(
+    return TreeNodeOut(
         id=obj["id"],
         kind=obj["kind"],
         level=obj["level"],
@@ -68,7 +76,7 @@ def _node(obj: dict[str, Any]) -> schemas.TreeNodeOut:
 
 def _tree(
     context: AppContext, session_id: str, row: RoundRow
-) -> tuple[schemas.TreeNodeOut, int, dict[str, list[str]]]:
+) -> tuple[TreeNodeOut, int, dict[str, list[str]]]:
     key = (session_id, row.index)
     with context.trees_lock:
         cached = context.trees.get(key)
@@ -85,13 +93,13 @@ def _tree(
     return value
 
 
-def round_tree(context: AppContext, session_id: str, index: int) -> schemas.RoundTree:
+def round_tree(context: AppContext, session_id: str, index: int) -> RoundTree:
     """The tree view of round `index`. Raises NotFoundError, ConflictError (preparing)."""
     row = _prepared_round(context.db, session_id, index)
     tree, levels, medoids = _tree(context, session_id, row)
     with context.db.read() as s:
         compared = repo.compared(s, row)
-    return schemas.RoundTree(
+    return RoundTree(
         round=index,
         levels=levels,
         clip=clip_timing(_pool_directory(context, row)),
@@ -101,11 +109,11 @@ def round_tree(context: AppContext, session_id: str, index: int) -> schemas.Roun
     )
 
 
-def round_edges(db: Database, session_id: str, index: int, k: int) -> list[schemas.Edge]:
+def round_edges(db: Database, session_id: str, index: int, k: int) -> list[Edge]:
     """The round's `k` best pairwise suggestion edges, best first."""
     row = _prepared_round(db, session_id, index)
     with db.read() as s:
-        return [schemas.Edge(a=e.a, b=e.b, score=e.score) for e in repo.edges(s, row.id, k)]
+        return [Edge(a=e.a, b=e.b, score=e.score) for e in repo.edges(s, row.id, k)]
 
 
 def _lease_s(db: Database, session_id: str) -> float:
@@ -122,7 +130,7 @@ def next_suggestion(
     index: int,
     exclude: Sequence[Sequence[str]] | None,
     caller: Caller = OWNER_CALLER,
-) -> schemas.SuggestionOut:
+) -> SuggestionOut:
     """The best unused group suggestion of the round for `caller`, skipping `exclude`
     (consecutive [left], [right] lists) and what is leased to others; in a shared session
     leased to `caller` (`storage.rounds.next_suggestion`). Raises InvalidError for an odd
@@ -136,9 +144,9 @@ def next_suggestion(
     with db.write() if lease_s > 0 else db.read() as s:
         found = repo.next_suggestion(s, row.id, queries, holder=caller.id, lease_s=lease_s)
         if found is None:
-            return schemas.SuggestionOut(suggestion=None)
-        return schemas.SuggestionOut(
-            suggestion=schemas.Suggestion(
+            return SuggestionOut(suggestion=None)
+        return SuggestionOut(
+            suggestion=Suggestion(
                 id=found.id,
                 left=list(found.left),
                 right=list(found.right),
@@ -164,7 +172,7 @@ def _open_round(db: Database, session_id: str, index: int | None = None) -> Roun
 
 def pairwise_next(
     context: AppContext, session_id: str, caller: Caller = OWNER_CALLER
-) -> schemas.PairwiseNext:
+) -> PairwiseNext:
     """The pair to ask `caller` now and the one after it (the page preloads both clips);
     in a shared session the first is leased to them."""
     db = context.db
@@ -174,9 +182,9 @@ def pairwise_next(
         queue = repo.pairwise_next(s, row.id, 2, holder=caller.id, lease_s=lease_s)
         clips = {b.name: b for b in repo.behaviours(s, row.id)}
 
-    def query(entry: Any) -> schemas.PairQuery:
+    def query(entry: Any) -> PairQuery:
         left, right = clips[entry.a], clips[entry.b]
-        return schemas.PairQuery(
+        return PairQuery(
             left=entry.a,
             right=entry.b,
             left_clip=left.clip,
@@ -190,7 +198,7 @@ def pairwise_next(
         clip = clip_timing(_pool_directory(context, row))
     except NotFoundError:
         clip = None
-    return schemas.PairwiseNext(
+    return PairwiseNext(
         pair=pairs[0] if pairs else None,
         following=pairs[1] if len(pairs) > 1 else None,
         clip=clip,
@@ -198,8 +206,8 @@ def pairwise_next(
 
 
 def skip_pair(
-    context: AppContext, session_id: str, skip: schemas.PairSkip, caller: Caller = OWNER_CALLER
-) -> schemas.PairwiseNext:
+    context: AppContext, session_id: str, skip: PairSkip, caller: Caller = OWNER_CALLER
+) -> PairwiseNext:
     """Skip a pair of the open round's queue; the next pairs. Raises NotFoundError."""
     row = _open_round(context.db, session_id)
     with context.db.write() as s:

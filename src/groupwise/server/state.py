@@ -17,8 +17,11 @@ from sqlalchemy.orm import Session as DbSession
 from groupwise.envs import horizon, make_env
 from groupwise.envs.datasets import check_dataset_env, open_dataset
 from groupwise.envs.episodes import check_episode_length
-from groupwise.server import schemas
 from groupwise.server.context import AppContext, Viewer
+from groupwise.server.schemas.annotators import AgreementOut, AnnotatorOut, MeOut, ModelAgreementOut
+from groupwise.server.schemas.judgements import AnnotatorRef, JudgementOut, PairOut
+from groupwise.server.schemas.sessions import Counts as CountsOut
+from groupwise.server.schemas.sessions import Progress, SessionCreate, SessionState, Timer
 from groupwise.storage import Database, InvalidError, lifecycle, sessions, timer
 from groupwise.storage.annotators import OWNER, Caller, owner_name, record_view
 from groupwise.storage.counts import Counts, counts
@@ -28,27 +31,27 @@ from groupwise.storage.settings import SessionSettings
 from groupwise.storage.team import AnnotatorStats, team_stats
 
 
-def annotator_out(stats: AnnotatorStats) -> schemas.AnnotatorOut:
+def annotator_out(stats: AnnotatorStats) -> AnnotatorOut:
     """A team member's row as the page shows it."""
-    return schemas.AnnotatorOut(
+    return AnnotatorOut(
         id=stats.id,
         name=stats.name,
         comparisons=stats.comparisons,
         pairs=stats.pairs,
         shown_s=stats.shown_s,
-        agreement=schemas.AgreementOut(
+        agreement=AgreementOut(
             kappa=stats.agreement.kappa, share=stats.agreement.share, n=stats.agreement.n
         ),
-        model_agreement=schemas.ModelAgreementOut(
+        model_agreement=ModelAgreementOut(
             share=stats.model_agreement.share, n=stats.model_agreement.n
         ),
     )
 
 
-def me_of(session: SessionRow, caller: Caller) -> schemas.MeOut:
+def me_of(session: SessionRow, caller: Caller) -> MeOut:
     """Who `caller` is in `session`."""
     name = owner_name(session) if caller.is_owner else caller.name
-    return schemas.MeOut(id=caller.id, name=name, owner=caller.is_owner)
+    return MeOut(id=caller.id, name=name, owner=caller.is_owner)
 
 
 def state_of(
@@ -57,13 +60,13 @@ def state_of(
     now: datetime,
     shown_at: datetime | None = None,
     *,
-    me: schemas.MeOut | None = None,
+    me: MeOut | None = None,
     team: Sequence[AnnotatorStats] = (),
-) -> schemas.SessionState:
+) -> SessionState:
     """The `SessionState` of a session row (`shown_at`: its current round's; `me`: the
     caller, default the owner; `team`: `storage.team.team_stats`)."""
     settings = SessionSettings.stored(session.settings)
-    return schemas.SessionState(
+    return SessionState(
         id=session.id,
         env=session.env,
         mode=session.mode,  # type: ignore[arg-type]  # one of MODES, checked on creation
@@ -72,21 +75,21 @@ def state_of(
         round=session.round,
         rounds=settings.rounds,
         phase=session.phase,  # type: ignore[arg-type]  # one of PHASES
-        progress=schemas.Progress(
+        progress=Progress(
             phase=session.progress_phase,
             fraction=session.progress_fraction,
             message=session.progress_message,
         ),
         error=session.error,
         failed_phase=session.failed_phase if session.phase == "failed" else None,  # type: ignore[arg-type]  # one of WORK_PHASES
-        timer=schemas.Timer(
+        timer=Timer(
             elapsed_s=round(timer.elapsed(session, now), 3),
             budget_s=settings.round_seconds,
             paused=session.paused,
             running=session.timer_started_at is not None,
             shown_at=shown_at,
         ),
-        counts=schemas.Counts(
+        counts=CountsOut(
             comparisons_round=counted.comparisons_round,
             pairs_round=counted.pairs_round,
             comparisons_total=counted.comparisons_total,
@@ -94,7 +97,7 @@ def state_of(
         ),
         created_at=session.created_at,
         origin=session.origin,
-        me=me or schemas.MeOut(id=OWNER, name=owner_name(session), owner=True),
+        me=me or MeOut(id=OWNER, name=owner_name(session), owner=True),
         annotators=[annotator_out(stats) for stats in team],
     )
 
@@ -113,9 +116,7 @@ def close_if_due(db: Database, session_id: str) -> int:
         return sessions.get_session(s, session_id).revision
 
 
-def _state(
-    s: DbSession, session: SessionRow, now: datetime, viewer: Viewer
-) -> schemas.SessionState:
+def _state(s: DbSession, session: SessionRow, now: datetime, viewer: Viewer) -> SessionState:
     return state_of(
         session,
         counts(s, session),
@@ -126,7 +127,7 @@ def _state(
     )
 
 
-def read_state(db: Database, session_id: str, viewer: Viewer | None = None) -> schemas.SessionState:
+def read_state(db: Database, session_id: str, viewer: Viewer | None = None) -> SessionState:
     """The session's current state as `viewer` sees it (default: the owner, without the
     model agreement). Raises NotFoundError."""
     close_if_due(db, session_id)
@@ -134,7 +135,7 @@ def read_state(db: Database, session_id: str, viewer: Viewer | None = None) -> s
         return _state(s, sessions.get_session(s, session_id), utcnow(), viewer or Viewer())
 
 
-def list_states(db: Database, viewer: Viewer | None = None) -> list[schemas.SessionState]:
+def list_states(db: Database, viewer: Viewer | None = None) -> list[SessionState]:
     """Every session's state, newest first; an annotator's own session only."""
     viewer = viewer or Viewer()
     now = utcnow()
@@ -225,7 +226,7 @@ def check_dataset(
     return name, resolved
 
 
-def create_session(context: AppContext, request: schemas.SessionCreate) -> schemas.SessionState:
+def create_session(context: AppContext, request: SessionCreate) -> SessionState:
     """Create a session (its round 0 is queued for the worker). Raises InvalidError."""
     env, settings = check_new_session(request.env, request.settings)
     with context.db.write() as s:
@@ -235,7 +236,7 @@ def create_session(context: AppContext, request: schemas.SessionCreate) -> schem
     return read_state(context.db, session_id, context.viewer())
 
 
-def pause(context: AppContext, session_id: str) -> schemas.SessionState:
+def pause(context: AppContext, session_id: str) -> SessionState:
     with context.db.write() as s:
         timer.pause(s, session_id)
     return read_state(context.db, session_id, context.viewer())
@@ -243,7 +244,7 @@ def pause(context: AppContext, session_id: str) -> schemas.SessionState:
 
 def show_round(
     context: AppContext, session_id: str, round_index: int, caller: Caller
-) -> schemas.SessionState:
+) -> SessionState:
     """`caller`'s page shows the open round: the round's timer starts the first time
     anyone shows it, and the caller's time shown the first time they do. Raises
     NotFoundError, ConflictError."""
@@ -253,20 +254,20 @@ def show_round(
     return read_state(context.db, session_id, context.viewer(caller))
 
 
-def resume(context: AppContext, session_id: str) -> schemas.SessionState:
+def resume(context: AppContext, session_id: str) -> SessionState:
     with context.db.write() as s:
         timer.resume(s, session_id)
     return read_state(context.db, session_id, context.viewer())
 
 
-def close_open_round(context: AppContext, session_id: str) -> schemas.SessionState:
+def close_open_round(context: AppContext, session_id: str) -> SessionState:
     with context.db.write() as s:
         lifecycle.close_open_round(s, session_id)
     context.supervisor.ensure_worker_soon()
     return read_state(context.db, session_id, context.viewer())
 
 
-def retry(context: AppContext, session_id: str) -> schemas.SessionState:
+def retry(context: AppContext, session_id: str) -> SessionState:
     """Re-queue the failed step and make sure a worker runs. Raises ConflictError."""
     with context.db.write() as s:
         lifecycle.retry(s, session_id)
@@ -274,14 +275,14 @@ def retry(context: AppContext, session_id: str) -> schemas.SessionState:
     return read_state(context.db, session_id, context.viewer())
 
 
-def judgement_out(record: JudgementRecord, names: Mapping[str, str]) -> schemas.JudgementOut:
+def judgement_out(record: JudgementRecord, names: Mapping[str, str]) -> JudgementOut:
     """The page's view of a stored judgement; `names`: id → name of the session's people
     (`storage.annotators.display_names`)."""
     if record.annotator_id == OWNER:  # the owner's own name for it, if they gave one
         name = record.annotator or names.get(OWNER, OWNER)
     else:
         name = names.get(record.annotator_id, record.annotator or record.annotator_id)
-    return schemas.JudgementOut(
+    return JudgementOut(
         id=record.id,
         client_id=record.client_id,
         round=record.round,
@@ -291,9 +292,9 @@ def judgement_out(record: JudgementRecord, names: Mapping[str, str]) -> schemas.
         source=record.source,
         seconds=record.seconds,
         edits=record.edits,
-        annotator=schemas.AnnotatorRef(id=record.annotator_id, name=name),
+        annotator=AnnotatorRef(id=record.annotator_id, name=name),
         suggestion_id=record.suggestion_id,
         created_at=record.created_at,
         undone=record.undone,
-        pairs=[schemas.PairOut(a=p.a, b=p.b, label=p.label) for p in record.pairs],
+        pairs=[PairOut(a=p.a, b=p.b, label=p.label) for p in record.pairs],
     )

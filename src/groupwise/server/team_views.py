@@ -1,8 +1,8 @@
 """A session's team as the page sees it: adding, listing and removing annotators
 (docs/teams.md; `storage.annotators`, `storage.team`)."""
 
-from groupwise.server import schemas
 from groupwise.server.context import AppContext
+from groupwise.server.schemas.annotators import AnnotatorCreated, AnnotatorIn, AnnotatorOut
 from groupwise.server.state import annotator_out, close_if_due
 from groupwise.storage import InvalidError
 from groupwise.storage import annotators as repo
@@ -19,13 +19,13 @@ def link(base_url: str, session_id: str, token: str) -> str:
 
 
 def add(
-    context: AppContext, session_id: str, request: schemas.AnnotatorIn, base_url: str
-) -> schemas.AnnotatorCreated:
+    context: AppContext, session_id: str, request: AnnotatorIn, base_url: str
+) -> AnnotatorCreated:
     """Add an annotator with a new token. Raises NotFoundError, InvalidError (the name),
     ConflictError (a name already there)."""
     with context.db.write() as s:
         added = repo.add_annotator(s, session_id, request.name)
-    return schemas.AnnotatorCreated(
+    return AnnotatorCreated(
         id=added.id,
         name=added.name,
         token=added.token,
@@ -33,7 +33,7 @@ def add(
     )
 
 
-def team(context: AppContext, session_id: str) -> list[schemas.AnnotatorOut]:
+def team(context: AppContext, session_id: str) -> list[AnnotatorOut]:
     """The owner and the present annotators with their counters and agreement."""
     close_if_due(context.db, session_id)
     with context.db.read() as s:

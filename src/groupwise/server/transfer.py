@@ -3,7 +3,7 @@
 from dataclasses import dataclass
 from pathlib import Path
 
-from groupwise.server import schemas
+from groupwise.server.schemas.sessions import SessionState
 from groupwise.server.state import read_state
 from groupwise.storage import Database, InvalidError
 from groupwise.storage import export as repo
@@ -56,9 +56,7 @@ def export_file(
     return ExportFile(write(export), media_type, f"{session_id}.{fmt}")
 
 
-def import_file(
-    db: Database, body: bytes, content_type: str, data_dir: Path
-) -> schemas.SessionState:
+def import_file(db: Database, body: bytes, content_type: str, data_dir: Path) -> SessionState:
     """Import an export into a new, finished session (its states, if any, into `data_dir`).
     Raises InvalidError."""
     kind = content_type.split(";", 1)[0].strip().lower()

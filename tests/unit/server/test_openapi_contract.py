@@ -5,7 +5,7 @@ from pathlib import Path
 
 from groupwise.server.app import create_app
 from groupwise.server.config import AppConfig
-from groupwise.server.schemas import limits
+from groupwise.server.schemas.base import limits
 
 WEB = Path(__file__).resolve().parents[3] / "web"
 SAVED = WEB / "openapi.json"

@@ -2,7 +2,7 @@
 
 from typing import Any
 
-from groupwise.server.schemas import ErrorOut
+from groupwise.server.schemas.base import ErrorOut
 
 ERRORS: dict[int | str, dict[str, Any]] = {
     code: {"model": ErrorOut, "description": text}

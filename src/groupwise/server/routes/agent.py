@@ -7,7 +7,8 @@ from groupwise.agent_file.summary import AGENT_VIDEO, AGENT_ZIP
 from groupwise.server import agent_views
 from groupwise.server.deps import Context, SessionId, owner_only
 from groupwise.server.routes import ERRORS
-from groupwise.server.schemas import AgentOut, AgentPickIn, ContinueIn, SessionState
+from groupwise.server.schemas.agent import AgentOut, AgentPickIn, ContinueIn
+from groupwise.server.schemas.sessions import SessionState
 
 router = APIRouter(prefix="/api/sessions", tags=["agent"], responses=ERRORS)
 

@@ -7,7 +7,7 @@ from fastapi import APIRouter, Depends, Path, Request, Response, status
 from groupwise.server import team_views
 from groupwise.server.deps import Context, SessionId, owner_only
 from groupwise.server.routes import ERRORS
-from groupwise.server.schemas import AnnotatorCreated, AnnotatorIn, AnnotatorOut
+from groupwise.server.schemas.annotators import AnnotatorCreated, AnnotatorIn, AnnotatorOut
 
 router = APIRouter(
     prefix="/api/sessions/{session_id}/annotators", tags=["annotators"], responses=ERRORS

@@ -7,7 +7,7 @@ from fastapi import APIRouter, Path, Query, Response, status
 from groupwise.server import state
 from groupwise.server.deps import Context, Me, SessionId
 from groupwise.server.routes import ERRORS
-from groupwise.server.schemas import JudgementIn, JudgementOut
+from groupwise.server.schemas.judgements import JudgementIn, JudgementOut
 from groupwise.storage import judgements as repo
 from groupwise.storage.annotators import Caller, display_names
 from groupwise.storage.sessions import get_session

@@ -8,7 +8,7 @@ from groupwise.clips.timing import default_clip_seconds
 from groupwise.envs import ENVS, TARGET_ENVS, TARGETS, EnvEntry
 from groupwise.server.deps import Context
 from groupwise.server.routes import ERRORS
-from groupwise.server.schemas import EnvOut, Health, TargetOut
+from groupwise.server.schemas.meta import EnvOut, Health, TargetOut
 
 router = APIRouter(prefix="/api", tags=["meta"], responses=ERRORS)
 

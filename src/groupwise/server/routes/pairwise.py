@@ -5,7 +5,7 @@ from fastapi import APIRouter
 from groupwise.server import pool_views
 from groupwise.server.deps import Context, Me, SessionId
 from groupwise.server.routes import ERRORS
-from groupwise.server.schemas import PairSkip, PairwiseNext
+from groupwise.server.schemas.pairwise import PairSkip, PairwiseNext
 
 router = APIRouter(
     prefix="/api/sessions/{session_id}/pairwise", tags=["pairwise"], responses=ERRORS

@@ -8,13 +8,8 @@ from fastapi import APIRouter, Query
 from groupwise.server import pool_views, state
 from groupwise.server.deps import Context, Me, RoundIndex, SessionId
 from groupwise.server.routes import ERRORS
-from groupwise.server.schemas import (
-    Edge,
-    RoundTree,
-    SessionState,
-    SuggestionOut,
-    SuggestionRequest,
-)
+from groupwise.server.schemas.rounds import Edge, RoundTree, SuggestionOut, SuggestionRequest
+from groupwise.server.schemas.sessions import SessionState
 
 router = APIRouter(prefix="/api/sessions/{session_id}/rounds", tags=["rounds"], responses=ERRORS)
 

@@ -5,7 +5,7 @@ from fastapi import APIRouter, Depends, status
 from groupwise.server import state
 from groupwise.server.deps import Context, Me, SessionId, owner_only
 from groupwise.server.routes import ERRORS
-from groupwise.server.schemas import SessionCreate, SessionState
+from groupwise.server.schemas.sessions import SessionCreate, SessionState
 
 router = APIRouter(prefix="/api/sessions", tags=["sessions"], responses=ERRORS)
 

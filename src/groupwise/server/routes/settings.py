@@ -4,7 +4,7 @@ from fastapi import APIRouter
 
 from groupwise.server import state
 from groupwise.server.routes import ERRORS
-from groupwise.server.schemas import SessionCreate
+from groupwise.server.schemas.sessions import SessionCreate
 from groupwise.storage.settings import SessionSettings
 
 router = APIRouter(prefix="/api/settings", tags=["settings"], responses=ERRORS)

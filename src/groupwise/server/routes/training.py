@@ -5,7 +5,7 @@ from fastapi import APIRouter
 from groupwise.server import training_views
 from groupwise.server.deps import Context, SessionId
 from groupwise.server.routes import ERRORS
-from groupwise.server.schemas import TrainingCurve
+from groupwise.server.schemas.training import TrainingCurve
 
 router = APIRouter(prefix="/api/sessions/{session_id}", tags=["training"], responses=ERRORS)
 

@@ -8,7 +8,7 @@ from fastapi import APIRouter, Query, Request, Response, status
 from groupwise.server import transfer
 from groupwise.server.deps import Context, SessionId
 from groupwise.server.routes import ERRORS
-from groupwise.server.schemas import SessionState
+from groupwise.server.schemas.sessions import SessionState
 
 router = APIRouter(prefix="/api/sessions", tags=["export"], responses=ERRORS)
 
