@@ -84,7 +84,7 @@ def teacher_of(dm: str, label_error: float):
     """The case studies' simulated teacher of decision-maker `dm`, calibrated to `label_error`."""
     cfg = RunConfig(teacher=TeacherConfig(label_error=label_error))
     return DECISION_MAKERS[dm](
-        dataclasses.replace(cfg, loop=dataclasses.replace(cfg.loop, oracle=dm))
+        dataclasses.replace(cfg, loop=dataclasses.replace(cfg.loop, decision_maker=dm))
     )
 
 

@@ -175,7 +175,8 @@ def run_rows(run: Path, folder: Path) -> tuple[list[dict[str, str]], dict[str, s
             strict=True,
         )
     }
-    dm = summary.get("decision_maker") or config["loop"].get("oracle", "")
+    loop = config["loop"]  # runs written before issue 38 name the decision-maker "oracle"
+    dm = summary.get("decision_maker") or loop.get("decision_maker", loop.get("oracle", ""))
     setup = run.parent.relative_to(folder).as_posix() if run != folder else ""
     base = {
         "folder": folder.name,

@@ -187,8 +187,9 @@ class LoopConfig:
 
     env: str = "GridWorld"
     """A groupwise env name (see `groupwise.envs.ENVS`) or any Gymnasium id."""
-    oracle: str = "pairwise"
-    """Who gives feedback: a simulated decision-maker from `groupwise.teachers.DECISION_MAKERS`."""
+    decision_maker: str = "pairwise"
+    """Who gives feedback: a simulated decision-maker from `groupwise.teachers.DECISION_MAKERS`,
+    or "human" (a person, through the app)."""
     comparisons: PositiveInt = 100
     """Total comparisons (queries) over the whole session."""
     rounds: PositiveInt = 5
@@ -378,14 +379,15 @@ class RunConfig:
     def from_dict(cls, data: dict[str, Any]) -> "RunConfig":
         """Validate a config read from JSON (lists become tuples; unknown fields fail).
 
-        Configs written before `TeacherConfig` existed (their teacher fields inside "loop",
-        `LEGACY_TEACHER_FIELDS`) are read as if written now; the fields of mechanisms
+        Configs written with an old name of a loop field (`LEGACY_LOOP_FIELDS`: the teacher
+        fields before `TeacherConfig` existed, "oracle") are read as if written now; the
+        fields of mechanisms
         removed since (`REMOVED_FIELDS`) are dropped, with a warning when one was in use.
 
         Raises:
             ValueError: a field fails validation, or an old and a new name give one field.
         """
-        return _RUN_CONFIG.validate_python(_removed_dropped(_teacher_moved_out_of_loop(data)))
+        return _RUN_CONFIG.validate_python(_removed_dropped(_legacy_loop_fields_moved(data)))
 
     def merged(self, partial: Mapping[str, Any]) -> "RunConfig":
         """This config with the fields `partial` gives replaced, section by section (a
@@ -400,7 +402,7 @@ class RunConfig:
             raise ValueError(f"a config is a JSON object, got {type(partial).__name__}")
         base = dataclasses.asdict(self)
         merged = dict(base)
-        for section, fields in _teacher_moved_out_of_loop(dict(partial)).items():
+        for section, fields in _legacy_loop_fields_moved(dict(partial)).items():
             if section in base and isinstance(fields, Mapping):
                 merged[section] = {**base[section], **fields}
             else:
@@ -416,16 +418,19 @@ PPOPreset = Literal["study", "mujoco"]
 """A key of `PPO_PRESETS`."""
 
 
-LEGACY_TEACHER_FIELDS = {
-    "noise_sigma": "noise_sigma",
-    "interactive_gap": "interactive_gap",
-    "interactive_clear": "interactive_clear",
-    "teacher_gamma": "gamma",
-    "teacher_mistake": "mistake",
-    "teacher_skip_quantile": "skip_quantile",
-    "teacher_equal_fraction": "equal_fraction",
+LEGACY_LOOP_FIELDS: dict[str, tuple[str, str]] = {
+    "noise_sigma": ("teacher", "noise_sigma"),
+    "interactive_gap": ("teacher", "interactive_gap"),
+    "interactive_clear": ("teacher", "interactive_clear"),
+    "teacher_gamma": ("teacher", "gamma"),
+    "teacher_mistake": ("teacher", "mistake"),
+    "teacher_skip_quantile": ("teacher", "skip_quantile"),
+    "teacher_equal_fraction": ("teacher", "equal_fraction"),
+    "oracle": ("loop", "decision_maker"),
 }
-"""Old `LoopConfig` field → its `TeacherConfig` field (issue 19 moved them out of the loop)."""
+"""Old `LoopConfig` field → the section and field that hold it now: issue 19 moved the
+teacher's fields out of the loop into `TeacherConfig`; issue 38 renamed "oracle" to
+`decision_maker` (one word for one concept)."""
 
 
 REMOVED_FIELDS: dict[str, dict[str, Any]] = {
@@ -466,26 +471,32 @@ def _removed_dropped(data: dict[str, Any]) -> dict[str, Any]:
     return cleaned
 
 
-def _teacher_moved_out_of_loop(data: dict[str, Any]) -> dict[str, Any]:
-    """`data` with the teacher fields of an old layout's "loop" moved into "teacher"."""
+def _legacy_loop_fields_moved(data: dict[str, Any]) -> dict[str, Any]:
+    """`data` with the fields of an old layout's "loop" (`LEGACY_LOOP_FIELDS`) under the
+    section and name that hold them now.
+
+    Raises:
+        ValueError: a field is given under both its old and its new name.
+    """
     loop = data.get("loop")
-    if not isinstance(loop, dict) or not loop.keys() & LEGACY_TEACHER_FIELDS.keys():
+    if not isinstance(loop, dict) or not loop.keys() & LEGACY_LOOP_FIELDS.keys():
         return data
-    teacher = data.get("teacher", {})
-    if not isinstance(teacher, dict):
-        return data  # validation names the bad value
-    moved = {
-        LEGACY_TEACHER_FIELDS[key]: value
-        for key, value in loop.items()
-        if key in LEGACY_TEACHER_FIELDS
+    sections: dict[str, dict[str, Any]] = {
+        "loop": {key: value for key, value in loop.items() if key not in LEGACY_LOOP_FIELDS}
     }
-    if clash := sorted(moved.keys() & teacher.keys()):
-        raise ValueError(f"teacher field(s) {', '.join(clash)} given in both loop and teacher")
-    return {
-        **data,
-        "loop": {key: value for key, value in loop.items() if key not in LEGACY_TEACHER_FIELDS},
-        "teacher": {**teacher, **moved},
-    }
+    for key, value in loop.items():
+        if key not in LEGACY_LOOP_FIELDS:
+            continue
+        section, name = LEGACY_LOOP_FIELDS[key]
+        if section not in sections:
+            given = data.get(section, {})
+            if not isinstance(given, dict):
+                return data  # validation names the bad value
+            sections[section] = dict(given)
+        if name in sections[section]:
+            raise ValueError(f"{section}.{name} is given twice: also as loop.{key}, its old name")
+        sections[section][name] = value
+    return {**data, **sections}
 
 
 _RUN_CONFIG = TypeAdapter(RunConfig)

@@ -126,7 +126,7 @@ def test_backflip_case_study_writes_rounds_video_and_strip(tmp_path, capsys):
     assert float(rows[1]["wall_s"]) > float(rows[0]["wall_s"])
 
     config = json.loads((out / CONFIG_FILE).read_text())["loop"]
-    assert config["env"] == "Hopper-backflip" and config["oracle"] == "groupwise"
+    assert config["env"] == "Hopper-backflip" and config["decision_maker"] == "groupwise"
     assert config["fragment_length"] == 30 and config["steps"] == 4096
     saved = json.loads((out / CONFIG_FILE).read_text())
     assert saved["reward"]["use_actions"] is False  # a target has no action cost

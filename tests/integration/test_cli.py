@@ -27,7 +27,8 @@ def _run(*args: str) -> subprocess.CompletedProcess:
         (["--env", "NoSuchEnv"], "NoSuchEnv"),
         (["--env", "GridWorld", "--comparisons", "0"], "comparisons"),
         (["--env", "GridWorld", "--rounds", "two"], "whole number"),
-        (["--env", "GridWorld", "--oracle", "psychic"], "psychic"),
+        (["--env", "GridWorld", "--dm", "psychic"], "unknown decision-maker 'psychic'"),
+        (["--env", "GridWorld", "--oracle", "pairwise"], "--oracle"),  # the old name is gone
     ],
 )
 def test_bad_input_is_one_line_and_exit_code_2(tmp_path, capsys, args, message):

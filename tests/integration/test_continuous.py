@@ -29,7 +29,12 @@ from groupwise.run.run import RESULTS_FILE, Run
 PACE, RATE = 2.0, 96.0  # 192 PPO steps per answer: one and a half rollouts
 CONTINUOUS = RunConfig(
     loop=LoopConfig(
-        env="GridWorld", oracle="groupwise", comparisons=16, rounds=2, eval_episodes=2, seed=5
+        env="GridWorld",
+        decision_maker="groupwise",
+        comparisons=16,
+        rounds=2,
+        eval_episodes=2,
+        seed=5,
     ),
     teacher=TeacherConfig(pace_s=PACE),
     training=TrainingConfig(mode="continuous", ppo_steps_per_s=RATE, refit_pairs=6, refit_s=9),

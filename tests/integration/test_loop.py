@@ -93,7 +93,10 @@ def test_resume_refuses_a_different_configuration(tmp_path):
 
 def test_a_pair_cap_keeps_one_pair_per_comparison(tmp_path):
     capped = dataclasses.replace(
-        TINY, loop=dataclasses.replace(TINY.loop, oracle="groupwise", comparisons=24, pair_cap=1.0)
+        TINY,
+        loop=dataclasses.replace(
+            TINY.loop, decision_maker="groupwise", comparisons=24, pair_cap=1.0
+        ),
     )
     records = run_session(capped, tmp_path, show_progress=False)
     assert all(r.pairs <= r.comparisons for r in records)

@@ -40,12 +40,12 @@ def test_rlhf_beats_random_and_closes_the_gap_to_true_reward_ppo(env, tmp_path):
         make, RandomPolicy(make().action_space), EVAL_EPISODES, eval_rng
     ).mean()
 
-    oracle_ppo = PPOAgent(make, PPOConfig(tensorboard=False), seed=0)
-    oracle_ppo.learn(STEPS, seed=0)
+    true_ppo = PPOAgent(make, PPOConfig(tensorboard=False), seed=0)
+    true_ppo.learn(STEPS, seed=0)
     true_ppo_return = evaluate(
-        make, oracle_ppo.policy(deterministic=True), EVAL_EPISODES, np.random.default_rng(123)
+        make, true_ppo.policy(deterministic=True), EVAL_EPISODES, np.random.default_rng(123)
     ).mean()
-    oracle_ppo.close()
+    true_ppo.close()
 
     cfg = RunConfig(
         loop=LoopConfig(env=env, comparisons=100, rounds=5, steps=STEPS, seed=0),

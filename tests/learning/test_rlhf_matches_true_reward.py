@@ -50,7 +50,7 @@ COLLAPSE = 0.2
 def _loop(seed: int) -> LoopConfig:
     return LoopConfig(
         env=ENV,
-        oracle="pairwise",
+        decision_maker="pairwise",
         comparisons=200,
         rounds=5,
         steps=STEPS,

@@ -30,7 +30,7 @@ def make_run(
     run = folder / name
     run.mkdir(parents=True)
     config = {
-        "loop": {"env": "Hopper-backflip", "oracle": "groupwise", "seed": seed,
+        "loop": {"env": "Hopper-backflip", "decision_maker": "groupwise", "seed": seed,
                  "pool_size": pool_size, "comparisons": 380},
         "reward": {"hidden_sizes": [64, 64], "lr": 0.001},
         "training": {"pretrain_steps": 0},

@@ -82,6 +82,7 @@ def test_configs_stored_with_teacher_fields_in_the_loop_read_as_a_teacher_config
     config = RunConfig(loop=LoopConfig(comparisons=12, seed=3), teacher=teacher)
     stored = _old_layout(config)
     assert "teacher" not in stored and stored["loop"]["teacher_gamma"] == 0.5
+    stored["loop"]["oracle"] = stored["loop"].pop("decision_maker")  # its name then
 
     assert RunConfig.from_dict(stored) == config
     assert RunConfig.from_dict(json.loads(config.to_json())) == config  # the new layout
@@ -96,6 +97,22 @@ def test_a_teacher_field_given_under_its_old_and_new_name_is_refused():
     stored = json.loads(RunConfig().to_json())
     stored["loop"]["teacher_patience"] = 1
     with pytest.raises(ValueError, match="teacher_patience"):
+        RunConfig.from_dict(stored)
+
+
+def test_configs_stored_with_an_oracle_read_it_as_the_decision_maker():
+    """Runs, checkpoints and sessions written before issue 38 named the decision-maker
+    "oracle"."""
+    config = RunConfig(loop=LoopConfig(decision_maker="groupwise", comparisons=12, seed=3))
+    stored = json.loads(config.to_json())
+    stored["loop"]["oracle"] = stored["loop"].pop("decision_maker")
+    assert RunConfig.from_dict(stored) == config
+    assert RunConfig().merged({"loop": {"oracle": "groupwise"}}).loop.decision_maker == "groupwise"
+    research = SessionSettings.model_validate({"research": {"loop": {"oracle": "human"}}})
+    assert research.run_config("GridWorld").loop.decision_maker == "human"
+
+    stored["loop"]["decision_maker"] = "pairwise"
+    with pytest.raises(ValueError, match=r"loop\.decision_maker is given twice"):
         RunConfig.from_dict(stored)
 
 

@@ -220,7 +220,7 @@ def apply_teacher_options(
     mode = args.training or cfg.training.mode
     pace = args.teacher_pace or cfg.teacher.pace_s
     if mode == "continuous" and pace is None:  # the pairwise DMs: "pairwise", "pairwise-…"
-        pace = paper_pace(target, pairwise=cfg.loop.oracle.startswith("pairwise"))
+        pace = paper_pace(target, pairwise=cfg.loop.decision_maker.startswith("pairwise"))
     error = args.teacher_error or cfg.teacher.label_error
     return dataclasses.replace(
         cfg,

@@ -55,7 +55,7 @@ def pair_cap(pairs: int | str | None, target: str, comparisons: int) -> float | 
 
 
 CASE_DEFAULTS: dict[str, Any] = {
-    "oracle": "groupwise",
+    "decision_maker": "groupwise",
     "comparisons": 1000,
     "rounds": 10,
     "eval_episodes": 0,  # the case study scores the target itself, after each round
@@ -100,7 +100,7 @@ def case_config(args: argparse.Namespace, partial: dict[str, Any]) -> "RunConfig
     rounds = args.rounds or loop.rounds
     comparisons = args.preferences or loop.comparisons
     given = {
-        "oracle": args.dm,
+        "decision_maker": args.dm,
         "comparisons": comparisons,
         "rounds": rounds,
         "steps": (args.steps or _steps_per_round(partial, loop.steps, loop.rounds)) * rounds,
@@ -139,7 +139,8 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
     case.add_argument("--target", required=True, choices=sorted(TARGETS), help="the behaviour")
     case.add_argument(
         "--dm",
-        help=f"simulated decision-maker (DECISION_MAKERS; default {CASE_DEFAULTS['oracle']})",
+        help="simulated decision-maker (DECISION_MAKERS; default "
+        f"{CASE_DEFAULTS['decision_maker']})",
     )
     case.add_argument(
         "--preferences",
@@ -201,10 +202,8 @@ def run(args: argparse.Namespace) -> int:
         cfg = case_config(args, read_config(args.config))
     except ValueError as error:
         raise config_error(error) from None
-    if cfg.loop.oracle not in DECISION_MAKERS:
-        raise UsageError(
-            f"unknown decision-maker {cfg.loop.oracle!r}; choose from {', '.join(DECISION_MAKERS)}"
-        )
+    if (dm := cfg.loop.decision_maker) not in DECISION_MAKERS:
+        raise UsageError(f"unknown decision-maker {dm!r}; choose from {', '.join(DECISION_MAKERS)}")
     if cfg.loop.pair_cap is not None and cfg.training.mode == "continuous":
         raise UsageError("--pairs caps each round's pairs: use it with --training rounds")
     out = writable_dir(args.out)

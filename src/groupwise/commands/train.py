@@ -48,9 +48,8 @@ def register(subparsers: "argparse._SubParsersAction[argparse.ArgumentParser]") 
     )
     train.add_argument("--env", help="GridWorld, Hopper, ... or a Gymnasium id")
     train.add_argument(
-        "--oracle",
         "--dm",
-        dest="oracle",
+        dest="dm",
         help="simulated decision-maker (default pairwise; with --from-session it answers "
         "the extra --rounds)",
     )
@@ -103,12 +102,12 @@ def run(args: argparse.Namespace) -> int:
 
     if args.env is None or args.out is None:
         raise UsageError("train needs --env and --out (or --from-session DIR)")
-    oracle = args.oracle or "pairwise"
-    if oracle not in DECISION_MAKERS:
-        raise UsageError(f"unknown oracle {oracle!r}; choose from {', '.join(DECISION_MAKERS)}")
+    dm = args.dm or "pairwise"
+    if dm not in DECISION_MAKERS:
+        raise UsageError(f"unknown decision-maker {dm!r}; choose from {', '.join(DECISION_MAKERS)}")
     overrides = {
         "env": args.env,
-        "oracle": oracle,
+        "decision_maker": dm,
         "comparisons": args.comparisons,
         "rounds": args.rounds,
         "steps": args.steps,
@@ -165,7 +164,7 @@ def _from_session(args: argparse.Namespace) -> int:
         raise UsageError("--from-session needs either --steps N or --rounds N")
     if args.steps == 0:
         raise UsageError("--steps must be at least 1")
-    if args.rounds is not None and args.oracle is None:
+    if args.rounds is not None and args.dm is None:
         raise UsageError(
             "--rounds needs --dm NAME: nobody answers a headless round but a simulated "
             "decision-maker"
@@ -182,7 +181,7 @@ def _from_session(args: argparse.Namespace) -> int:
             directory,
             steps=args.steps,
             rounds=args.rounds,
-            oracle=args.oracle,
+            decision_maker=args.dm,
             comparisons=per_round,
             show_progress=not args.quiet,
         )

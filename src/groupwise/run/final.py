@@ -227,28 +227,28 @@ def continue_run(
     *,
     steps: int | None = None,
     rounds: int | None = None,
-    oracle: str | None = None,
+    decision_maker: str | None = None,
     comparisons: int | None = None,
     frame_size: int | None = None,
     show_progress: bool = True,
 ) -> list[RoundRecord]:
     """Continue the run (an app session's directory, or a `groupwise train` output) in
     `out` from its latest checkpoint, headless: `steps` more PPO steps on the frozen learned
-    reward, or `rounds` more feedback rounds answered by the simulated decision-maker
-    `oracle` (`comparisons` per round, default the run's own, or for an app session without
-    a limit per round as many as fill its pool; the run's PPO steps per round)
-    followed by its `final_steps` on the frozen reward. Writes checkpoints, ``rounds.csv``,
+    reward, or `rounds` more feedback rounds answered by the simulated `decision_maker`
+    (`comparisons` per round, default the run's own, or for an app session without a limit
+    per round as many as fill its pool; the run's PPO steps per round) followed by its
+    `final_steps` on the frozen reward. Writes checkpoints, ``rounds.csv``,
     TensorBoard logs, ``agent.mp4``, ``agent.zip`` and ``agent.json`` into `out`, as the
     app does; ``config.json`` stays as it was.
 
     Raises:
         FileNotFoundError: `out` has no ``config.json`` or no checkpoint.
         ValueError: not exactly one of `steps` and `rounds`, or `rounds` without a known
-            `oracle`.
+            `decision_maker`.
     """
     if (steps is None) == (rounds is None):
         raise ValueError("give either steps or rounds")
-    if rounds is not None and oracle not in DECISION_MAKERS:
+    if rounds is not None and decision_maker not in DECISION_MAKERS:
         raise ValueError(
             f"more rounds need a simulated decision-maker to answer them (--dm); "
             f"choose from {', '.join(DECISION_MAKERS)}"
@@ -270,8 +270,8 @@ def continue_run(
                 frozen.add(run.next_round)
                 train_frozen(run, steps, callback=callback)
             else:
-                assert rounds is not None and oracle is not None
-                feedback = DECISION_MAKERS[oracle](cfg)
+                assert rounds is not None and decision_maker is not None
+                feedback = DECISION_MAKERS[decision_maker](cfg)
                 per_round = comparisons or _comparisons_per_round(cfg, out)
                 for _ in range(rounds):
                     run_round(run, feedback, per_round, cfg.loop.steps // cfg.loop.rounds, callback)

@@ -36,17 +36,18 @@ def round_plan(loop: LoopConfig) -> list[tuple[int, int]]:
 
 
 def feedback_of(cfg: RunConfig) -> Feedback:
-    """The simulated decision-maker `cfg.loop.oracle` (`groupwise.teachers.DECISION_MAKERS`).
+    """The simulated decision-maker `cfg.loop.decision_maker`, from
+    `groupwise.teachers.DECISION_MAKERS`.
 
     Raises:
         ValueError: no such decision-maker (e.g. "human": a person answers app sessions).
     """
-    if cfg.loop.oracle not in DECISION_MAKERS:
+    if cfg.loop.decision_maker not in DECISION_MAKERS:
         raise ValueError(
-            f"no simulated decision-maker {cfg.loop.oracle!r} (a person answers an app "
+            f"no simulated decision-maker {cfg.loop.decision_maker!r} (a person answers an app "
             f"session's rounds); choose from {', '.join(DECISION_MAKERS)}"
         )
-    return DECISION_MAKERS[cfg.loop.oracle](cfg)
+    return DECISION_MAKERS[cfg.loop.decision_maker](cfg)
 
 
 def run_rounds(
@@ -84,7 +85,7 @@ def run_session(
 
     Writes `config.json`, `rounds.csv` (rewritten after every round), TensorBoard logs and
     one checkpoint per round. Rounds 0 … R−1 gather feedback from `feedback` (default: the
-    decision-maker `cfg.loop.oracle`); when `final_steps` > 0 a last row (round R, no
+    decision-maker `cfg.loop.decision_maker`); when `final_steps` > 0 a last row (round R, no
     comparisons) trains PPO further on the frozen learned reward. With `takeaway` the run
     then hands over an agent (`hand_over`: ``takeaway.json``, ``agent.zip``, ``agent.json``).
 

@@ -38,7 +38,7 @@ class PreferenceComparisons:
     """The RLHF loop over a user's env factory, agent, reward ensemble and feedback.
 
     `loop` sets the budgets (comparisons, rounds, PPO steps, fragment length, seed, pair
-    derivation, ...; `loop.env` and `loop.oracle` are only labels here); `reward` how the
+    derivation, ...; `loop.env` and `loop.decision_maker` are only labels here); `reward` how the
     ensemble is fitted. The agent must be trained on `reward_model`'s reward (e.g. its env
     wrapped in `LearnedRewardVecEnv(venv, reward_model.mean_reward)`): the loop refits the
     ensemble in place every round, so the agent's env sees the new reward at once.

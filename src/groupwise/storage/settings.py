@@ -81,7 +81,7 @@ LEGACY_SECTIONS = frozenset({"ppo", "reward"})
 """Settings stored before issue 38 held these core configs whole; they are `research` now."""
 
 HUMAN = "human"
-"""`LoopConfig.oracle` of a session a person answers (through the page)."""
+"""`LoopConfig.decision_maker` of a session a person answers (through the page)."""
 LIBRARY = "library"
 """`SessionSettings.driver` of a session whose rounds a user's program publishes and trains
 (`groupwise.worker.web_teacher.WebTeacher`); the app's worker leaves it alone."""
@@ -364,7 +364,7 @@ class SessionSettings(BaseModel):
         parts = self.recipe_parts(env)
         loop = LoopConfig(
             env=env,
-            oracle=HUMAN,
+            decision_maker=HUMAN,
             comparisons=max(1, self.comparisons_per_round * self.rounds),
             rounds=self.rounds,
             steps=self.ppo_steps_per_round * self.rounds,

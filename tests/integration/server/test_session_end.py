@@ -40,7 +40,7 @@ def test_final_phase_then_from_session_continues_headless(serve, capsys):
     directory = server.data / "sessions" / sid
     rows = _rounds(directory)
     assert [(r["round"], r["comparisons"], r["pairs"]) for r in rows][1] == ("1", "0", "0")
-    assert json.loads((directory / "config.json").read_text())["loop"]["oracle"] == "human"
+    assert json.loads((directory / "config.json").read_text())["loop"]["decision_maker"] == "human"
     assert any((directory / "tb").rglob("events.out.tfevents.*"))
     assert probe(directory / "agent.mp4").frames >= 1
     server.stop()  # the headless continuation works on the directory alone

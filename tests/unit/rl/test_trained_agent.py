@@ -67,7 +67,7 @@ def test_continuing_needs_one_of_steps_and_rounds(tmp_path):
     with pytest.raises(ValueError, match="either steps or rounds"):
         continue_run(tmp_path, steps=1, rounds=1)
     with pytest.raises(ValueError, match="simulated decision-maker"):
-        continue_run(tmp_path, rounds=1, oracle="human")
+        continue_run(tmp_path, rounds=1, decision_maker="human")
 
 
 @pytest.mark.parametrize(

@@ -65,7 +65,7 @@ def test_the_final_phase_trains_on_the_frozen_reward_and_publishes_the_agent(cli
     assert int(final["env_steps"]) >= int(rows[0]["env_steps"]) + 64
     directory = context_of(client).data_dir / "sessions" / sid
     config = json.loads((directory / "config.json").read_text())
-    assert config["loop"]["oracle"] == "human" and config["loop"]["final_steps"] == 64
+    assert config["loop"]["decision_maker"] == "human" and config["loop"]["final_steps"] == 64
 
     agent = client.get(f"/api/sessions/{sid}/agent").json()
     assert agent["round"] == 1 and agent["measure"] == "true return"
@@ -89,7 +89,7 @@ def test_the_final_phase_trains_on_the_frozen_reward_and_publishes_the_agent(cli
     (tmp_path / "agent.zip").write_bytes(download.content)
     loaded = groupwise.load_agent(tmp_path / "agent.zip")
     assert loaded.env == "GridWorld" and loaded.summary.round == 1
-    assert loaded.config().loop.oracle == "human"
+    assert loaded.config().loop.decision_maker == "human"
     assert loaded.reward_model().size >= 1
 
 

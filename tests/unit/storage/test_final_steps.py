@@ -7,7 +7,7 @@ def test_the_final_phase_defaults_to_two_rounds_of_ppo_and_is_stored() -> None:
     resolved = SessionSettings(ppo_steps_per_round=5_000).for_env("GridWorld")
     assert resolved.final_steps == 10_000
     cfg = resolved.run_config("GridWorld")
-    assert (cfg.loop.final_steps, cfg.loop.oracle) == (10_000, "human")
+    assert (cfg.loop.final_steps, cfg.loop.decision_maker) == (10_000, "human")
     assert SessionSettings(final_steps=0).for_env("GridWorld").final_steps == 0
 
 

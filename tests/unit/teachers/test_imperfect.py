@@ -112,7 +112,7 @@ def test_teacher_presets_are_built_from_the_parameters():
     assert TEACHERS["equal"](0.1, p).steps == (EqualWhenClose(0.4), decide)
 
 
-def test_registry_builds_every_oracle_and_each_is_seeded(make_pool):
+def test_registry_builds_every_decision_maker_and_each_is_seeded(make_pool):
     expected = {"pairwise", "pairwise-boltzmann", "groupwise", "interactive"}
     expected |= {"interactive-mean", "interactive-distinct", "interactive-clear"}
     expected |= {
@@ -122,8 +122,8 @@ def test_registry_builds_every_oracle_and_each_is_seeded(make_pool):
     pool = make_pool(np.random.default_rng(0).uniform(0, 30, size=40).tolist())
     cfg = RunConfig()
     for name, factory in DECISION_MAKERS.items():
-        oracle = factory(cfg)
-        first = oracle.gather(pool, 10, np.random.default_rng(3))
+        feedback = factory(cfg)
+        first = feedback.gather(pool, 10, np.random.default_rng(3))
         assert len(first) <= 10, name
         assert all(isinstance(j, Judgement) for j in first), name
-        assert first == oracle.gather(pool, 10, np.random.default_rng(3)), name
+        assert first == feedback.gather(pool, 10, np.random.default_rng(3)), name

@@ -400,7 +400,7 @@ def _summary(
             "stretch": target.stretch,
             "description": target.description,
         },
-        "decision_maker": cfg.loop.oracle,
+        "decision_maker": cfg.loop.decision_maker,
         "comparisons": last.comparisons_total,
         "preference_pairs": last.pairs_total,
         "env_steps": last.env_steps,
