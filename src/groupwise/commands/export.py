@@ -90,7 +90,8 @@ def _judgements_text(total: int, undone: int) -> str:
 def run_export(args: argparse.Namespace) -> int:
     from groupwise.storage import Database, StorageError, default_url
     from groupwise.storage.export import StatesExport, export_session
-    from groupwise.storage.export_format import to_jsonl, to_parquet
+    from groupwise.storage.export_jsonl import to_jsonl
+    from groupwise.storage.export_parquet import to_parquet
     from groupwise.storage.sessions import list_sessions
 
     fmt = _format_of(args)
@@ -158,7 +159,8 @@ def run_import(args: argparse.Namespace) -> int:
     from groupwise.storage import Database, StorageError, default_url
     from groupwise.storage.counts import counts
     from groupwise.storage.export import import_session
-    from groupwise.storage.export_format import from_jsonl, from_parquet
+    from groupwise.storage.export_jsonl import from_jsonl
+    from groupwise.storage.export_parquet import from_parquet
     from groupwise.storage.judgements import list_judgements
 
     try:

@@ -1,4 +1,5 @@
-"""Export and import of sessions over HTTP (formats: `groupwise.storage.export_format`)."""
+"""Export and import of sessions over HTTP (the files: `groupwise.storage.export_jsonl` and
+`groupwise.storage.export_parquet`)."""
 
 from dataclasses import dataclass
 from pathlib import Path
@@ -7,7 +8,8 @@ from groupwise.server.schemas.sessions import SessionState
 from groupwise.server.state import read_state
 from groupwise.storage import Database, InvalidError
 from groupwise.storage import export as repo
-from groupwise.storage.export_format import from_jsonl, from_parquet, to_jsonl, to_parquet
+from groupwise.storage.export_jsonl import from_jsonl, to_jsonl
+from groupwise.storage.export_parquet import from_parquet, to_parquet
 from groupwise.storage.phases import FINISHED
 from groupwise.storage.sessions import get_session
 from groupwise.storage.team import ScoreSource

@@ -18,7 +18,8 @@ timer: shown, pause, resume, due), `progress` (the worker's progress line), `cou
 `rounds` (pools, suggestions, pairwise queue),
 `judgements` (store, retry, undo, list), `annotators` (the people a session is shared
 with, their tokens and views), `team` (their counters and agreement), `export` (a session
-to its export and back), `export_format` (the export as JSONL / Parquet).
+to its export and back), `export_format` (the export's lines), `export_jsonl` /
+`export_parquet` (the export as JSONL / Parquet).
 """
 
 from groupwise.storage.database import DATABASE_FILE, Database, default_url, sqlite_url

@@ -1,5 +1,6 @@
 """A session to its export and an export to a new session: the database side of the
-session export (its file formats, JSONL and Parquet: `groupwise.storage.export_format`).
+session export (its lines: `groupwise.storage.export_format`; its files, JSONL and Parquet:
+`export_jsonl`, `export_parquet`).
 
 Undone judgements are exported (flagged, without pairs): the export is the record of truth.
 Importing creates a new, finished session holding the same judgements and pairs (pairs are

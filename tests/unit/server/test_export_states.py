@@ -21,7 +21,7 @@ from groupwise.pool.files import load_pool
 from groupwise.reward.bradley_terry import fit
 from groupwise.reward.ensemble import RewardEnsemble
 from groupwise.storage import Database, default_url
-from groupwise.storage.export_format import from_jsonl
+from groupwise.storage.export_jsonl import from_jsonl
 from groupwise.storage.models import SessionRow
 from groupwise.storage.sessions import round_directory
 from groupwise.storage.states import preference_dataset

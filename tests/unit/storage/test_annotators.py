@@ -19,7 +19,8 @@ from groupwise.storage import annotators as team_repo
 from groupwise.storage import rounds as repo
 from groupwise.storage.database import sqlite_url
 from groupwise.storage.export import export_session, import_session
-from groupwise.storage.export_format import from_jsonl, from_parquet, to_jsonl, to_parquet
+from groupwise.storage.export_jsonl import from_jsonl, to_jsonl
+from groupwise.storage.export_parquet import from_parquet, to_parquet
 from groupwise.storage.judgements import (
     JudgementInput,
     add_judgement,
