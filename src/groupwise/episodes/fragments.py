@@ -39,6 +39,10 @@ class Trajectory:
     source: int = 0
     """Which policy played it in a pool: 0 the round's policy, k its k-th variant
     (`groupwise.pool.sampling.sample_pool`)."""
+    tile_from: int = 0
+    """The step its windows start at or after (`tile_fragments`), a multiple of the window
+    length: the steps before it are kept to replay the episode from its reset, not shown
+    (a recorded episode whose early steps an older policy played, `pool.recent`)."""
 
     def __post_init__(self) -> None:
         t = self.obs.shape[0]
@@ -50,6 +54,10 @@ class Trajectory:
 
     def __len__(self) -> int:
         return int(self.obs.shape[0])
+
+    def windows(self, length: int) -> int:
+        """How many windows of `length` steps `tile_fragments` cuts from it."""
+        return max(0, (len(self) - self.tile_from) // length)
 
 
 @dataclass(frozen=True)
@@ -80,8 +88,9 @@ class Fragment:
 def tile_fragments(trajectories: Sequence[Trajectory], length: int) -> list[Fragment]:
     """Cut every trajectory into consecutive, non-overlapping windows of `length` steps.
 
-    Each trajectory is tiled on its own, ``len(trajectory) // length`` windows, so no window
-    crosses an episode's end. A trailing remainder shorter than `length` is dropped (a
+    Each trajectory is tiled on its own from its `Trajectory.tile_from` step (0 but for a
+    recorded episode partly played by an older policy), `Trajectory.windows` windows, so no
+    window crosses an episode's end. A trailing remainder shorter than `length` is dropped (a
     trajectory shorter than `length` gives none), so every fragment has exactly one clip of
     exactly `length` frames.
     """
@@ -89,7 +98,7 @@ def tile_fragments(trajectories: Sequence[Trajectory], length: int) -> list[Frag
         raise ValueError(f"fragment length must be >= 1, got {length}")
     fragments = []
     for traj in trajectories:
-        for start in range(0, len(traj) - length + 1, length):
+        for start in range(traj.tile_from, len(traj) - length + 1, length):
             window = slice(start, start + length)
             fragments.append(
                 Fragment(

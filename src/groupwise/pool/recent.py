@@ -31,14 +31,19 @@ from groupwise.types import IntArray, ProgressFn
 
 @dataclass(frozen=True)
 class RecentRollouts(FixedSource):
-    """The learner's latest recorded episodes (`rl.recording.record_rollouts` on its envs),
-    the rest sampled from the policy with `exploration` random actions when they hold
-    fewer windows than asked. Recorded episodes have no random actions: PPO's own
-    stochastic policy played them."""
+    """The windows of the learner's latest recorded rollouts (`rl.recording.record_rollouts`
+    on its envs) played by policies at most `max_age` rollouts older than the policy now,
+    the rest sampled from the policy now with `exploration` random actions. Recorded
+    episodes have no random actions: PPO's own stochastic policy played them.
+
+    With the default 1 every behaviour of a pool cut between PPO updates is at most one
+    rollout old (issue 39): the last rollout's windows, played by the policy just before
+    the latest update, and the rest sampled from the policy as it is."""
 
     exploration: float = 0.0
     share: float | None = None
     tags: int = 1
+    max_age: int = 1
 
     def sample(
         self,
@@ -48,9 +53,13 @@ class RecentRollouts(FixedSource):
         progress: ProgressFn | None = None,
     ) -> list[Trajectory]:
         recorder = None if ctx.agent is None else recorder_of_agent(ctx.agent)
-        recent = [] if recorder is None else recorder.recent(windows)
+        if recorder is None:
+            recent = []
+        else:
+            since = recorder.policy_steps() - self.max_age * recorder.rollout
+            recent = recorder.recent(windows, since)
         episodes = [e.trajectory for e in recent]
-        held = sum(len(e) // ctx.length for e in episodes)
+        held = sum(e.windows(ctx.length) for e in episodes)
         total = windows * ctx.length
         if progress is not None:
             progress(min(held, windows) * ctx.length, total)

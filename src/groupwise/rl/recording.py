@@ -22,6 +22,7 @@ Seeding every reset changes which initial states PPO's episodes start from (not 
 distribution): a run with recording is a different run, seed for seed, from one without.
 """
 
+import bisect
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
@@ -49,8 +50,11 @@ class _Episode:
     policy_steps: list[int] = field(default_factory=list)  # the acting policy's, per step
     snapshots: dict[int, FloatArray] = field(default_factory=dict)
 
-    def trajectory(self, space: gym.Space, steps: int, episode: int) -> Trajectory:
-        """Its first `steps` steps as a `Trajectory` numbered `episode`."""
+    def trajectory(
+        self, space: gym.Space, steps: int, episode: int, tile_from: int = 0
+    ) -> Trajectory:
+        """Its first `steps` steps as a `Trajectory` numbered `episode`, its windows from
+        step `tile_from` on."""
         raw = np.asarray(self.actions[:steps])
         return Trajectory(
             obs=np.asarray(self.obs[:steps]).reshape(steps, -1).astype(np.float32),
@@ -60,6 +64,7 @@ class _Episode:
             reset_seed=self.reset_seed,
             episode=episode,
             snapshots={t: s for t, s in self.snapshots.items() if t < steps},
+            tile_from=tile_from,
         )
 
 
@@ -116,25 +121,31 @@ class RolloutRecorder:
         """Whether the physics state before step `t` is kept (a window's clip or poster)."""
         return any(t + 1 - o >= 0 and (t + 1 - o) % self.length == 0 for o in self.offsets)
 
-    def recent(self, windows: int) -> list[RecentEpisode]:
-        """The newest episodes holding at least `windows` whole windows (all there are when
-        fewer), oldest first: the running episodes' parts recorded so far, then the
-        finished ones from the newest; numbered 0 … E − 1 in the order returned."""
-        chosen: list[tuple[_Episode, int]] = []
+    def recent(self, windows: int, since: int = 0) -> list[RecentEpisode]:
+        """The newest episodes holding at least `windows` whole windows played by policies
+        of at least `since` PPO steps (all there are when fewer), oldest first: the running
+        episodes' parts recorded so far, then the finished ones from the newest; numbered
+        0 … E − 1 in the order returned. An episode an older policy began is returned whole
+        (its reset replays it), its windows from the first window boundary at or after its
+        first step played since (`Trajectory.tile_from`)."""
+        chosen: list[tuple[_Episode, int, int]] = []
         held = 0
         running = [(e, len(e.actions)) for _, e in sorted(self.running.items())]
         for episode, steps in [*running, *reversed(self.finished)]:
             if held >= windows:
                 break
-            if steps >= self.length:
-                chosen.append((episode, steps))
-                held += steps // self.length
+            first = bisect.bisect_left(episode.policy_steps, since, hi=steps)
+            start = -(-first // self.length) * self.length  # the next window boundary
+            if steps - start >= self.length:
+                chosen.append((episode, steps, start))
+                held += (steps - start) // self.length
         chosen.reverse()
         return [
             RecentEpisode(
-                e.trajectory(self.space, steps, i), np.asarray(e.policy_steps[:steps], np.int64)
+                e.trajectory(self.space, steps, i, start),
+                np.asarray(e.policy_steps[:steps], np.int64),
             )
-            for i, (e, steps) in enumerate(chosen)
+            for i, (e, steps, start) in enumerate(chosen)
         ]
 
     def clear(self) -> None:

@@ -65,14 +65,33 @@ def test_old_episodes_are_dropped_once_newer_ones_hold_enough_windows():
     assert 30 <= finished < 30 + 20  # one 200-step episode more than needed, at most
 
 
-def test_a_pool_of_recent_rollouts_costs_no_sampling_and_knows_its_ages():
-    agent = _agent(SHORT, 10, keep=20)
+def test_windows_since_a_policy_start_at_a_window_boundary_after_its_first_step():
+    agent = _agent(SHORT, 10, keep=40)
+    agent.learn(8 * ROLLOUT, seed=1)
+    recorder = recorder_of_agent(agent)
+    assert recorder is not None
+    since = 7 * ROLLOUT  # the last rollout's policy
+    recent = recorder.recent(100, since)
+    assert recent  # 2 envs × 64 steps hold a dozen windows of 10 steps
+    for episode in recent:
+        t = episode.trajectory
+        assert t.tile_from % 10 == 0
+        windows = tile_fragments([t], 10)
+        assert len(windows) == t.windows(10) >= 1
+        # every window's first step was played since; the one before the first was not
+        assert all(episode.window_policy(w.start) >= since for w in windows)
+        if t.tile_from >= 10:
+            assert episode.window_policy(t.tile_from - 10) < since
+
+
+def test_a_fresh_pool_is_at_most_one_rollout_old():
+    agent = _agent(SHORT, 10, keep=40)
     agent.learn(8 * ROLLOUT, seed=1)
     rng = np.random.default_rng(0)
     pool = sample_pool(
         lambda: make_env(SHORT),
         agent.policy(),
-        8,
+        20,
         10,
         rng,
         oversample=2.0,
@@ -80,11 +99,14 @@ def test_a_pool_of_recent_rollouts_costs_no_sampling_and_knows_its_ages():
         agent=agent,
     )
     recorder = recorder_of_agent(agent)
+    assert recorder is not None
     recorded = {e.trajectory.reset_seed for e in recorder.recent(recorder.held_windows())}
-    assert {f.reset_seed for f in pool.fragments} <= recorded
     ages = pool_ages(pool, recorder, agent.num_timesteps)
-    assert ages.min() >= ROLLOUT  # the last rollout's policy has been updated once since
-    assert ages.max() <= (SPAN + 2) * ROLLOUT
+    from_rollouts = np.array([f.reset_seed in recorded for f in pool.fragments])
+    assert from_rollouts.any() and not from_rollouts.all()  # the last rollout, then sampled
+    # the last rollout's policy has been updated once since; a sampled window is the policy now
+    assert (ages[from_rollouts] == ROLLOUT).all()
+    assert not ages[~from_rollouts].any()
 
 
 def test_without_recorded_rollouts_the_pool_is_sampled_from_the_policy():
