@@ -11,7 +11,7 @@ run out). The worker trains as it would for a person.
 
 The teacher's time is the wall time since round 0 opened (answers and waits alike). At each
 mark of `--minutes` the benchmark copies the session's run directory (its committed
-checkpoints and the live checkpoint the worker writes every 30 s); after the session it
+checkpoints and the mid-round checkpoint the worker writes every 30 s); after the session it
 loads each copy's policy and measures its greedy episodes' target score in the target env,
 as the case studies do (`study.case_studies.case_study.evaluate_target`). A seed succeeds when its
 success rate reaches `SEED_SUCCESS`, as in the case studies' tables.
@@ -221,12 +221,12 @@ def _take_marks(
 
 def evaluate_copy(cell: Cell, minute: float, copy: Path) -> None:
     """The success rate of the greedy policy in `copy` (the newest of its committed and
-    live checkpoints), measured on the target env."""
+    mid-round checkpoints), measured on the target env."""
     cfg = RunConfig.load(copy / CONFIG_FILE)
     with Run.create(cfg, copy) as run:
         run.restore()
         round_index = run.next_round
-        run.restore_live(round_index)
+        run.restore_mid_round(round_index)
         cell.ppo_steps[minute] = int(run.agent.num_timesteps)
         target = TARGETS[cell.target]
         rng = np.random.default_rng([cell.seed, int(minute)])

@@ -3,7 +3,7 @@
 Starts a real server (`groupwise serve`: uvicorn, SQLite, the training worker process) with
 one session of `--env` whose settings say ``training: "continuous"``, and plays a person:
 one comparison every `--pace` seconds for `--minutes` minutes a round, then "End round",
-for `--rounds` rounds. Meanwhile it reads the worker's live checkpoint
+for `--rounds` rounds. Meanwhile it reads the worker's mid-round checkpoint
 (``checkpoints/live/state.json``: PPO steps, written every 30 s) to measure PPO steps per
 minute of session time, and times each judgement's answer and each wait from "End round"
 until the next round is open (the person's wait: the worker cuts the next pool from PPO's
@@ -27,7 +27,7 @@ per CPU-minute; judgement answers, median / p99.
   when a round is committed, the background processes at niceness +5 (load 1.2):
   0.1 / 0.1 s (0.1); **0.81×** (81,148 vs 99,932); 16 / 517 ms.
 
-The worker logs where its time goes every minute (`worker.live`, "the last 61 s: PPO 59.6 s
+The worker logs where its time goes every minute (`worker.continuous`, "the last 61 s: PPO 59.6 s
 (98%), refits 1.1 s (2%), ..."); before the evaluations moved out they took 9–10 % of it.
 """
 
@@ -62,7 +62,7 @@ SETTINGS = {
 }
 
 
-def _live_steps(data: Path, session: str) -> int | None:
+def _mid_round_steps(data: Path, session: str) -> int | None:
     state = data / "sessions" / session / "checkpoints" / "live" / "state.json"
     try:
         return int(json.loads(state.read_text())["env_steps"])
@@ -122,7 +122,7 @@ def main(argv: Sequence[str] | None = None) -> None:
 
                 def watch() -> None:
                     while not done.wait(1.0):
-                        steps = _live_steps(data, session)
+                        steps = _mid_round_steps(data, session)
                         if steps is not None and (not samples or samples[-1][1] != steps):
                             samples.append((time.monotonic(), steps))
 
@@ -179,7 +179,7 @@ def main(argv: Sequence[str] | None = None) -> None:
     )
     print("| measure | value |")
     print("|---|---:|")
-    print(f"| PPO steps per minute of session time (live checkpoints) | {per_minute:,.0f} |")
+    print(f"| PPO steps per minute of session time (mid-round checkpoints) | {per_minute:,.0f} |")
     print(f"| PPO one core, learned reward (steps per minute of CPU time) | {single * 60:,.0f} |")
     print(f"| ratio | {per_minute / (single * 60):.2f} |")
     p50, p99 = np.percentile(latencies, [50, 99]) * 1000
@@ -198,7 +198,8 @@ def main(argv: Sequence[str] | None = None) -> None:
             q = np.percentile(values, [0, 50, 90, 100])
             print(f"| {name} | {' / '.join(f'{v:,.0f}' for v in q)} |")
     print(
-        f"\n{len(samples)} live checkpoints read; {statistics.mean(latencies) * 1000:.0f} ms mean"
+        f"\n{len(samples)} mid-round checkpoints read; "
+        f"{statistics.mean(latencies) * 1000:.0f} ms mean"
     )
     for r, a in enumerate(ages, start=1):
         if len(a):

@@ -181,9 +181,9 @@ def test_train_continuous_from_the_command_line(tmp_path, capsys):
     assert "expected a finite number > 0" in capsys.readouterr().err
 
 
-def test_a_live_round_refits_when_due_and_an_undo_counts(tmp_path):
+def test_a_continuous_round_refits_when_due_and_an_undo_counts(tmp_path):
     from groupwise.preferences.judgement import LEFT_BETTER, Judgement
-    from groupwise.run.continuous import LiveRound
+    from groupwise.run.continuous import ContinuousRound
     from groupwise.run.round import begin_round, derive_pairs
     from groupwise.run.streams import round_streams
     from groupwise.teachers import DECISION_MAKERS
@@ -195,19 +195,19 @@ def test_a_live_round_refits_when_due_and_an_undo_counts(tmp_path):
     with Run.create(cfg, None) as run:
         streams = round_streams(cfg.loop.seed, 0)
         offer = begin_round(run, DECISION_MAKERS["groupwise"](cfg).queries, 8, streams=streams)
-        live = LiveRound(run, offer, streams, clock=0.0)
+        continuous = ContinuousRound(run, offer, streams, clock=0.0)
         a = Judgement((0, 1, 2), (3, 4), LEFT_BETTER)  # 3 pairs
         b = Judgement((5,), (6,), LEFT_BETTER)  # 1 pair
-        assert live.update([(0, a)], clock=1.0)  # a run's first pairs: fitted at once
-        assert len(run.dataset) == 3 and live.report is not None
-        assert not live.update([(0, a), (1, b)], clock=2.0)  # 1 new pair < 4, 1 s < 100 s
-        assert live.update([(0, a), (1, b)], clock=150.0)  # due by time
+        assert continuous.update([(0, a)], clock=1.0)  # a run's first pairs: fitted at once
+        assert len(run.dataset) == 3 and continuous.report is not None
+        assert not continuous.update([(0, a), (1, b)], clock=2.0)  # 1 new pair < 4, 1 s < 100 s
+        assert continuous.update([(0, a), (1, b)], clock=150.0)  # due by time
         assert len(run.dataset) == 4
-        assert not live.update([(0, a), (1, b)], clock=500.0)  # nothing changed
+        assert not continuous.update([(0, a), (1, b)], clock=500.0)  # nothing changed
         # b undone (1 pair) and nothing new: due only by time …
-        assert not live.update([(0, a)], clock=151.0)
-        assert live.update([(0, a)], clock=300.0)
+        assert not continuous.update([(0, a)], clock=151.0)
+        assert continuous.update([(0, a)], clock=300.0)
         # … and the dataset is the rounds before plus the pairs of the judgements now
         assert len(run.dataset) == len(derive_pairs([a], cfg.loop, 0, [0])) == 3
-        assert live.update([(0, a), (2, b)], clock=301.0, final=True)  # final: any change
+        assert continuous.update([(0, a), (2, b)], clock=301.0, final=True)  # final: any change
         assert run.dataset.rounds.tolist() == [0] * 4

@@ -10,7 +10,7 @@ reward ensemble refits between rollouts as soon as
 whichever comes first. A rollout's rewards therefore all come from one fit: the policy's
 reward (`ensemble.mean_reward`, refitted in place) changes only between `learn` calls,
 which are whole rollouts. A round is the teacher's unit of *fresh behaviours*: its pool is
-cut from PPO's own latest rollouts when the round begins (issue 39: `LiveRound` records
+cut from PPO's own latest rollouts when the round begins (issue 39: `ContinuousRound` records
 PPO's episodes, `rl.recording`, the latest ones across rounds, and `begin_round` reads them
 through `pool.recent.fresh_sources`), so the teacher judges what the agent does now and the
 pool costs no sampling; round 0, or a round after a restart, samples what the recorded
@@ -70,27 +70,27 @@ def continuous_round(
         run, feedback.queries, budget, streams=streams, sources=fresh_sources(cfg.loop)
     )
     clock = clock_before(run)
-    live = LiveRound(run, offer, streams, clock, callback)
-    timer = live.timer
+    continuous = ContinuousRound(run, offer, streams, clock, callback)
+    timer = continuous.timer
     judgements: list[Judgement] = []
     credit = 0.0
     for query in offer.queries:
         credit += pace * cfg.training.ppo_steps_per_s
         rollouts = int(credit // rollout)
         if rollouts:
-            live.learn(rollouts * rollout)
+            continuous.learn(rollouts * rollout)
             credit -= rollouts * rollout
         clock += pace
         tick = time.perf_counter()
         judgements += feedback.teacher.answer(offer.pool, [query], streams.feedback)
         timer.seconds["feedback_s"] += time.perf_counter() - tick
-        live.update(list(enumerate(judgements)), clock)
-    live.update(list(enumerate(judgements)), clock, final=True)
+        continuous.update(list(enumerate(judgements)), clock)
+    continuous.update(list(enumerate(judgements)), clock, final=True)
     return finish_round(
         run,
         offer,
         judgements,
-        live.report,
+        continuous.report,
         timer,
         callback,
         asked=len(offer.queries),
@@ -98,7 +98,7 @@ def continuous_round(
     )
 
 
-class LiveRound:
+class ContinuousRound:
     """One round trained while its judgements arrive: PPO in slices (`learn`), the reward
     ensemble refitted between them (`update`) once `TrainingConfig.refit_pairs` pairs have
     changed (new ones, or an undone judgement's) or `refit_s` seconds have passed since the

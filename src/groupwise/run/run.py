@@ -47,8 +47,9 @@ log = logging.getLogger(__name__)
 CONFIG_FILE = "config.json"
 RESULTS_FILE = "rounds.csv"
 TENSORBOARD_DIR = "tb"
-LIVE_DIR = "live"
-"""``checkpoints/live``: a continuous round's policy and reward model mid-round."""
+MID_ROUND_DIR = "live"
+"""``checkpoints/live``: a continuous round's policy and reward model mid-round (the folder
+keeps its name from before issue 38, so a session stopped mid-round still resumes there)."""
 
 
 class ConfigMismatchError(ValueError):
@@ -173,12 +174,12 @@ class Run:
         write_records(out / RESULTS_FILE, self.records)
         return path
 
-    def save_live(self, round_index: int) -> Path:
+    def save_mid_round(self, round_index: int) -> Path:
         """Write the policy and the reward ensemble as they are in the middle of round
         `round_index` (continuous training) into ``checkpoints/live``, atomically; the
         dataset is not saved: the round's judgements are the database's."""
         out = self.directory
-        final = out / CHECKPOINTS / LIVE_DIR
+        final = out / CHECKPOINTS / MID_ROUND_DIR
         tmp = final.with_name(final.name + ".tmp")
         shutil.rmtree(tmp, ignore_errors=True)
         tmp.mkdir(parents=True)
@@ -191,7 +192,7 @@ class Run:
 
     def save_policy(self, directory: Path) -> None:
         """Write the policy and the reward ensemble as they are now into `directory` (a
-        live checkpoint's part; a snapshot another process samples the next round from)."""
+        mid-round checkpoint's part; a snapshot another process samples the next round from)."""
         self.ppo.save(directory)
         self.ensemble.save(directory / REWARD_FILE)
 
@@ -200,10 +201,10 @@ class Run:
         self.ppo.load(directory)
         self.ensemble.load_state(directory / REWARD_FILE)
 
-    def restore_live(self, round_index: int) -> bool:
-        """Load the live checkpoint of round `round_index` over the restored run (policy and
+    def restore_mid_round(self, round_index: int) -> bool:
+        """Load the mid-round checkpoint of round `round_index` over the restored run (policy and
         reward ensemble); False when there is none of that round."""
-        directory = self.directory / CHECKPOINTS / LIVE_DIR
+        directory = self.directory / CHECKPOINTS / MID_ROUND_DIR
         try:
             state = _read_state(directory)
         except FileNotFoundError:
@@ -216,9 +217,9 @@ class Run:
         )
         return True
 
-    def drop_live(self) -> None:
-        """Remove the live checkpoint (its round ended and was committed)."""
-        shutil.rmtree(self.directory / CHECKPOINTS / LIVE_DIR, ignore_errors=True)
+    def drop_mid_round(self) -> None:
+        """Remove the mid-round checkpoint (its round ended and was committed)."""
+        shutil.rmtree(self.directory / CHECKPOINTS / MID_ROUND_DIR, ignore_errors=True)
 
     def close(self) -> None:
         """Release the agent's envs and loggers."""

@@ -2,7 +2,7 @@
 
 A continuous round gets a point after each refit of the reward model (its pairs and
 validation accuracy) and after each evaluation of the greedy policy's true return
-(`groupwise.worker.live`); every trained round, in either training mode, gets one from its
+(`groupwise.worker.continuous`); every trained round, in either training mode, gets one from its
 record's stats when its training is committed (`round_point`, from
 `lifecycle.finish_training` and `finish_final`). Writing a point bumps the session's
 revision, so the event stream sends it (``training``) at once.

@@ -1,8 +1,8 @@
 """Continuous training in the app (issues 24, 39): the worker trains an open round's policy
 while the person compares, instead of idling until the round ends.
 
-Whenever no phase job waits (`process.Worker`), `LiveSessions.step` gives one open session
-with ``training: "continuous"`` one slice (`live_round.train_slice`: the judgements read,
+Whenever no phase job waits (`process.Worker`), `ContinuousSessions.step` gives one open session
+with ``training: "continuous"`` one slice (`continuous_round.train_slice`: the judgements read,
 the reward refitted when due, one PPO rollout), the sessions taking turns. A session whose
 timer is paused trains no PPO until it is resumed, so "Pause" pauses the agent too.
 
@@ -10,7 +10,7 @@ The round's end (the person, its budget or its timer) queues its training job, w
 the round's run from here (`take`): the next round's pool is cut from that run's latest
 rollouts and opened, then the round is committed (`jobs.train`, `jobs.open_fresh`), and the
 same run trains on into the next round (`keep`), its recorded rollouts kept. A round this
-worker does not hold (a restarted worker) is resumed from its live checkpoint
+worker does not hold (a restarted worker) is resumed from its mid-round checkpoint
 (`worker.resume`).
 """
 
@@ -24,8 +24,8 @@ from groupwise.storage import Database
 from groupwise.storage.phases import READY, TRAINING
 from groupwise.storage.sessions import sessions_in, settings_of
 from groupwise.worker import curve
+from groupwise.worker.continuous_round import ContinuousTraining, train_slice
 from groupwise.worker.job import Job
-from groupwise.worker.live_round import LiveTraining, train_slice
 from groupwise.worker.resume import resume, resume_round
 
 log = logging.getLogger(__name__)
@@ -35,8 +35,8 @@ SLOW_SLICE_S = 1.5
 """A slice longer than this is logged: a training job waits for the slice in progress."""
 
 
-class LiveSessions:
-    """The worker's continuous rounds, one `LiveTraining` per open session (module
+class ContinuousSessions:
+    """The worker's continuous rounds, one `ContinuousTraining` per open session (module
     docstring)."""
 
     def __init__(
@@ -46,7 +46,7 @@ class LiveSessions:
         self.data_dir = data_dir
         self.serves = serves
         """Whether this worker serves a session (`process.Worker.serves`)."""
-        self._live: dict[str, LiveTraining] = {}
+        self._rounds: dict[str, ContinuousTraining] = {}
         self._turns: dict[str, int] = {}
         self._turn = 0
         self._evaluator: curve.Evaluator | None = None
@@ -61,8 +61,8 @@ class LiveSessions:
         open_jobs, held = self._continuous_sessions()
         jobs = [job for job in open_jobs if self._broken.get(job.session_id) != job.round]
         # a paused or just ended round keeps its run (for its resumption or training job)
-        for stale in set(self._live) - {job.session_id for job in jobs} - held:
-            self._live.pop(stale).run.close()
+        for stale in set(self._rounds) - {job.session_id for job in jobs} - held:
+            self._rounds.pop(stale).run.close()
         for job in sorted(jobs, key=lambda j: self._turns.get(j.session_id, -1)):
             self._turn += 1
             self._turns[job.session_id] = self._turn
@@ -76,7 +76,7 @@ class LiveSessions:
                     job.round,
                 )
                 self._broken[job.session_id] = job.round
-                if (training := self._live.pop(job.session_id, None)) is not None:
+                if (training := self._rounds.pop(job.session_id, None)) is not None:
                     training.run.close()
                 return True
             if (took := time.perf_counter() - tick) > SLOW_SLICE_S:
@@ -85,17 +85,17 @@ class LiveSessions:
                 return True
         return False
 
-    def take(self, job: Job) -> LiveTraining:
-        """The live training of `job`'s round, to end it (the training job): this worker's,
-        or resumed from the live checkpoint and the database after a restart."""
-        training = self._live.pop(job.session_id, None)
+    def take(self, job: Job) -> ContinuousTraining:
+        """The continuous training of `job`'s round, to end it (the training job): this worker's,
+        or resumed from the mid-round checkpoint and the database after a restart."""
+        training = self._rounds.pop(job.session_id, None)
         if training is not None and training.round == job.round:
             return training
         if training is not None:
             training.run.close()
         return resume(job, self.db, self.data_dir, self.evaluator)
 
-    def keep(self, job: Job, training: LiveTraining, opened: bool) -> None:
+    def keep(self, job: Job, training: ContinuousTraining, opened: bool) -> None:
         """After `job`'s training job: with the next round `opened`, train on into it on the
         same run (its recorded rollouts and statistics kept: no reload from the checkpoint
         just written); else close the run."""
@@ -104,7 +104,7 @@ class LiveSessions:
             return
         following = dataclasses.replace(job, round=job.round + 1, phase=READY, elapsed_s=0.0)
         try:
-            self._live[job.session_id] = resume_round(
+            self._rounds[job.session_id] = resume_round(
                 following, self.db, self.data_dir, self.evaluator, run=training.run
             )
         except Exception:
@@ -118,18 +118,18 @@ class LiveSessions:
         return self._evaluator
 
     def close(self) -> None:
-        for training in self._live.values():
+        for training in self._rounds.values():
             training.run.close()
-        self._live.clear()
+        self._rounds.clear()
         if self._evaluator is not None:
             self._evaluator.close()
 
-    def _training(self, job: Job) -> LiveTraining:
-        training = self._live.get(job.session_id)
+    def _training(self, job: Job) -> ContinuousTraining:
+        training = self._rounds.get(job.session_id)
         if training is None or training.round != job.round:
             if training is not None:
                 training.run.close()
-            training = self._live[job.session_id] = resume(
+            training = self._rounds[job.session_id] = resume(
                 job, self.db, self.data_dir, self.evaluator
             )
         return training

@@ -1,11 +1,11 @@
-"""One continuous round in the worker: its state (`LiveTraining`) and one slice of its
-training (`train_slice`), as `worker.live` schedules them.
+"""One continuous round in the worker: its state (`ContinuousTraining`) and one slice of its
+training (`train_slice`), as `worker.continuous` schedules them.
 
 A slice reads the round's judgements from the database (`round_judgements`: undone ones
 left out, each keyed by its place in the round), refits the reward ensemble when due
-(`run.continuous.LiveRound`: 20 changed pairs or 60 s), then trains one PPO rollout on the
+(`run.continuous.ContinuousRound`: 20 changed pairs or 60 s), then trains one PPO rollout on the
 latest fit — so the reward PPO sees changes only between rollouts. Every `CHECKPOINT_S`
-seconds the policy and the ensemble go to ``checkpoints/live`` (`Run.save_live`).
+seconds the policy and the ensemble go to ``checkpoints/live`` (`Run.save_mid_round`).
 
 The page sees the agent learn (`worker.curve`): each refit stores a point of the session's
 learning curve (PPO steps, pairs, validation accuracy), and so does each evaluation of the
@@ -26,7 +26,7 @@ from concurrent.futures import Future
 from contextlib import contextmanager
 from dataclasses import dataclass
 
-from groupwise.run.continuous import LiveRound
+from groupwise.run.continuous import ContinuousRound
 from groupwise.run.run import Run
 from groupwise.storage import Database
 from groupwise.storage.judgements import round_judgements
@@ -36,7 +36,7 @@ from groupwise.worker import curve
 log = logging.getLogger(__name__)
 
 CHECKPOINT_S = 30.0
-"""Seconds between a continuous round's live checkpoints."""
+"""Seconds between a continuous round's mid-round checkpoints."""
 ACCOUNT_S = 60.0
 """Seconds between the log lines that say where a continuous round's worker time went."""
 PROGRESS_S = 1.0
@@ -45,15 +45,15 @@ on a slow env; a tiny env's rollouts would write dozens a second)."""
 
 
 @dataclass
-class LiveTraining:
+class ContinuousTraining:
     """One session's round being trained continuously in this worker."""
 
     session_id: str
     round: int
     run: Run
-    live: LiveRound
+    continuous: ContinuousRound
     checkpointed: float
-    """`time.monotonic()` of the last live checkpoint."""
+    """`time.monotonic()` of the last mid-round checkpoint."""
     pool_steps: int
     """PPO steps of the policy that played the round's pool (its oldest behaviour)."""
     trained_s: float = 0.0
@@ -99,14 +99,14 @@ class LiveTraining:
 
 
 def train_slice(
-    training: LiveTraining, db: Database, evaluator: Callable[[], curve.Evaluator]
+    training: ContinuousTraining, db: Database, evaluator: Callable[[], curve.Evaluator]
 ) -> bool:
     """Refit when due and train one rollout (module docstring); False when the round has
     no pairs yet. `evaluator` gives the process that evaluates the curve's points."""
     with training.timed("reads"), db.read() as s:
         keyed = round_judgements(s, training.session_id, training.round)
     with training.timed("refits"):
-        refitted = training.live.update(keyed, time.monotonic())
+        refitted = training.continuous.update(keyed, time.monotonic())
     run = training.run
     if not len(run.dataset):  # PPO starts with the round's first pairs
         training.spent.clear()  # waiting for them is no loss of PPO's: not accounted
@@ -116,7 +116,7 @@ def train_slice(
         _point(training, db, evaluator, refit=refitted, evaluate=training.evaluated_s is None)
     tick = time.perf_counter()
     with training.timed("PPO"):
-        training.live.learn(run.ppo.rollout_steps)
+        training.continuous.learn(run.ppo.rollout_steps)
     training.trained_s += time.perf_counter() - tick
     if _evaluation_due(training):
         _point(training, db, evaluator, refit=False, evaluate=True)
@@ -124,14 +124,14 @@ def train_slice(
         _point(training, db, evaluator, refit=True, evaluate=False)
     if time.monotonic() - training.checkpointed >= CHECKPOINT_S:
         with training.timed("checkpoints"):
-            run.save_live(training.round)
+            run.save_mid_round(training.round)
         training.checkpointed = time.monotonic()
     training.account()
     return True
 
 
 def _point(
-    training: LiveTraining,
+    training: ContinuousTraining,
     db: Database,
     evaluator: Callable[[], curve.Evaluator],
     *,
@@ -142,7 +142,7 @@ def _point(
     with `evaluate`, hand the point with a snapshot of the greedy policy to the evaluator
     process, which stores it with the policy's true return when it has it
     (`curve.Evaluator`)."""
-    run, report = training.run, training.live.report
+    run, report = training.run, training.continuous.report
     accuracy = None if report is None else report.validation_accuracy
     evaluating = evaluate and run.cfg.loop.eval_episodes > 0
     if refit or not evaluating:
@@ -168,7 +168,7 @@ def _point(
         training.evaluating = evaluator().submit(point)
 
 
-def _evaluation_due(training: LiveTraining) -> bool:
+def _evaluation_due(training: ContinuousTraining) -> bool:
     """Whether to evaluate the policy again (`worker.curve`): the last evaluation has
     finished and the slices have trained long enough since."""
     if training.evaluating is not None:

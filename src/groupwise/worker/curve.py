@@ -1,7 +1,7 @@
 """The learning curve of a continuous round, as the worker measures it.
 
 Every trained round adds a point from its record (`storage.training.round_point`); a
-continuous round also adds one after each refit (`worker.live_round`) and one for each
+continuous round also adds one after each refit (`worker.continuous_round`) and one for each
 evaluation of the greedy policy's true return. An evaluation takes a snapshot of the policy
 (`PPOAgent.snapshot`) between two PPO slices and runs in a process of its own (`Evaluator`),
 which stores the point as of the snapshot, while PPO trains on: evaluating in the worker

@@ -11,7 +11,7 @@ train after round r: the run as round r − 1 left it → the round's stored jud
     undone, each keyed by its place in the round) → `end_round`: pairs, dataset, reward fit,
     PPO for `ppo_steps_per_round`, evaluation, checkpoint and ``rounds.csv`` → round r + 1
     preparing, or finishing.
-end a continuous round r (`worker.live` trained it while the person compared): its last fit
+end a continuous round r (`worker.continuous` trained it while the person compared): its last fit
     brought up to date → round r + 1's pool cut from that run's latest rollouts
     (`pool.recent`, issue 39) and opened at once (`open_fresh`) → then round r committed
     (evaluation, checkpoint, record) while the person compares again.
@@ -33,7 +33,7 @@ from groupwise.pool.dataset import dataset_sources
 from groupwise.pool.recent import fresh_sources, pool_ages
 from groupwise.preferences.judgement import Judgement
 from groupwise.rl.batch_envs import free_cores
-from groupwise.run.continuous import LiveRound
+from groupwise.run.continuous import ContinuousRound
 from groupwise.run.progress import RunCallback, as_callback
 from groupwise.run.records import RoundRecord
 from groupwise.run.round import begin_round, end_round, finish_round
@@ -91,12 +91,12 @@ def train(
     db: Database,
     data_dir: Path,
     progress: JobProgress,
-    live: LiveRound | None = None,
+    continuous: ContinuousRound | None = None,
     render: RenderPool | None = None,
 ) -> bool:
     """End round `job.round` on its stored judgements and queue the next round or the final
-    phase (module docstring); True when the next round opened here. With `live` (a
-    continuous session's round, `worker.live`) the round's run is the one that trained while
+    phase (module docstring); True when the next round opened here. With `continuous` (a
+    continuous session's round, `worker.continuous`) the round's run is the one that trained while
     the person compared, the round adds no PPO steps of its own, and the run is left open
     for the caller (it trains on into the next round); with `render` too, the next round is
     cut from that run's rollouts and opens *before* the round is committed (`open_fresh`):
@@ -105,15 +105,15 @@ def train(
     `worker.resume`)."""
     r = job.round
     opened = False
-    if live is None:
+    if continuous is None:
         record = commit_round(job, db, data_dir, progress)
     else:
         progress.on_phase("load", 0, 1)
         keyed = _judgements(db, job.session_id, r)
-        live.update(keyed, time.monotonic(), final=True)
+        continuous.update(keyed, time.monotonic(), final=True)
         if render is not None:
-            opened = open_fresh(job, db, data_dir, live, render, progress)
-        record = commit_live(live, keyed, job.elapsed_s, progress)
+            opened = open_fresh(job, db, data_dir, continuous, render, progress)
+        record = commit_continuous(continuous, keyed, job.elapsed_s, progress)
     checkpoint = checkpoint_of(job.session_id, r)
     stats = {**record.stats(), "pool_steps": pool_steps_of(db, data_dir, job.session_id, r)}
     with db.write() as s:
@@ -136,17 +136,17 @@ def open_fresh(
     job: Job,
     db: Database,
     data_dir: Path,
-    live: LiveRound,
+    continuous: ContinuousRound,
     render: RenderPool,
     progress: JobProgress | None = None,
 ) -> bool:
-    """Cut round `job.round + 1`'s pool from the latest rollouts of `live`'s run
+    """Cut round `job.round + 1`'s pool from the latest rollouts of `continuous`'s run
     (`pool.recent.fresh_sources`: what they lack sampled from the policy), publish it and
     open it in the transaction that queues it, before round `job.round` is committed; False
     when that was the last round or the session moved on. Logs the pool's ages (PPO steps
     from the policy that played each behaviour to the policy now) and the wait since the
     round ended."""
-    settings, run, r = job.settings, live.run, job.round
+    settings, run, r = job.settings, continuous.run, job.round
     if r + 1 >= settings.rounds:
         return False
     with kernel_threads(free_cores()):  # PPO waits for this job: the distances take the cores
@@ -160,13 +160,13 @@ def open_fresh(
             callback=progress,
         )
     now = run.agent.num_timesteps
-    ages = pool_ages(offer.pool, live.recorder, now)
+    ages = pool_ages(offer.pool, continuous.recorder, now)
     oldest = now - int(ages.max(initial=0))
     prepared = published_round(
         data_dir, job.session_id, job.env, settings, offer.pool, offer.queries, render,
         progress, offer.sample_s, oldest, ages.tolist(),
     )  # fmt: skip
-    accuracy = None if live.report is None else live.report.validation_accuracy
+    accuracy = None if continuous.report is None else continuous.report.validation_accuracy
     with db.write() as s:
         ended = get_round(s, job.session_id, r).closed_at
         opened = advance_before_commit(s, job.session_id, r) and store_prepared_round(
@@ -207,17 +207,17 @@ def commit_round(
     db: Database,
     data_dir: Path,
     progress: RunCallback | None,
-    live: LiveRound | None = None,
+    continuous: ContinuousRound | None = None,
 ) -> RoundRecord:
-    """Commit round `job.round` on its stored judgements: on `live`'s run (`commit_live`),
-    left open for the next round; else `end_round` on the run as the round before left it
-    (`ppo_steps_per_round`), closed."""
+    """Commit round `job.round` on its stored judgements: on `continuous`'s run
+    (`commit_continuous`), left open for the next round; else `end_round` on the run as the
+    round before left it (`ppo_steps_per_round`), closed."""
     settings, r = job.settings, job.round
     if progress is not None:
         progress.on_phase("load", 0, 1)
     keyed = _judgements(db, job.session_id, r)
-    if live is not None:
-        return commit_live(live, keyed, job.elapsed_s, progress)
+    if continuous is not None:
+        return commit_continuous(continuous, keyed, job.elapsed_s, progress)
     with db.read() as s:
         pool_dir = get_round(s, job.session_id, r).pool_dir
     if pool_dir is None:
@@ -235,27 +235,27 @@ def commit_round(
         )
 
 
-def commit_live(
-    live: LiveRound,
+def commit_continuous(
+    continuous: ContinuousRound,
     keyed: Sequence[tuple[int, Judgement]],
     feedback_s: float,
     progress: RunCallback | None,
 ) -> RoundRecord:
     """Commit a continuous round on the run that trained it: its last fit brought up to
-    date (`LiveRound.update`, as the headless continuous round ends: no PPO steps, no second
-    fit of the same pairs), evaluation, checkpoint; its live checkpoint dropped."""
-    live.update(keyed, time.monotonic(), final=True)
-    live.timer.seconds["feedback_s"] = feedback_s
+    date (`ContinuousRound.update`, as the headless continuous round ends: no PPO steps, no second
+    fit of the same pairs), evaluation, checkpoint; its mid-round checkpoint dropped."""
+    continuous.update(keyed, time.monotonic(), final=True)
+    continuous.timer.seconds["feedback_s"] = feedback_s
     record = finish_round(
-        live.run,
-        live.offer,
+        continuous.run,
+        continuous.offer,
         [judgement for _, judgement in keyed],
-        live.report,
-        live.timer,
+        continuous.report,
+        continuous.timer,
         as_callback(progress),
         asked=None,
     )
-    live.run.drop_live()
+    continuous.run.drop_mid_round()
     return record
 
 

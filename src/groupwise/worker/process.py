@@ -38,8 +38,8 @@ from groupwise.worker.progress import JobProgress, ProgressReporter
 
 if TYPE_CHECKING:  # the server imports this module; only the worker process needs these
     from groupwise.clips.render import RenderPool
+    from groupwise.worker.continuous import ContinuousSessions
     from groupwise.worker.job import Job
-    from groupwise.worker.live import LiveSessions
 
 log = logging.getLogger(__name__)
 
@@ -121,17 +121,17 @@ class Worker:
         self.poll_s = poll_s
         self.shard = shard
         self._render: dict[int, RenderPool] = {}
-        self._live: LiveSessions | None = None
+        self._continuous: ContinuousSessions | None = None
 
     @property
-    def live(self) -> "LiveSessions":
-        """The continuous rounds this worker trains (`worker.live`; loaded on first use, as
+    def continuous(self) -> "ContinuousSessions":
+        """The continuous rounds this worker trains (`worker.continuous`; loaded on first use, as
         the server imports this module)."""
-        if self._live is None:
-            from groupwise.worker.live import LiveSessions
+        if self._continuous is None:
+            from groupwise.worker.continuous import ContinuousSessions
 
-            self._live = LiveSessions(self.db, self.data_dir, self.serves)
-        return self._live
+            self._continuous = ContinuousSessions(self.db, self.data_dir, self.serves)
+        return self._continuous
 
     def serves(self, session_id: str) -> bool:
         """Whether this worker serves the session (its `shard`)."""
@@ -156,14 +156,14 @@ class Worker:
             for child in multiprocessing.active_children():
                 child.terminate()
             self._close_render_pools()
-            if self._live is not None:
-                self._live.close()
+            if self._continuous is not None:
+                self._continuous.close()
         _exit_if_orphaned()
 
     def work_once(self) -> bool:
         """The waiting job of one session, else one slice of continuous training: a job
         never waits for more than one slice. False when there was nothing to do."""
-        return self.run_next() or self.train_live()
+        return self.run_next() or self.train_continuous()
 
     def run_next(self) -> bool:
         """Run the job of the longest-waiting session, if any; True when one ran."""
@@ -178,9 +178,9 @@ class Worker:
                 return True
         return False
 
-    def train_live(self) -> bool:
-        """One slice of continuous training (`worker.live`); True when one ran."""
-        return self.live.step()
+    def train_continuous(self) -> bool:
+        """One slice of continuous training (`worker.continuous`); True when one ran."""
+        return self.continuous.step()
 
     def run_job(self, job: "Job") -> None:
         """Run one job; an exception marks the session failed with its message."""
@@ -197,15 +197,15 @@ class Worker:
                 elif job.phase == "finishing":
                     finishing.finish(job, self.db, self.data_dir, progress)
                 elif job.settings.training == "continuous":
-                    training = self.live.take(job)
+                    training = self.continuous.take(job)
                     render = self._render_pool(job.settings.render_workers)
                     opened = False
                     try:
                         opened = jobs.train(
-                            job, self.db, self.data_dir, progress, training.live, render
+                            job, self.db, self.data_dir, progress, training.continuous, render
                         )
                     finally:  # the run trains on into the round it opened, or closes
-                        self.live.keep(job, training, opened)
+                        self.continuous.keep(job, training, opened)
                 else:
                     jobs.train(job, self.db, self.data_dir, progress)
         except Exception as error:

@@ -14,7 +14,7 @@ a thread, so it never blocks the event loop). Each check:
 3. starts a worker when there is work and none is running, e.g. after `POST /retry`
    re-queued a failed step, at startup for sessions a previous server left mid-step, or
    for an open round that trains continuously (a killed worker's training resumes from
-   its live checkpoint at once, not when the round ends).
+   its mid-round checkpoint at once, not when the round ends).
 """
 
 import asyncio

@@ -1,5 +1,5 @@
 """`GET /api/sessions/{id}/training` and the ``training`` event: the worker's learning curve
-of a continuous round (driven in-process, `Worker.train_live`) and of trained rounds."""
+of a continuous round (driven in-process, `Worker.train_continuous`) and of trained rounds."""
 
 import json
 import time
@@ -54,23 +54,23 @@ def test_a_continuous_round_shows_its_steps_fits_and_true_returns(client, monkey
     assert client.get(f"/api/sessions/{sid}/training").json() == {"points": [], "summary": None}
     worker = Worker(context_of(client).db, context_of(client).data_dir, poll_s=0.1)
     try:
-        worker.train_live()  # no pairs yet: no PPO, no point
+        worker.train_continuous()  # no pairs yet: no PPO, no point
         assert client.get(f"/api/sessions/{sid}/training").json()["points"] == []
         post_judgement(client, sid, ["b0", "b1"], ["b2"])
         # the first fit, the policy before any PPO handed to the evaluator process, a rollout
         # (the evaluator is still starting: no second evaluation yet)
-        worker.train_live()
+        worker.train_continuous()
         _curve_when(client, sid, evaluated=1)
-        worker.train_live()  # that evaluation is done: the next, after the second rollout
+        worker.train_continuous()  # that evaluation is done: the next, after the second rollout
         curve_ = _curve_when(client, sid, evaluated=2)
         # the evaluator's return is the greedy policy's as the worker would measure it
-        run = worker.live._live[sid].run  # its policy is still the one evaluated last
+        run = worker.continuous._rounds[sid].run  # its policy is still the one evaluated last
         loop = run.cfg.loop
         here = curve.true_return(
             run.make_env, run.agent.policy(True), loop.eval_episodes, loop.seed
         )
     finally:
-        worker.live.close()
+        worker.continuous.close()
     points = curve_["points"]  # in time order: an evaluation's point as of its snapshot
     assert [(p["ppo_steps"], p["true_return"] is None) for p in points] == [
         (0, True),  # the first fit, stored at once
@@ -113,7 +113,7 @@ def test_every_trained_round_adds_a_point_from_its_record(client, training):
     assert client.post(f"/api/sessions/{sid}/end-round").status_code == 200
     run_worker_once(client)  # round 0 trained
     points = client.get(f"/api/sessions/{sid}/training").json()["points"]
-    steps = 64 if training == "rounds" else 0  # TINY's ppo_steps_per_round; live: none
+    steps = 64 if training == "rounds" else 0  # TINY's ppo_steps_per_round; continuous: none
     record = points[-1]
     assert (record["round"], record["ppo_steps"], record["pairs"]) == (0, steps, 1)
     assert record["true_return"] is not None

@@ -1,13 +1,13 @@
-"""Continuous training in the app's worker (`worker.live`), in-process on a real database:
+"""Continuous training in the app's worker (`worker.continuous`), in-process on a real database:
 PPO trains while the round is open, the reward refits on the stored judgements, the round
-ends on the run that trained, and a restarted worker resumes from the live checkpoint."""
+ends on the run that trained, and a restarted worker resumes from the mid-round checkpoint."""
 
 import json
 
 import pytest
 from tests.unit.server.conftest import context_of, new_session, post_judgement, run_worker_once
 
-from groupwise.worker import live_round
+from groupwise.worker import continuous_round
 from groupwise.worker.process import Worker
 
 ROLLOUT = 32  # TINY's PPO: 1 env × 32 steps
@@ -24,20 +24,20 @@ def test_the_worker_trains_while_the_round_is_open_and_ends_it_on_that_run(clien
     worker = _worker(client)
     # an open continuous round with no pairs yet: no PPO, and the worker may sleep (it
     # used to report work done and poll the database in a tight loop)
-    assert not worker.train_live()
-    training = worker.live._live[sid]
+    assert not worker.train_continuous()
+    training = worker.continuous._rounds[sid]
     assert training.run.agent.num_timesteps == 0
     post_judgement(client, sid, ["b0", "b1"], ["b2"])
     for _ in range(3):
-        assert worker.train_live()
+        assert worker.train_continuous()
     assert len(training.run.dataset) == 2  # the first pairs were fitted at once
     assert training.run.agent.num_timesteps == 3 * ROLLOUT
     post_judgement(client, sid, ["b3"], ["b4", "b5", "b6"])  # arrives between two slices …
-    assert worker.train_live()
+    assert worker.train_continuous()
     assert training.run.agent.num_timesteps == 4 * ROLLOUT  # 3 new pairs: no refit yet
     assert client.post(f"/api/sessions/{sid}/end-round").json()["phase"] == "training"
-    assert not worker.train_live()  # the round is no longer open
-    assert worker.run_next()  # the training job ends the round on the live run …
+    assert not worker.train_continuous()  # the round is no longer open
+    assert worker.run_next()  # the training job ends the round on the run that trained …
     state = client.get(f"/api/sessions/{sid}").json()
     # … and opens the next one, cut from its rollouts: no preparing job
     assert (state["phase"], state["round"], state["error"]) == ("ready", 1, None)
@@ -48,19 +48,19 @@ def test_the_worker_trains_while_the_round_is_open_and_ends_it_on_that_run(clien
     assert record["env_steps"] == 4 * ROLLOUT
 
 
-def test_a_restarted_worker_resumes_the_round_from_its_live_checkpoint(client, monkeypatch):
-    monkeypatch.setattr(live_round, "CHECKPOINT_S", 0.0)
+def test_a_restarted_worker_resumes_the_round_from_its_mid_round_checkpoint(client, monkeypatch):
+    monkeypatch.setattr(continuous_round, "CHECKPOINT_S", 0.0)
     sid = new_session(client, training="continuous")["id"]
     run_worker_once(client)
     post_judgement(client, sid, ["b0", "b1"], ["b2"])
     first = _worker(client)
     for _ in range(2):
-        first.train_live()
-    assert first.live._live[sid].run.agent.num_timesteps == 2 * ROLLOUT
+        first.train_continuous()
+    assert first.continuous._rounds[sid].run.agent.num_timesteps == 2 * ROLLOUT
     post_judgement(client, sid, ["b7"], ["b8"])  # acknowledged, then the worker is killed
     second = _worker(client)  # a new worker: nothing in memory
-    second.train_live()
-    resumed = second.live._live[sid]
+    second.train_continuous()
+    resumed = second.continuous._rounds[sid]
     assert resumed.run.agent.num_timesteps == 3 * ROLLOUT  # the checkpoint's 2, then 1 more
     assert len(resumed.run.dataset) == 2 + 1  # every acknowledged judgement's pairs
 
@@ -70,7 +70,7 @@ def test_a_rounds_session_is_left_alone_while_open(client, training):
     sid = new_session(client, training=training)["id"]
     run_worker_once(client)
     post_judgement(client, sid, ["b0"], ["b1"])
-    assert not _worker(client).train_live()
+    assert not _worker(client).train_continuous()
 
 
 def test_sessions_take_turns_and_a_job_goes_first(client):
@@ -84,11 +84,11 @@ def test_sessions_take_turns_and_a_job_goes_first(client):
     second = new_session(client, training="continuous")["id"]
     assert worker.work_once()  # the second session's preparation, before any more training
     assert client.get(f"/api/sessions/{second}").json()["phase"] == "ready"
-    assert worker.live._live[first].run.agent.num_timesteps == ROLLOUT
+    assert worker.continuous._rounds[first].run.agent.num_timesteps == ROLLOUT
     post_judgement(client, second, ["b3"], ["b4", "b5"])
     for _ in range(4):
         assert worker.work_once()
-    steps = {sid: worker.live._live[sid].run.agent.num_timesteps for sid in (first, second)}
+    steps = {sid: worker.continuous._rounds[sid].run.agent.num_timesteps for sid in (first, second)}
     assert steps == {first: 3 * ROLLOUT, second: 2 * ROLLOUT}  # turn by turn
 
 
@@ -100,6 +100,6 @@ def test_a_session_with_nothing_to_learn_from_passes_its_turn(client):
     post_judgement(client, busy, ["b0", "b1"], ["b2"])
     worker = _worker(client)
     for _ in range(2):
-        assert worker.train_live()  # both slices go to the session with pairs
-    assert worker.live._live[busy].run.agent.num_timesteps == 2 * ROLLOUT
-    assert worker.live._live[idle].run.agent.num_timesteps == 0
+        assert worker.train_continuous()  # both slices go to the session with pairs
+    assert worker.continuous._rounds[busy].run.agent.num_timesteps == 2 * ROLLOUT
+    assert worker.continuous._rounds[idle].run.agent.num_timesteps == 0

@@ -10,7 +10,7 @@ from tests.unit.server.conftest import context_of, new_session, post_judgement, 
 from groupwise.pool.files import load_fragments
 from groupwise.storage.sessions import get_round
 from groupwise.storage.training import list_points
-from groupwise.worker import jobs, live_round
+from groupwise.worker import continuous_round, jobs
 from groupwise.worker.job import checkpoint_of, job_of
 from groupwise.worker.process import Worker
 from groupwise.worker.publishing import sampled_at
@@ -27,7 +27,7 @@ def _training_session(client, slices: int = SLICES, **settings) -> tuple[str, Wo
     context = context_of(client)
     worker = Worker(context.db, context.data_dir, poll_s=0.1)
     for _ in range(slices):
-        assert worker.train_live()
+        assert worker.train_continuous()
     return sid, worker
 
 
@@ -44,8 +44,8 @@ def _round_stats(client, sid: str, round_index: int) -> dict | None:
 
 def test_the_next_pool_is_cut_from_the_latest_rollouts_when_the_round_ends(client):
     sid, worker = _training_session(client)
-    training = worker.live._live[sid]
-    recorded = training.live.recorder.recent(32)
+    training = worker.continuous._rounds[sid]
+    recorded = training.continuous.recorder.recent(32)
     assert [len(e.trajectory) for e in recorded] == [SLICES * ROLLOUT]  # the one episode
     episode = recorded[0]
     assert client.post(f"/api/sessions/{sid}/end-round").json()["phase"] == "training"
@@ -74,7 +74,7 @@ def test_each_point_carries_its_own_rounds_pool_position(client):
     worker.run_next()  # round 1 open from round 0's rollouts, round 0 committed
     post_judgement(client, sid, ["b3"], ["b4", "b5"], round_index=1)
     for _ in range(SLICES):
-        assert worker.train_live()
+        assert worker.train_continuous()
     client.post(f"/api/sessions/{sid}/end-round")
     worker.run_next()  # round 2 open from round 1's rollouts, round 1 committed
     with context_of(client).db.read() as s:
@@ -90,33 +90,34 @@ def test_each_point_carries_its_own_rounds_pool_position(client):
 
 
 def test_the_step_counter_moves_with_each_rollout_and_pause_stops_ppo(client, monkeypatch):
-    monkeypatch.setattr(live_round, "PROGRESS_S", 0.0)
+    monkeypatch.setattr(continuous_round, "PROGRESS_S", 0.0)
     sid, worker = _training_session(client, slices=2)
-    training = worker.live._live[sid]
+    training = worker.continuous._rounds[sid]
     with context_of(client).db.read() as s:
         newest = list_points(s, sid)[-1]
     assert newest.ppo_steps == training.run.agent.num_timesteps == 2 * ROLLOUT
     assert client.post(f"/api/sessions/{sid}/pause").status_code == 200
-    assert not worker.train_live()  # paused: no PPO …
+    assert not worker.train_continuous()  # paused: no PPO …
     assert training.run.agent.num_timesteps == 2 * ROLLOUT
-    assert worker.live._live[sid] is training  # … and the run is kept for the resumption
+    assert worker.continuous._rounds[sid] is training  # … and the run is kept for the resumption
     assert client.post(f"/api/sessions/{sid}/resume").status_code == 200
-    assert worker.train_live()
+    assert worker.train_continuous()
     assert training.run.agent.num_timesteps == 3 * ROLLOUT
 
 
 def _opened_not_committed(client):
     """A session whose round 0 ended and whose round 1 `jobs.open_fresh` opened from round
-    0's rollouts, round 0 not yet committed: (sid, worker, context, job, the live training)."""
+    0's rollouts, round 0 not yet committed: (sid, worker, context, job, the continuous
+    training)."""
     sid, worker = _training_session(client, slices=2)
     client.post(f"/api/sessions/{sid}/end-round")
     context = context_of(client)
     job = job_of(context.db, sid)
     assert job is not None
-    training = worker.live.take(job)
+    training = worker.continuous.take(job)
     render = worker._render_pool(job.settings.render_workers)
     try:
-        assert jobs.open_fresh(job, context.db, context.data_dir, training.live, render)
+        assert jobs.open_fresh(job, context.db, context.data_dir, training.continuous, render)
     except BaseException:
         training.run.close()
         raise
@@ -126,31 +127,31 @@ def _opened_not_committed(client):
 def test_a_worker_killed_between_opening_and_committing_commits_on_resume(client):
     sid, worker, context, _job, training = _opened_not_committed(client)
     training.run.close()
-    worker.live.close()  # killed here: round 1 open, round 0 not committed
+    worker.continuous.close()  # killed here: round 1 open, round 0 not committed
     assert _round_stats(client, sid, 0) is None
 
     resumed = Worker(context.db, context.data_dir, poll_s=0.1)
     post_judgement(client, sid, ["b3"], ["b4", "b5"], round_index=1)
-    assert resumed.train_live()  # commits round 0 first, then trains round 1
+    assert resumed.train_continuous()  # commits round 0 first, then trains round 1
     stats = _round_stats(client, sid, 0)
     assert stats is not None and stats["round"] == 0
     assert (context.data_dir / checkpoint_of(sid, 0) / "state.json").is_file()
-    again = resumed.live._live[sid]
+    again = resumed.continuous._rounds[sid]
     assert again.round == 1 and len(again.run.dataset) > stats["pairs_total"]
 
 
 def test_a_round_checkpointed_but_not_recorded_keeps_its_checkpoint_on_resume(client):
-    """Killed after `end_round` wrote round 0's checkpoint (and dropped the live one) but
+    """Killed after `end_round` wrote round 0's checkpoint (and dropped the mid-round one) but
     before its record was stored: the resumed worker records it from the checkpoint instead
     of training round 0 again from round −1 (which would lose its PPO steps)."""
     sid, _worker, context, job, training = _opened_not_committed(client)
     ended = dataclasses.replace(job, round=0, phase="training")
-    record = jobs.commit_round(ended, context.db, context.data_dir, None, training.live)
+    record = jobs.commit_round(ended, context.db, context.data_dir, None, training.continuous)
     training.run.close()
     assert record.env_steps > 0 and _round_stats(client, sid, 0) is None  # killed here
 
     resumed = Worker(context.db, context.data_dir, poll_s=0.1)
-    assert resumed.train_live()
+    assert resumed.train_continuous()
     assert _round_stats(client, sid, 0) == {**record.stats(), "pool_steps": 0}
 
 

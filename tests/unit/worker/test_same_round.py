@@ -6,7 +6,7 @@ the real HTTP routes on a real SQLite database, the worker's jobs picked up from
 (`Worker.run_next`: prepare, train). The headless side is `begin_round` → the same
 judgements → `end_round` on a `Run` of the session's own config. In continuous training
 (issue 39) the worker trains the open round slice by slice and cuts the next pool from the
-run's latest rollouts; the headless side drives `run.continuous.LiveRound` alike.
+run's latest rollouts; the headless side drives `run.continuous.ContinuousRound` alike.
 """
 
 import uuid
@@ -23,7 +23,7 @@ from groupwise.pool.files import load_fragments
 from groupwise.pool.recent import fresh_sources
 from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.preferences.judgement import LEFT_BETTER, RIGHT_BETTER, Judgement
-from groupwise.run.continuous import LiveRound
+from groupwise.run.continuous import ContinuousRound
 from groupwise.run.progress import RunCallback
 from groupwise.run.round import begin_round, end_round, finish_round
 from groupwise.run.run import CONFIG_FILE, Run
@@ -162,7 +162,7 @@ def test_a_continuous_app_round_and_a_headless_continuous_round_are_the_same_rou
 ):
     """The continuous path (issue 39): the worker trains the open round slice by slice and,
     when the round ends, cuts the next pool from its run's latest rollouts; the headless
-    continuous round (`run.continuous`: `LiveRound`, `pool.recent.fresh_sources`) does the
+    continuous round (`run.continuous`: `ContinuousRound`, `pool.recent.fresh_sources`) does the
     same with the same judgements and rollouts, and gets the same next pool, bit for bit."""
     chosen = {"seed": 11, "training": "continuous"}
     slices = 12  # 384 PPO steps: the next pool's 32 windows all from the recorded rollouts
@@ -177,10 +177,10 @@ def test_a_continuous_app_round_and_a_headless_continuous_round_are_the_same_rou
         assert client.post(f"/api/sessions/{sid}/judgements", json=body).status_code == 201
     worker = Worker(context.db, context.data_dir, poll_s=0.1)
     for _ in range(slices):
-        assert worker.train_live()
+        assert worker.train_continuous()
     assert client.post(f"/api/sessions/{sid}/end-round").json()["phase"] == "training"
     assert worker.run_next()  # round 1 cut from round 0's rollouts and opened; 0 committed
-    worker.live.close()
+    worker.continuous.close()
     assert client.get(f"/api/sessions/{sid}").json()["round"] == 1
     cfg = RunConfig.load(app_dir / CONFIG_FILE)
     assert cfg == settings.run_config("GridWorld")
@@ -194,11 +194,13 @@ def test_a_continuous_app_round_and_a_headless_continuous_round_are_the_same_rou
         )
         _same_pool(load_fragments(context.data_dir / round_directory(sid, 0)), offer.pool)
         judgements, keys = _kept(0)
-        live = LiveRound(run, offer, round_streams(cfg.loop.seed, 0), 0.0)
-        live.update(list(zip(keys, judgements, strict=True)), 0.0, final=True)
+        continuous = ContinuousRound(run, offer, round_streams(cfg.loop.seed, 0), 0.0)
+        continuous.update(list(zip(keys, judgements, strict=True)), 0.0, final=True)
         for _ in range(slices):
-            live.learn(run.ppo.rollout_steps)
-        finish_round(run, offer, judgements, live.report, live.timer, RunCallback(), asked=None)
+            continuous.learn(run.ppo.rollout_steps)
+        finish_round(
+            run, offer, judgements, continuous.report, continuous.timer, RunCallback(), asked=None
+        )
         following = begin_round(
             run, strategy, budget, n_queries=queries, sources=fresh_sources(cfg.loop)
         )

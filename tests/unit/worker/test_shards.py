@@ -52,8 +52,8 @@ def test_a_worker_trains_only_the_open_rounds_of_its_shard(client):
         post_judgement(client, sid, ["b0", "b1"], ["b2"])
     second = Worker(context.db, context.data_dir, poll_s=0.1, shard=(1, 2))
     for _ in range(len(shards[1])):
-        assert second.train_live()
-    assert set(second.live._live) == set(shards[1])
+        assert second.train_continuous()
+    assert set(second.continuous._rounds) == set(shards[1])
 
 
 def test_the_supervisor_starts_a_worker_per_shard_with_work(client):
