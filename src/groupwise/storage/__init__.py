@@ -16,10 +16,10 @@ Modules: `models` (tables), `database` (engines, pragmas), `settings` (session s
 timer: shown, pause, resume, due), `progress` (the worker's progress line), `counts`
 (comparisons and pairs), `ending` ("Finish now", "Continue training"),
 `rounds` (pools, suggestions, pairwise queue),
-`judgements` (store, retry, undo, list), `annotators` (the people a session is shared
-with, their tokens and views), `team` (their counters and agreement), `export` (a session
-to its export and back), `export_format` (the export's lines), `export_jsonl` /
-`export_parquet` (the export as JSONL / Parquet).
+`judging` (store, retry, undo), `judgements` (the records: list, a round's), `annotators`
+(the people a session is shared with, their tokens and views), `team` (their counters and
+agreement), `export` (a session to its export and back), `export_format` (the export's
+lines), `export_jsonl` / `export_parquet` (the export as JSONL / Parquet).
 """
 
 from groupwise.storage.database import DATABASE_FILE, Database, default_url, sqlite_url

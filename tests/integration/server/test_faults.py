@@ -18,7 +18,7 @@ from tests.postgres import BACKENDS
 
 from groupwise.storage import Database, SessionSettings
 from groupwise.storage import sessions as repo
-from groupwise.storage.judgements import JudgementInput, add_judgement
+from groupwise.storage.judging import JudgementInput, add_judgement
 from groupwise.storage.rounds import BehaviourInput, PreparedRound, store_prepared_round
 
 

@@ -21,12 +21,8 @@ from groupwise.storage.database import sqlite_url
 from groupwise.storage.export import export_session, import_session
 from groupwise.storage.export_jsonl import from_jsonl, to_jsonl
 from groupwise.storage.export_parquet import from_parquet, to_parquet
-from groupwise.storage.judgements import (
-    JudgementInput,
-    add_judgement,
-    list_judgements,
-    undo_judgement,
-)
+from groupwise.storage.judgements import list_judgements
+from groupwise.storage.judging import JudgementInput, add_judgement, undo_judgement
 from groupwise.storage.models import utcnow
 from groupwise.storage.sessions import get_round, get_session
 from groupwise.storage.team import team_stats

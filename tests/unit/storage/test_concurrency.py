@@ -16,7 +16,8 @@ from tests.unit.storage.conftest import N
 from groupwise.preferences.judgement import Judgement
 from groupwise.preferences.pairs import judgement_pairs
 from groupwise.storage import ConflictError, Database, SessionSettings
-from groupwise.storage.judgements import LABELS, JudgementInput, add_judgement, undo_judgement
+from groupwise.storage.judgements import LABELS
+from groupwise.storage.judging import JudgementInput, add_judgement, undo_judgement
 from groupwise.storage.lifecycle import close_open_round
 from groupwise.storage.models import JudgementRow
 from groupwise.storage.sessions import get_session

@@ -9,7 +9,7 @@ from groupwise.storage.counts import counts
 from groupwise.storage.export import export_session, import_session
 from groupwise.storage.export_jsonl import from_jsonl, to_jsonl
 from groupwise.storage.export_parquet import from_parquet, to_parquet
-from groupwise.storage.judgements import JudgementInput, add_judgement, undo_judgement
+from groupwise.storage.judging import JudgementInput, add_judgement, undo_judgement
 from groupwise.storage.phases import FINISHED
 from groupwise.storage.sessions import get_session
 from groupwise.storage.timer import show_round

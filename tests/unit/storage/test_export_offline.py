@@ -14,7 +14,7 @@ from groupwise.cli import main as cli
 from groupwise.storage import InvalidError
 from groupwise.storage.export import StatesExport, export_session
 from groupwise.storage.export_offline import env_slug, index_codes, offline_pairs
-from groupwise.storage.judgements import JudgementInput, add_judgement, undo_judgement
+from groupwise.storage.judging import JudgementInput, add_judgement, undo_judgement
 from groupwise.storage.states import preference_dataset
 
 

@@ -12,7 +12,7 @@ from groupwise.storage import Database, InvalidError, NotFoundError, default_url
 from groupwise.storage.export import StatesExport, export_session, import_session
 from groupwise.storage.export_jsonl import from_jsonl, to_jsonl
 from groupwise.storage.export_parquet import from_parquet, to_parquet
-from groupwise.storage.judgements import JudgementInput, add_judgement, undo_judgement
+from groupwise.storage.judging import JudgementInput, add_judgement, undo_judgement
 from groupwise.storage.sessions import get_round, list_sessions, round_directory
 from groupwise.storage.states import preference_dataset
 

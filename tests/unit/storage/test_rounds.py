@@ -4,7 +4,7 @@ import pytest
 
 from groupwise.storage import NotFoundError
 from groupwise.storage import rounds as repo
-from groupwise.storage.judgements import JudgementInput, add_judgement, undo_judgement
+from groupwise.storage.judging import JudgementInput, add_judgement, undo_judgement
 from groupwise.storage.sessions import get_round
 
 

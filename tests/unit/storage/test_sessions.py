@@ -8,7 +8,7 @@ from sqlalchemy import delete, func, select, text
 
 from groupwise.storage import Database, NotFoundError
 from groupwise.storage.database import add_missing_columns, sqlite_url
-from groupwise.storage.judgements import JudgementInput, add_judgement
+from groupwise.storage.judging import JudgementInput, add_judgement
 from groupwise.storage.models import JudgementRow, PairRow, SessionRow
 from groupwise.storage.sessions import find_resumable, get_session, list_sessions
 

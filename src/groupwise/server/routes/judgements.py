@@ -9,6 +9,7 @@ from groupwise.server.deps import Context, Me, SessionId
 from groupwise.server.routes import ERRORS
 from groupwise.server.schemas.judgements import JudgementIn, JudgementOut
 from groupwise.storage import judgements as repo
+from groupwise.storage import judging
 from groupwise.storage.annotators import Caller, display_names
 from groupwise.storage.sessions import get_session
 
@@ -28,15 +29,15 @@ def submit(
     """Store the caller's judgement and its pairs (committed before this answer). A retry
     with the same client_id answers 200 with the stored judgement."""
     with context.db.write() as s:
-        record, created = repo.add_judgement(s, session_id, _input(judgement, me))
+        record, created = judging.add_judgement(s, session_id, _input(judgement, me))
         names = display_names(s, get_session(s, session_id))
     if not created:
         response.status_code = status.HTTP_200_OK
     return state.judgement_out(record, names)
 
 
-def _input(judgement: JudgementIn, caller: Caller) -> repo.JudgementInput:
-    return repo.JudgementInput(
+def _input(judgement: JudgementIn, caller: Caller) -> judging.JudgementInput:
+    return judging.JudgementInput(
         client_id=judgement.client_id,
         round=judgement.round,
         left=tuple(judgement.left),
@@ -76,6 +77,6 @@ def undo(
     """Undo the caller's judgement of the open round (its pairs are removed); 403 for
     someone else's."""
     with context.db.write() as s:
-        record = repo.undo_judgement(s, session_id, judgement_id, annotator_id=me.id)
+        record = judging.undo_judgement(s, session_id, judgement_id, annotator_id=me.id)
         names = display_names(s, get_session(s, session_id))
     return state.judgement_out(record, names)
