@@ -13,8 +13,8 @@ The teacher's time is the wall time since round 0 opened (answers and waits alik
 mark of `--minutes` the benchmark copies the session's run directory (its committed
 checkpoints and the mid-round checkpoint the worker writes every 30 s); after the session it
 loads each copy's policy and measures its greedy episodes' target score in the target env,
-as the case studies do (`study.case_studies.case_study.evaluate_target`). A seed succeeds when its
-success rate reaches `SEED_SUCCESS`, as in the case studies' tables.
+as the case studies do (`study.case_studies.target_evaluation.evaluate_target`). A seed
+succeeds when its success rate reaches `SEED_SUCCESS`, as in the case studies' tables.
 
 The teacher reads the true step scores of a round's behaviours from the pool files the
 worker published (a person sees them in the clips); everything else goes through HTTP.
@@ -53,8 +53,8 @@ from groupwise.query.strategies import Query
 from groupwise.run.continuous import PAPER_CASES, paper_pace
 from groupwise.run.run import CONFIG_FILE, Run
 from groupwise.storage.sessions import round_directory, session_directory
-from groupwise.study.case_studies.case_study import evaluate_target
 from groupwise.study.case_studies.table import SEED_SUCCESS
+from groupwise.study.case_studies.target_evaluation import evaluate_target
 from groupwise.teachers import DECISION_MAKERS
 from groupwise.teachers.calibration import PEOPLE_LABEL_ERROR
 

@@ -69,7 +69,7 @@ def check_dependencies(setups: Sequence[str]) -> str:
 
         from groupwise.config import RunConfig
         from groupwise.envs import make_env
-        from groupwise.study.case_studies.case_study import CaseRecord
+        from groupwise.study.case_studies.case_record import CaseRecord
     except ImportError as error:
         sys.exit(f"walker_remedies: cannot import {error.name} (run with the project's venv)")
     if "reward_rank_rho" not in CaseRecord.__dataclass_fields__:

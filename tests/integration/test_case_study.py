@@ -14,13 +14,8 @@ from groupwise.clips.video import probe
 from groupwise.commands.case_study import CASE_STEPS_PER_ROUND, case_config
 from groupwise.envs import TARGETS, horizon
 from groupwise.run.run import CONFIG_FILE, RESULTS_FILE
-from groupwise.study.case_studies.case_study import (
-    CASE_FILE,
-    STRIP_FILE,
-    SUMMARY_FILE,
-    VIDEO_FILE,
-    CaseRecord,
-)
+from groupwise.study.case_studies.case_record import CaseRecord
+from groupwise.study.case_studies.case_study import CASE_FILE, STRIP_FILE, SUMMARY_FILE, VIDEO_FILE
 from groupwise.study.case_studies.splits_posture import replay_posture
 from groupwise.study.case_studies.table import (
     curves_figure,

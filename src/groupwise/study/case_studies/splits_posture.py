@@ -30,7 +30,7 @@ from groupwise.rl.policy_files import load_policy
 from groupwise.run.checkpoint import checkpoint_dir
 from groupwise.run.run import CONFIG_FILE
 from groupwise.run.streams import eval_rng
-from groupwise.study.case_studies.case_study import evaluate_target
+from groupwise.study.case_studies.target_evaluation import evaluate_target
 from groupwise.types import FloatArray
 
 HEADER = (

@@ -26,7 +26,7 @@ from groupwise.config import PPO_PRESETS, PPOConfig
 from groupwise.envs import TARGETS, Target, make_env
 from groupwise.envs.targets import TARGET_SCORE_KEY
 from groupwise.rl.ppo import PPOAgent
-from groupwise.study.case_studies.case_study import evaluate_target
+from groupwise.study.case_studies.target_evaluation import evaluate_target
 
 log = logging.getLogger(__name__)
 

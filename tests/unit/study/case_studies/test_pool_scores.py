@@ -4,7 +4,7 @@ import numpy as np
 
 from groupwise.behaviour.pool import BehaviourPool
 from groupwise.episodes.fragments import Fragment
-from groupwise.study.case_studies.case_study import PoolRecorder, pool_scores
+from groupwise.study.case_studies.pool_scores import PoolRecorder, pool_scores
 
 
 def _fragment(rewards: list[float], start: int) -> Fragment:

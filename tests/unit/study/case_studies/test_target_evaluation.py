@@ -5,7 +5,7 @@ import pytest
 
 from groupwise.envs import TARGET_TOTAL_KEY, TARGETS, make_env
 from groupwise.rl.policy import RandomPolicy
-from groupwise.study.case_studies.case_study import evaluate_target
+from groupwise.study.case_studies.target_evaluation import evaluate_target
 
 
 def test_evaluation_scores_each_episode_by_the_envs_total() -> None:
