@@ -9,7 +9,7 @@ from each run's ``case-study.csv`` and ``summary.json``. Above it, the summary: 
 and DM, the seeds whose greedy policy succeeds (at least `SEED_SUCCESS` of its final
 episodes reach the threshold) after the last round and as the take-away agent, the pairs and
 comparisons used, and the spread and best of the pools' target scores in rounds 0–2
-(`case_study.pool_scores`, mean over the seeds). A run's DM is labelled with the exploration
+(`pool_scores.pool_scores`, mean over the seeds). A run's DM is labelled with the exploration
 it ran with (`setup_label`). With ``--figure PNG`` it also draws each run's target score
 against its preference pairs, one panel per target, the success threshold dashed; with
 ``--strips PNG`` the five-frame strip of each target's and DM's best final episode. It is how
