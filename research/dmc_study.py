@@ -3,13 +3,15 @@
     python research/dmc_study.py OUT [--seeds 2] [--workers 2]  # what is missing, then the table
     python research/dmc_study.py OUT --table                     # the table of what OUT holds
 
-Runs `groupwise study --profile dmc` into OUT (Walker-walk and Cheetah-run, the three DMs,
-100 preferences: 100 comparisons, each DM held to one pair per comparison), then, for each
+Runs `groupwise study --profile dmc --ablation noiseless` into OUT (Walker-walk and
+Cheetah-run, the three DMs, 100 preferences: 100 comparisons, each DM held to one pair per
+comparison; with SPEC §7's noisy teacher, and with a teacher that is never wrong, as the
+published tables' scripted teacher), then, for each
 env and seed, PPO on the env's own reward with the same PPO settings, steps and greedy
 evaluation (`groupwise.study.simulation.reference`) into OUT/reference/ENV/seed-K/. Both
 skip what is finished, so an interrupted call resumes. Then prints one Markdown table: the
-final greedy true return per env and DM (mean ± sd over seeds) beside the reference and
-the published SAC-based numbers at 100 preferences.
+final greedy true return per env, teacher and DM (mean ± sd over seeds) beside the
+reference and the published SAC-based numbers at 100 preferences.
 """
 
 import argparse
@@ -34,6 +36,8 @@ from groupwise.study.simulation.reference import (
 PUBLISHED_WALKER_WALK = {"PEBBLE": 453, "SURF": 661, "RUNE": 415, "QPA": 796, "PPE": 908}
 """Walker-walk at 100 preferences as PPE (NeurIPS 2025) reports it, SAC-based methods after
 500 k env steps (their own budgets, not ours)."""
+CONDITIONS = {"cells": "SPEC §7 (σ 0.25 a step)", "noiseless": "never wrong"}
+"""The study's directory of each teacher → how the table names it."""
 EVERY = 50_000
 """PPO steps between the reference's evaluations."""
 
@@ -72,25 +76,28 @@ def table(out: Path, seeds: int) -> list[str]:
     """The Markdown table of the finished cells and references under `out`."""
     columns = [*PAPER_DMS, "PPO, true reward"]
     lines = [
-        "| env | " + " | ".join(columns) + " | published at 100 preferences (SAC, 500 k steps) |",
-        "|---|" + "---:|" * len(columns) + "---|",
+        "| env | teacher | "
+        + " | ".join(columns)
+        + " | published at 100 preferences (SAC, 500 k steps) |",
+        "|---|---|" + "---:|" * len(columns) + "---|",
     ]
     for env in DMC.envs:
-        cells = []
-        for dm in PAPER_DMS:
-            found = [
-                final_return(out / "cells" / env_directory(env) / dm / f"seed-{s}" / "rounds.csv")
-                for s in range(seeds)
-            ]
-            cells.append(_cell([v for v in found if v is not None]))
         references = [final_return(reference_file(out, env, s)) for s in range(seeds)]
-        cells.append(_cell([v for v in references if v is not None]))
+        reference = _cell([v for v in references if v is not None])
         published = (
             ", ".join(f"{k} {v}" for k, v in PUBLISHED_WALKER_WALK.items())
             if env.startswith("dm_control/walker-walk")
             else "–"
         )
-        lines.append(f"| {env} | " + " | ".join(cells) + f" | {published} |")
+        for condition, teacher in CONDITIONS.items():
+            cells = []
+            for dm in PAPER_DMS:
+                folder = out / condition / env_directory(env) / dm
+                found = [final_return(folder / f"seed-{s}" / "rounds.csv") for s in range(seeds)]
+                cells.append(_cell([v for v in found if v is not None]))
+            lines.append(
+                f"| {env} | {teacher} | " + " | ".join([*cells, reference]) + f" | {published} |"
+            )
     return lines
 
 
@@ -110,6 +117,7 @@ def main(argv: Sequence[str] | None = None) -> None:
         if groupwise is None:
             sys.exit("dmc_study: no `groupwise` command beside this python or on PATH")
         study = [groupwise, "study", "--profile", "dmc", "--out", str(args.out)]
+        study += ["--ablation", *(c for c in CONDITIONS if c != "cells")]
         study += ["--seeds", str(args.seeds), "--workers", str(args.workers), "-q"]
         code = subprocess.run(study).returncode
         if code != 0:

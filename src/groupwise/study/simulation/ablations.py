@@ -15,6 +15,9 @@ Each one reproduces a choice of the comparison the paper made that our defaults 
 - ``calibrated``: the simulated teacher is wrong as often as the paper's people (12 % of
   behaviour pairs of unequal return, its noise set per pool: `teachers.calibration`) instead
   of SPEC §7's fixed σ per step.
+- ``noiseless``: the simulated teacher is never wrong (σ = 0), as the scripted teacher of
+  the preference-based RL benchmarks (B-Pref; PEBBLE, SURF, QPA, PPE) is: their published
+  tables are read beside these cells (issue 42's DMC table).
 """
 
 import dataclasses
@@ -54,6 +57,10 @@ def _obs_only(config: RunConfig) -> RunConfig:
     return dataclasses.replace(config, reward=dataclasses.replace(config.reward, use_actions=False))
 
 
+def _noiseless(config: RunConfig) -> RunConfig:
+    return dataclasses.replace(config, teacher=dataclasses.replace(config.teacher, noise_sigma=0.0))
+
+
 def _calibrated(config: RunConfig) -> RunConfig:
     teacher = dataclasses.replace(config.teacher, label_error=PEOPLE_LABEL_ERROR)
     return dataclasses.replace(config, teacher=teacher)
@@ -80,6 +87,10 @@ ABLATIONS: dict[str, Ablation] = {
     "calibrated": Ablation(
         f"a teacher wrong as often as the paper's people (label_error {PEOPLE_LABEL_ERROR})",
         _calibrated,
+    ),
+    "noiseless": Ablation(
+        "a teacher that is never wrong (noise_sigma 0), as the benchmarks' scripted teacher",
+        _noiseless,
     ),
 }
 """Every ablation by name; the name is also its directory in a study (`cells.Cell`)."""

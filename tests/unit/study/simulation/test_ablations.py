@@ -21,6 +21,7 @@ INTENDED = {
     "no-reward-norm": {("ppo", "normalize_reward"): False},
     "obs-only": {("reward", "use_actions"): False},
     "calibrated": {("teacher", "label_error"): 0.12},
+    "noiseless": {("teacher", "noise_sigma"): 0.0},
 }
 
 
