@@ -10,7 +10,6 @@ they are rather than mirroring them.
 
 import dataclasses
 import json
-import logging
 from collections.abc import Mapping
 from dataclasses import field
 from pathlib import Path
@@ -19,9 +18,8 @@ from typing import Annotated, Any, Literal
 from pydantic import ConfigDict, Field, TypeAdapter, model_validator
 from pydantic.dataclasses import dataclass
 
+from groupwise.config_history import legacy_loop_fields_moved, removed_dropped
 from groupwise.preferences.judgement import MAX_GROUP
-
-log = logging.getLogger(__name__)
 
 _STRICT = ConfigDict(extra="forbid", use_attribute_docstrings=True)
 """Unknown fields fail; each field's docstring is its description (OpenAPI, the page's help)."""
@@ -379,15 +377,15 @@ class RunConfig:
     def from_dict(cls, data: dict[str, Any]) -> "RunConfig":
         """Validate a config read from JSON (lists become tuples; unknown fields fail).
 
-        Configs written with an old name of a loop field (`LEGACY_LOOP_FIELDS`: the teacher
-        fields before `TeacherConfig` existed, "oracle") are read as if written now; the
-        fields of mechanisms
-        removed since (`REMOVED_FIELDS`) are dropped, with a warning when one was in use.
+        Configs written with an old name of a loop field (`config_history.LEGACY_LOOP_FIELDS`:
+        the teacher fields before `TeacherConfig` existed, "oracle") are read as if written
+        now; the fields of mechanisms removed since (`config_history.REMOVED_FIELDS`) are
+        dropped, with a warning when one was in use.
 
         Raises:
             ValueError: a field fails validation, or an old and a new name give one field.
         """
-        return _RUN_CONFIG.validate_python(_removed_dropped(_legacy_loop_fields_moved(data)))
+        return _RUN_CONFIG.validate_python(removed_dropped(legacy_loop_fields_moved(data)))
 
     def merged(self, partial: Mapping[str, Any]) -> "RunConfig":
         """This config with the fields `partial` gives replaced, section by section (a
@@ -402,7 +400,7 @@ class RunConfig:
             raise ValueError(f"a config is a JSON object, got {type(partial).__name__}")
         base = dataclasses.asdict(self)
         merged = dict(base)
-        for section, fields in _legacy_loop_fields_moved(dict(partial)).items():
+        for section, fields in legacy_loop_fields_moved(dict(partial)).items():
             if section in base and isinstance(fields, Mapping):
                 merged[section] = {**base[section], **fields}
             else:
@@ -416,87 +414,6 @@ class RunConfig:
 
 PPOPreset = Literal["study", "mujoco"]
 """A key of `PPO_PRESETS`."""
-
-
-LEGACY_LOOP_FIELDS: dict[str, tuple[str, str]] = {
-    "noise_sigma": ("teacher", "noise_sigma"),
-    "interactive_gap": ("teacher", "interactive_gap"),
-    "interactive_clear": ("teacher", "interactive_clear"),
-    "teacher_gamma": ("teacher", "gamma"),
-    "teacher_mistake": ("teacher", "mistake"),
-    "teacher_skip_quantile": ("teacher", "skip_quantile"),
-    "teacher_equal_fraction": ("teacher", "equal_fraction"),
-    "oracle": ("loop", "decision_maker"),
-}
-"""Old `LoopConfig` field → the section and field that hold it now: issue 19 moved the
-teacher's fields out of the loop into `TeacherConfig`; issue 38 renamed "oracle" to
-`decision_maker` (one word for one concept)."""
-
-
-REMOVED_FIELDS: dict[str, dict[str, Any]] = {
-    "reward": {"exploration_bonus": 0.0, "pessimism": 0.0, "exploration_decay": 0.5},
-    "loop": {
-        "pool_variants_greedy": False,
-        "pool_lookahead": 0,
-        "adopt_variants": False,
-        "suggestion_rank": "variance",
-    },
-    "training": {"continue_from": "last", "continue_episodes": 3},
-}
-"""Section → field → its default: fields of mechanisms that measured no gain, removed in
-issue 38 (their results, commands and the commit with their code: docs/case-studies.md,
-"Measured and removed"). Configs of older runs still load without them."""
-
-
-def _removed_dropped(data: dict[str, Any]) -> dict[str, Any]:
-    """`data` without `REMOVED_FIELDS`; a warning names those that were not their default
-    (the run used a mechanism that is gone, so it cannot be repeated as it ran)."""
-    dropped: dict[str, Any] = {}
-    cleaned = dict(data)
-    for section, removed in REMOVED_FIELDS.items():
-        fields = data.get(section)
-        if not isinstance(fields, dict) or not fields.keys() & removed.keys():
-            continue
-        cleaned[section] = {k: v for k, v in fields.items() if k not in removed}
-        dropped |= {
-            f"{section}.{k}": v for k, v in fields.items() if k in removed and v != removed[k]
-        }
-    if dropped:
-        used = ", ".join(f"{key}={value!r}" for key, value in sorted(dropped.items()))
-        log.warning(
-            "config uses removed mechanisms (%s): read without them; their code is in "
-            "commit 697627f (docs/case-studies.md, 'Measured and removed')",
-            used,
-        )
-    return cleaned
-
-
-def _legacy_loop_fields_moved(data: dict[str, Any]) -> dict[str, Any]:
-    """`data` with the fields of an old layout's "loop" (`LEGACY_LOOP_FIELDS`) under the
-    section and name that hold them now.
-
-    Raises:
-        ValueError: a field is given under both its old and its new name.
-    """
-    loop = data.get("loop")
-    if not isinstance(loop, dict) or not loop.keys() & LEGACY_LOOP_FIELDS.keys():
-        return data
-    sections: dict[str, dict[str, Any]] = {
-        "loop": {key: value for key, value in loop.items() if key not in LEGACY_LOOP_FIELDS}
-    }
-    for key, value in loop.items():
-        if key not in LEGACY_LOOP_FIELDS:
-            continue
-        section, name = LEGACY_LOOP_FIELDS[key]
-        if section not in sections:
-            given = data.get(section, {})
-            if not isinstance(given, dict):
-                return data  # validation names the bad value
-            sections[section] = dict(given)
-        if name in sections[section]:
-            raise ValueError(f"{section}.{name} is given twice: also as loop.{key}, its old name")
-        sections[section][name] = value
-    return {**data, **sections}
 
 
 _RUN_CONFIG = TypeAdapter(RunConfig)

@@ -21,7 +21,7 @@ ROOT = Path(groupwise.__file__).parent
 LAYERS: list[set[str]] = [
     # leaves: the data types every layer shares (the package's own API loads lazily)
     {"groupwise", "groupwise.types", "groupwise.episodes"},
-    {"groupwise.envs", "groupwise.preferences"},
+    {"groupwise.envs", "groupwise.preferences", "groupwise.config_history"},
     {"groupwise.config", "groupwise.recipes", "groupwise.agent_file"},
     # the core's computations: no SB3, FastAPI or matplotlib
     {"groupwise.behaviour", "groupwise.clips", "groupwise.reward"},

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from groupwise.config import REMOVED_FIELDS
+from groupwise.config_history import REMOVED_FIELDS
 
 HEADER = (
     "| target | DM | seed | comparisons | preference pairs | tied pairs | label error "
@@ -54,7 +54,7 @@ SETUP_FIELDS: dict[tuple[str, str], Callable[[Any], str]] = {
 def setup_label(run: Path) -> str:
     """The run's decision-maker with the setup it ran with (`SETUP_FIELDS`), e.g.
     "groupwise", "groupwise · 8 pool variants · pre-training 100,000", "groupwise · pools of
-    500"; a run of a mechanism removed since (`config.REMOVED_FIELDS`) names the field and
+    500"; a run of a mechanism removed since (`config_history.REMOVED_FIELDS`) names the field and
     its value, e.g. "groupwise · 8 pool variants · adopt variants"."""
     summary, _ = _read(run)
     cfg = json.loads((run / "config.json").read_text())
