@@ -15,7 +15,12 @@ learning-curve points). It measures PPO's single-core throughput the same way as
 `ppo_throughput` (CPU time, learned reward) and prints a Markdown table.
 
     python -m benchmarks.continuous [--env Hopper] [--rounds 10] [--minutes 1.5] [--pace 5]
-                                    [--stage-after 60] [--log FILE]
+                                    [--recipe teach] [--pretrain-steps 0] [--frame-size 240]
+                                    [--research JSON] [--stage-after 60] [--log FILE]
+
+The End-round table splits the wait as the worker measured it in each round's
+``opening.json`` (`worker.jobs.OpeningClock`, issue 39): the PPO slice in progress, the last
+fit, sampling, DTW + tree + queries, clips and posters, the database write.
 
 Measured on this 2-core machine, Hopper, defaults (`--rounds 10 --minutes 1.5`): End round →
 next round open, median / p95 (max); PPO steps per minute of session time against one core's
@@ -50,16 +55,26 @@ import torch
 from benchmarks.ppo_throughput import steps_per_second
 from benchmarks.submit_latency import start_server, wait_for
 from groupwise.storage.sessions import round_directory
+from groupwise.worker.jobs import OPENING_FILE
 
 SETTINGS = {
-    "recipe": "paper",  # the infrastructure as measured before: no pre-training, no variants
     "pool_size": 100,
     "round_seconds": 0,
     "comparisons_per_round": 0,
     "rounds": 3,  # set to --rounds + 1
-    "frame_size": 96,
     "training": "continuous",
 }
+PARTS = {
+    "before": "the slice in progress (PPO) and picking the job up",
+    "refit": "the last fit brought up to date",
+    "sample": "sampling what the latest rollout lacks",
+    "cut": "DTW, tree and queries",
+    "publish": "clips, posters and pool files",
+    "store": "the database write that opens it",
+    "other": "the rest of the job",
+}
+"""The parts of the wait from End round to the next round's opening, as the worker writes
+them to each round's ``opening.json`` (`worker.jobs.OpeningClock`)."""
 
 
 def _mid_round_steps(data: Path, session: str) -> int | None:
@@ -96,6 +111,26 @@ def main(argv: Sequence[str] | None = None) -> None:
         help="for the comparison only: seconds into a round when the earlier design sampled "
         "the next pool (the app's stage_after_s was 60)",
     )
+    parser.add_argument(
+        "--recipe", default="teach", help="the session's recipe (the app's default: teach)"
+    )
+    parser.add_argument(
+        "--pretrain-steps",
+        type=int,
+        default=0,
+        help="pre-training before round 0 (the recipe's on MuJoCo is 100,000; it changes the "
+        "policy round 0 starts from, not the work at End round)",
+    )
+    parser.add_argument(
+        "--frame-size", type=int, default=240, help="clip pixels (the app's default: 240)"
+    )
+    parser.add_argument(
+        "--research",
+        type=json.loads,
+        default=None,
+        help='a partial run config for the session\'s "research" setting, as JSON (e.g. '
+        '\'{"loop": {"pool_oversample": 1}}\')',
+    )
     parser.add_argument("--log", type=Path, help="write the server's and worker's log here")
     args = parser.parse_args([] if argv is None else list(argv))
     rng = np.random.default_rng(0)
@@ -111,7 +146,14 @@ def main(argv: Sequence[str] | None = None) -> None:
         try:
             with httpx.Client(base_url=url, timeout=60) as http:
                 wait_for(http, first, "ready")  # the server is up (its CLI session ready)
-                settings = {**SETTINGS, "rounds": args.rounds + 1}
+                settings = {
+                    **SETTINGS,
+                    "rounds": args.rounds + 1,
+                    "recipe": args.recipe,
+                    "pretrain_steps": args.pretrain_steps,
+                    "frame_size": args.frame_size,
+                    **({} if args.research is None else {"research": args.research}),
+                }
                 session = http.post(
                     "/api/sessions", json={"env": args.env, "settings": settings}
                 ).json()["id"]
@@ -160,6 +202,7 @@ def main(argv: Sequence[str] | None = None) -> None:
                 watcher.join()
                 points = http.get(f"/api/sessions/{session}/training").json()["points"]
             ages = [_pool_ages(data, session, r) for r in range(1, args.rounds + 1)]
+            openings = [_opening(data, session, r) for r in range(1, args.rounds + 1)]
         finally:
             process.terminate()
             process.wait(timeout=30)
@@ -171,12 +214,15 @@ def main(argv: Sequence[str] | None = None) -> None:
         per_minute = (s1 - s0) / (t1 - t0) * 60
     else:
         per_minute = float("nan")
+    research = "" if args.research is None else f", research {json.dumps(args.research)}"
     print(
-        f"{args.env}, one continuous session, a comparison every {args.pace:g} s for "
-        f"{args.minutes:g} min a round, next pool cut from the latest rollouts at its end, "
-        f"{args.rounds} rounds, {os.cpu_count()} CPUs, "
+        f"{args.env}, one continuous session (recipe {args.recipe}, pre-training "
+        f"{args.pretrain_steps:,} steps, {args.frame_size} px clips{research}), a comparison "
+        f"every {args.pace:g} s for {args.minutes:g} min a round, next pool cut from the "
+        f"latest rollouts at its end, {args.rounds} rounds, {os.cpu_count()} CPUs, "
         f"load average {os.getloadavg()[0]:.1f}\n"
     )
+    _print_waits(waits, openings)
     print("| measure | value |")
     print("|---|---:|")
     print(f"| PPO steps per minute of session time (mid-round checkpoints) | {per_minute:,.0f} |")
@@ -207,6 +253,34 @@ def main(argv: Sequence[str] | None = None) -> None:
                 f"round {r}: {len(a)} behaviours, ages {min(a):,}–{max(a):,} "
                 f"(median {int(np.median(a)):,})"
             )
+
+
+def _print_waits(waits: list[float], openings: list[dict | None]) -> None:
+    """The End-round wait table: the person's wait (median, p95, max) and its parts, from
+    each round's ``opening.json`` (wall seconds; the job's CPU seconds in this process)."""
+    print("| End round → next round open (s) | median | p95 | max |")
+    print("|---|---:|---:|---:|")
+    rows: list[tuple[str, list[float]]] = [("the person's wait (HTTP, polled every 50 ms)", waits)]
+    found = [o for o in openings if o is not None]
+    if found:
+        rows.append(("the worker's: round closed → round opened", [o["waited_s"] for o in found]))
+        for part, meaning in PARTS.items():
+            values = [o["parts_s"].get(part, 0.0) for o in found]
+            rows.append((f"· {part}: {meaning}", values))
+        rows.append(("the job's CPU time (worker process)", [o["job_cpu_s"] for o in found]))
+    for name, values in rows:
+        p50, p95 = np.percentile(values, [50, 95])
+        print(f"| {name} | {p50:.2f} | {p95:.2f} | {max(values):.2f} |")
+    print()
+
+
+def _opening(data: Path, session: str, round_index: int) -> dict | None:
+    """Where the wait for round `round_index` went (its ``opening.json``; None without)."""
+    path = data / round_directory(session, round_index) / OPENING_FILE
+    try:
+        return dict(json.loads(path.read_text()))
+    except (OSError, ValueError):
+        return None
 
 
 def _pool_ages(data: Path, session: str, round_index: int) -> np.ndarray:

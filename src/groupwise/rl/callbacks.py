@@ -1,6 +1,7 @@
 """SB3 callbacks: the extension point for progress reporting."""
 
 import math
+from collections.abc import Callable
 from typing import Any
 
 from stable_baselines3.common.callbacks import BaseCallback
@@ -26,13 +27,26 @@ class ProgressCallback(BaseCallback):
 
     The total reported is what runs (`planned_steps`: whole rollouts for PPO), not the
     `total` asked, so the count ends at the total (issue 23: "PPO 1 / 1 steps" while 2,048
-    ran)."""
+    ran).
 
-    def __init__(self, total: int, report: ProgressFn | None = None) -> None:
+    `stop`, when given, is asked at every step of a rollout (each vec-env step): once it
+    says True the rollout in progress ends there and `learn` returns without training on it
+    (SB3's own way: `_on_step` returning False); `rollouts` counts the rollouts collected
+    whole (issue 39: a continuous round's End round waits for no PPO slice)."""
+
+    def __init__(
+        self,
+        total: int,
+        report: ProgressFn | None = None,
+        stop: Callable[[], bool] | None = None,
+    ) -> None:
         super().__init__()
         self.asked = total
         self.total = total
         self.report = report
+        self.stop = stop
+        self.stopped = False
+        self.rollouts = 0
         self._start = 0
 
     def _on_training_start(self) -> None:
@@ -42,8 +56,11 @@ class ProgressCallback(BaseCallback):
             self.report(0, self.total)
 
     def _on_rollout_end(self) -> None:
+        self.rollouts += 1
         if self.report is not None:
             self.report(min(self.num_timesteps - self._start, self.total), self.total)
 
     def _on_step(self) -> bool:
-        return True
+        if self.stop is not None and self.stop():
+            self.stopped = True
+        return not self.stopped

@@ -6,6 +6,7 @@ repeats an uninterrupted one.
 """
 
 import logging
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
@@ -83,16 +84,22 @@ class PPOAgent:
         steps: int,
         seed: int | None,
         report: ProgressFn | None = None,
-    ) -> None:
-        """Train for at least `steps` env steps (whole rollouts).
+        stop: Callable[[], bool] | None = None,
+    ) -> bool:
+        """Train for at least `steps` env steps (whole rollouts); False when `stop` ended it.
 
         With a `seed` the call reseeds SB3 and starts fresh episodes, so the result depends
         only on the saved state and `seed` (which makes `--resume` exact); with None it
         continues the episodes in flight and SB3's random state (continuous training's
         later slices of one round, `groupwise.run.continuous`).
+
+        `stop` is asked at every step of a rollout (`ProgressCallback`): when it says True
+        the rollout in progress is dropped untrained and the step count goes back to the
+        rollouts trained, so it stays a whole number of rollouts (the envs' episodes have
+        moved on by the dropped steps; `rl.recording` keeps them, played by the policy now).
         """
         if steps <= 0:
-            return
+            return True
         if seed is not None:
             self.model.set_random_seed(seed)
             if self.cfg.reset_reward_norm:
@@ -103,12 +110,17 @@ class PPOAgent:
         if self.model.tensorboard_log is None:
             # without one, SB3 makes an empty /tmp/SB3-<time> folder on every learn call
             self.model.set_logger(Logger(folder=None, output_formats=[]))
+        callback = ProgressCallback(steps, report, stop)
+        before = self.model.num_timesteps
         self.model.learn(
             total_timesteps=steps,
-            callback=ProgressCallback(steps, report),
+            callback=callback,
             reset_num_timesteps=False,
             tb_log_name="ppo",
         )
+        if callback.stopped:
+            self.model.num_timesteps = before + callback.rollouts * self.rollout_steps
+        return not callback.stopped
 
     def pretrain(
         self, reward_fn: RewardFn, steps: int, seed: int, report: ProgressFn | None = None

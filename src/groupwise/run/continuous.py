@@ -27,7 +27,7 @@ another core than PPO, as the app's worker will run them.
 
 import dataclasses
 import time
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 from groupwise.clips.timing import clip_timing, step_seconds
 from groupwise.pool.recent import fresh_sources
@@ -130,18 +130,23 @@ class ContinuousRound:
         self.started = False
         self.recorder = recorder_for(run, offer.budget)
 
-    def learn(self, steps: int) -> None:
+    def learn(self, steps: int, stop: Callable[[], bool] | None = None) -> bool:
         """`steps` more PPO steps: the round's first call seeds PPO from the round's stream
-        and starts fresh episodes, later ones continue the episodes in flight."""
+        and starts fresh episodes, later ones continue the episodes in flight. `stop` ends
+        the rollout in progress untrained once it says True (`PPOAgent.learn`: the app's
+        worker when the round ends meanwhile, so that the next round opens without waiting
+        for the rest of it); False when it did."""
         tick = time.perf_counter()
         seed = None if self.started else int(self.streams.ppo.integers(2**31 - 1))
         self.started = True
-        self.run.agent.learn(
+        whole = self.run.ppo.learn(
             steps,
             seed,
             report=lambda done, total: self.callback.on_phase("ppo", done, total),
+            stop=stop,
         )
         self.timer.seconds["ppo_s"] += time.perf_counter() - tick
+        return whole
 
     def update(
         self, keyed: Sequence[tuple[int, Judgement]], clock: float, *, final: bool = False

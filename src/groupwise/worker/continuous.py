@@ -6,7 +6,8 @@ with ``training: "continuous"`` one slice (`continuous_round.train_slice`: the j
 the reward refitted when due, one PPO rollout), the sessions taking turns. A session whose
 timer is paused trains no PPO until it is resumed, so "Pause" pauses the agent too.
 
-The round's end (the person, its budget or its timer) queues its training job, which takes
+The round's end (the person, its budget or its timer) queues its training job and stops
+the slice in progress (`continuous_round.round_ended`); the job takes
 the round's run from here (`take`): the next round's pool is cut from that run's latest
 rollouts and opened, then the round is committed (`jobs.train`, `jobs.open_fresh`), and the
 same run trains on into the next round (`keep`), its recorded rollouts kept. A round this

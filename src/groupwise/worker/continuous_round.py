@@ -5,7 +5,10 @@ A slice reads the round's judgements from the database (`round_judgements`: undo
 left out, each keyed by its place in the round), refits the reward ensemble when due
 (`run.continuous.ContinuousRound`: 20 changed pairs or 60 s), then trains one PPO rollout on the
 latest fit — so the reward PPO sees changes only between rollouts. Every `CHECKPOINT_S`
-seconds the policy and the ensemble go to ``checkpoints/live`` (`Run.save_mid_round`).
+seconds the policy and the ensemble go to ``checkpoints/live`` (`Run.save_mid_round`). A
+rollout in progress when the round ends stops there, untrained (`round_ended`, read every
+`STOP_POLL_S` seconds): the round's training job, which opens the next round while the
+person waits, then waits for no more PPO (issue 39; it waited 1.3 s on Hopper).
 
 The page sees the agent learn (`worker.curve`): each refit stores a point of the session's
 learning curve (PPO steps, pairs, validation accuracy), and so does each evaluation of the
@@ -30,6 +33,8 @@ from groupwise.run.continuous import ContinuousRound
 from groupwise.run.run import Run
 from groupwise.storage import Database
 from groupwise.storage.judgements import round_judgements
+from groupwise.storage.phases import READY
+from groupwise.storage.sessions import get_session
 from groupwise.storage.training import add_point
 from groupwise.worker import curve
 
@@ -39,6 +44,9 @@ CHECKPOINT_S = 30.0
 """Seconds between a continuous round's mid-round checkpoints."""
 ACCOUNT_S = 60.0
 """Seconds between the log lines that say where a continuous round's worker time went."""
+STOP_POLL_S = 0.1
+"""Least seconds between two reads, during a PPO rollout, of whether its round has ended
+(a read is about a millisecond; an ended round's rollout stops within this)."""
 PROGRESS_S = 1.0
 """Least seconds between two points that only say how many PPO steps ran (one a rollout
 on a slow env; a tiny env's rollouts would write dozens a second)."""
@@ -116,8 +124,13 @@ def train_slice(
         _point(training, db, evaluator, refit=refitted, evaluate=training.evaluated_s is None)
     tick = time.perf_counter()
     with training.timed("PPO"):
-        training.continuous.learn(run.ppo.rollout_steps)
+        whole = training.continuous.learn(
+            run.ppo.rollout_steps, round_ended(training, db, STOP_POLL_S)
+        )
     training.trained_s += time.perf_counter() - tick
+    if not whole:  # the round ended meanwhile: its training job waits for nothing more
+        log.info("session %s: round %d ended during a rollout", training.session_id, training.round)
+        return True
     if _evaluation_due(training):
         _point(training, db, evaluator, refit=False, evaluate=True)
     elif time.monotonic() - training.pointed >= PROGRESS_S:
@@ -128,6 +141,25 @@ def train_slice(
         training.checkpointed = time.monotonic()
     training.account()
     return True
+
+
+def round_ended(training: ContinuousTraining, db: Database, every_s: float) -> Callable[[], bool]:
+    """Whether `training`'s round has ended (its session no longer ready in that round: the
+    person, its budget or its timer ended it), read from the database at most every
+    `every_s` seconds: PPO's `stop` in a slice (`ContinuousRound.learn`)."""
+    read = time.monotonic()
+
+    def ended() -> bool:
+        nonlocal read
+        now = time.monotonic()
+        if now - read < every_s:
+            return False
+        read = now
+        with db.read() as s:
+            session = get_session(s, training.session_id)
+            return session.phase != READY or session.round != training.round
+
+    return ended
 
 
 def _point(

@@ -77,6 +77,10 @@ def worker_main(
     from groupwise.behaviour import set_kernel_threads, warm_up
 
     torch.set_num_threads(1)
+    # torch checks every distribution's arguments (SB3 builds one per policy call): a
+    # quarter of each call's time when a pool is sampled at End round (issue 39); the
+    # checks change no number
+    torch.distributions.Distribution.set_default_validate_args(False)
     logging.basicConfig(
         level=logging.WARNING, format="%(asctime)s %(levelname)s %(name)s: %(message)s"
     )
