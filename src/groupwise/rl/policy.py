@@ -1,17 +1,28 @@
 """What samples actions: the one-verb `Policy` interface and the uniform random policy."""
 
-from typing import Protocol
+from typing import Protocol, runtime_checkable
 
 import gymnasium as gym
 import numpy as np
 
-from groupwise.types import FloatArray
+from groupwise.types import FloatArray, IntArray
 
 
 class Policy(Protocol):
     """Maps a batch of raw observations (B, *obs_shape) to a batch of env actions."""
 
     def act(self, obs: FloatArray, rng: np.random.Generator) -> np.ndarray: ...
+
+
+@runtime_checkable
+class RowPolicy(Policy, Protocol):
+    """A policy that acts by which episode of a sampling batch each row is (`rl.rollout`
+    passes the episodes' numbers, (B,)): several policies stepped side by side in one batch,
+    one call per step (`pool.recent.FreshVariants`)."""
+
+    def act_rows(
+        self, obs: FloatArray, episodes: IntArray, rng: np.random.Generator
+    ) -> np.ndarray: ...
 
 
 def random_actions(space: gym.Space, n: int, rng: np.random.Generator) -> np.ndarray:
@@ -67,7 +78,10 @@ class BiasedPolicy:
         )
 
     def act(self, obs: FloatArray, rng: np.random.Generator) -> np.ndarray:
-        actions = np.asarray(self.base.act(obs, rng))
+        return self.push(np.asarray(self.base.act(obs, rng)), rng)
+
+    def push(self, actions: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+        """The base policy's `actions` (B, ...) pushed this variant's way."""
         if isinstance(self.space, gym.spaces.Discrete):
             assert self.action is not None
             return np.where(rng.random(actions.shape[0]) < self.share, self.action, actions)

@@ -85,8 +85,8 @@ class PPOAgent:
         seed: int | None,
         report: ProgressFn | None = None,
         stop: Callable[[], bool] | None = None,
-    ) -> bool:
-        """Train for at least `steps` env steps (whole rollouts); False when `stop` ended it.
+    ) -> None:
+        """Train for at least `steps` env steps (whole rollouts), fewer when `stop` ends it.
 
         With a `seed` the call reseeds SB3 and starts fresh episodes, so the result depends
         only on the saved state and `seed` (which makes `--resume` exact); with None it
@@ -99,7 +99,7 @@ class PPOAgent:
         moved on by the dropped steps; `rl.recording` keeps them, played by the policy now).
         """
         if steps <= 0:
-            return True
+            return
         if seed is not None:
             self.model.set_random_seed(seed)
             if self.cfg.reset_reward_norm:
@@ -120,7 +120,6 @@ class PPOAgent:
         )
         if callback.stopped:
             self.model.num_timesteps = before + callback.rollouts * self.rollout_steps
-        return not callback.stopped
 
     def pretrain(
         self, reward_fn: RewardFn, steps: int, seed: int, report: ProgressFn | None = None

@@ -26,7 +26,7 @@ from groupwise.envs.episodes import GIVE_UP_EPISODES, too_short_message
 from groupwise.envs.spaces import encode_actions
 from groupwise.episodes.fragments import Trajectory
 from groupwise.rl.batch_envs import BatchEnvs, processes_for
-from groupwise.rl.policy import Policy, random_actions
+from groupwise.rl.policy import Policy, RowPolicy, random_actions
 from groupwise.types import FloatArray, IntArray, ProgressFn
 
 EnvFactory = Callable[[], gym.Env]
@@ -292,8 +292,13 @@ def _run(
     scores = np.full(n, np.nan)  # an env's episode score so far, where it has one
     snapshots: list[dict[int, FloatArray]] = [{} for _ in range(n)]  # step → state before it
     running = np.arange(n)  # the envs whose episodes have not ended, in order
+    rows = policy if isinstance(policy, RowPolicy) else None
     for t in range(limit):
-        action = np.asarray(policy.act(current.astype(np.float32), rng))
+        batch = current.astype(np.float32)
+        if rows is None:
+            action = np.asarray(policy.act(batch, rng))
+        else:  # policies side by side: each row's by its episode's number
+            action = np.asarray(rows.act_rows(batch, first_episode + running, rng))
         random = explore[running, t]
         if random.any():
             action = action.copy()

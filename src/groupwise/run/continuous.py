@@ -139,14 +139,15 @@ class ContinuousRound:
         tick = time.perf_counter()
         seed = None if self.started else int(self.streams.ppo.integers(2**31 - 1))
         self.started = True
-        whole = self.run.ppo.learn(
+        before = self.run.agent.num_timesteps
+        self.run.ppo.learn(
             steps,
             seed,
             report=lambda done, total: self.callback.on_phase("ppo", done, total),
             stop=stop,
         )
         self.timer.seconds["ppo_s"] += time.perf_counter() - tick
-        return whole
+        return self.run.agent.num_timesteps - before >= steps
 
     def update(
         self, keyed: Sequence[tuple[int, Judgement]], clock: float, *, final: bool = False
