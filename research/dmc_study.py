@@ -180,7 +180,9 @@ def figure(rows: Sequence[dict[str, str]], path: Path) -> Path:
         ax.set_title(env.removeprefix("dm_control/"))
         ax.set_xlabel("PPO env steps")
         ax.set_ylabel("greedy true return (mean over seeds)")
-    axes[-1].legend(fontsize=7, loc="upper left")
+    for ax in axes:
+        if ax.lines:
+            ax.legend(fontsize=7, loc="upper left")
     fig.savefig(path, dpi=120)
     return path
 
