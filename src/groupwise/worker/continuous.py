@@ -33,7 +33,8 @@ log = logging.getLogger(__name__)
 
 CONTINUOUS = "continuous"
 SLOW_SLICE_S = 1.5
-"""A slice longer than this is logged: a training job waits for the slice in progress."""
+"""A slice longer than this is logged: another session's job waits for the slice in progress
+(its own round's end stops it, `continuous_round.round_ended`)."""
 
 
 class ContinuousSessions:
