@@ -3,31 +3,20 @@
 the step count stays a whole number of rollouts, so the recorded behaviours keep their ages.
 """
 
-from tests.unit.server.conftest import context_of, new_session, post_judgement, run_worker_once
+from tests.unit.server.conftest import context_of
+from tests.unit.worker.conftest import training_session
 
 from groupwise.pool.files import load_fragments
 from groupwise.storage.sessions import get_round
 from groupwise.worker import continuous_round
 from groupwise.worker.jobs import OPENING_FILE
-from groupwise.worker.process import Worker
 
 ROLLOUT = 32  # TINY's PPO: 1 env × 32 steps
 
 
-def _training_session(client, slices: int) -> tuple[str, Worker]:
-    sid = new_session(client, training="continuous")["id"]
-    run_worker_once(client)  # round 0 ready
-    post_judgement(client, sid, ["b0", "b1"], ["b2"])
-    context = context_of(client)
-    worker = Worker(context.db, context.data_dir, poll_s=0.1)
-    for _ in range(slices):
-        assert worker.train_continuous()
-    return sid, worker
-
-
 def test_a_slice_stops_its_rollout_when_its_round_ends(client, monkeypatch):
     monkeypatch.setattr(continuous_round, "STOP_POLL_S", 0.0)
-    sid, worker = _training_session(client, slices=2)
+    sid, worker = training_session(client, slices=2)
     training = worker.continuous._rounds[sid]
     episode = training.continuous.recorder.running[0]
     assert len(episode.actions) == 2 * ROLLOUT
@@ -54,7 +43,7 @@ def test_a_stopped_rollout_leaves_whole_rollouts_and_true_ages(client):
     """A rollout stopped part way: the step count goes back to the rollouts trained, and the
     next rollout, played by the same policy, carries that policy's step count, as the
     dropped steps do."""
-    sid, worker = _training_session(client, slices=2)
+    sid, worker = training_session(client, slices=2)
     training = worker.continuous._rounds[sid]
     calls = 0
 

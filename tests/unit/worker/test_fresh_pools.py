@@ -5,7 +5,8 @@ opening and committing commits on resume."""
 
 import dataclasses
 
-from tests.unit.server.conftest import context_of, new_session, post_judgement, run_worker_once
+from tests.unit.server.conftest import context_of, post_judgement
+from tests.unit.worker.conftest import training_session
 
 from groupwise.pool.files import load_fragments
 from groupwise.storage.sessions import get_round
@@ -20,15 +21,7 @@ SLICES = 12  # 384 steps of one GridWorld episode; the last rollout's 32 hold 3 
 
 
 def _training_session(client, slices: int = SLICES, **settings) -> tuple[str, Worker]:
-    """A continuous session in round 0 with one judgement, trained `slices` rollouts."""
-    sid = new_session(client, training="continuous", **settings)["id"]
-    run_worker_once(client)  # round 0 ready
-    post_judgement(client, sid, ["b0", "b1"], ["b2"])
-    context = context_of(client)
-    worker = Worker(context.db, context.data_dir, poll_s=0.1)
-    for _ in range(slices):
-        assert worker.train_continuous()
-    return sid, worker
+    return training_session(client, slices, **settings)
 
 
 def _pool_dir(client, sid: str, round_index: int):
