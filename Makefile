@@ -44,6 +44,7 @@ lint: $(STAMPS)/dev
 	$(BIN)/mypy
 	$(BIN)/mypy research
 	$(BIN)/python research/results_table.py check docs/results
+	$(BIN)/python research/dmc_study.py --check docs/results/dmc/README.md
 
 setup: $(STAMPS)/dev $(WEB_BUILD)
 
