@@ -107,12 +107,6 @@ class RewardConfig:
     pseudo_labels: Annotated[float, Field(ge=0.5, le=1)] | None = None
     """Research (issue 41): add pairs of the round's pool pseudo-labelled where a member is
     at least this sure (SURF's 0.95; `reward.augment.PseudoLabels`); None: none."""
-    reset_every: Annotated[int, Field(ge=1)] | None = None
-    """Research (issue 41): fresh member weights, refitted on the whole dataset, before the
-    fit of every round r ≥ 1 divisible by this (PoLiCER; `reward.reset`); None: never."""
-    reset_margin: float | None = None
-    """Research (issue 41): ... or whenever the reward pays the round's pool more than the
-    preferred behaviours by this many sds of its per-step value (`reward.reset`); None: never."""
 
 
 @dataclass(frozen=True, config=_STRICT)
@@ -230,10 +224,6 @@ class LoopConfig:
     pool_variant_scale: Annotated[float, Field(ge=0, le=1)] = 0.5
     """... and how far each pushes the actions: a fixed offset per action dimension of up
     to this share of half its range."""
-    coverage_share: Annotated[float, Field(ge=0, le=1)] = 0.0
-    """Research (issue 41): share of a round's queries chosen by how far their behaviours
-    are from every judged one, half the least and half the most covered (PPE;
-    `query.coverage`); 0: the strategy's own order."""
     candidate_pairs: PositiveInt = 10
     """Pairwise active learning: random candidate pairs scored per query."""
     eval_episodes: Annotated[int, Field(ge=0)] = 5

@@ -26,18 +26,26 @@ teacher's fields out of the loop into `TeacherConfig`; issue 38 renamed "oracle"
 
 
 REMOVED_FIELDS: dict[str, dict[str, Any]] = {
-    "reward": {"exploration_bonus": 0.0, "pessimism": 0.0, "exploration_decay": 0.5},
+    "reward": {
+        "exploration_bonus": 0.0,
+        "pessimism": 0.0,
+        "exploration_decay": 0.5,
+        "reset_every": None,
+        "reset_margin": None,
+    },
     "loop": {
         "pool_variants_greedy": False,
         "pool_lookahead": 0,
         "adopt_variants": False,
         "suggestion_rank": "variance",
+        "coverage_share": 0.0,
     },
     "training": {"continue_from": "last", "continue_episodes": 3},
 }
 """Section → field → its default: fields of mechanisms that measured no gain, removed in
-issue 38 (their results, commands and the commit with their code: docs/case-studies.md,
-"Measured and removed"). Configs of older runs still load without them."""
+issues 38 and 41 (their results, commands and the commit with their code:
+docs/case-studies.md, "Measured and removed"). Configs of older runs still load without
+them."""
 
 
 def removed_dropped(data: dict[str, Any]) -> dict[str, Any]:
@@ -56,8 +64,8 @@ def removed_dropped(data: dict[str, Any]) -> dict[str, Any]:
     if dropped:
         used = ", ".join(f"{key}={value!r}" for key, value in sorted(dropped.items()))
         log.warning(
-            "config uses removed mechanisms (%s): read without them; their code is in "
-            "commit 697627f (docs/case-studies.md, 'Measured and removed')",
+            "config uses removed mechanisms (%s): read without them; docs/case-studies.md, "
+            "'Measured and removed', names the commit that has their code",
             used,
         )
     return cleaned

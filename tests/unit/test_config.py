@@ -117,22 +117,26 @@ def test_configs_stored_with_an_oracle_read_it_as_the_decision_maker():
 
 
 def test_configs_of_removed_mechanisms_load_without_them(caplog):
-    """Runs written before issue 38 carry the fields of 7 mechanisms that measured no gain;
-    they still load, and a warning names a removed mechanism the run actually used."""
+    """Runs written before issues 38 and 41 carry the fields of 9 mechanisms that measured
+    no gain; they still load, and a warning names a removed mechanism the run actually used."""
     stored = json.loads(RunConfig(loop=LoopConfig(pool_variants=8)).to_json())
     stored["loop"] |= {"pool_variants_greedy": False, "pool_lookahead": 0}
     stored["reward"] |= {"exploration_bonus": 0.0, "pessimism": 0.0, "exploration_decay": 0.5}
     stored["training"] |= {"continue_from": "last", "continue_episodes": 3}
+    stored["reward"] |= {"reset_every": None, "reset_margin": None}
+    stored["loop"]["coverage_share"] = 0.0
     with caplog.at_level("WARNING", logger="groupwise.config"):
         assert RunConfig.from_dict(stored) == RunConfig(loop=LoopConfig(pool_variants=8))
     assert not caplog.records  # the defaults: nothing was used
     stored["loop"]["adopt_variants"] = True
     stored["reward"]["pessimism"] = 1.0
+    stored["loop"]["coverage_share"] = 0.5
     with caplog.at_level("WARNING", logger="groupwise.config"):
         assert RunConfig.from_dict(stored) == RunConfig(loop=LoopConfig(pool_variants=8))
     (warning,) = caplog.records
-    assert "loop.adopt_variants=True, reward.pessimism=1.0" in warning.getMessage()
-    assert "697627f" in warning.getMessage()
+    message = warning.getMessage()
+    assert "loop.adopt_variants=True, loop.coverage_share=0.5, reward.pessimism=1.0" in message
+    assert "Measured and removed" in message
 
 
 def test_a_partial_config_is_merged_over_the_defaults_section_by_section():

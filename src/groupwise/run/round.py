@@ -31,7 +31,6 @@ from groupwise.pool.sampling import sample_pool
 from groupwise.pool.sources import PoolSource, pool_sources
 from groupwise.preferences.judgement import Judgement
 from groupwise.preferences.pairs import Pair, cap_pairs, judgement_pairs
-from groupwise.query.coverage import with_coverage
 from groupwise.query.strategies import Query, QueryStrategy
 from groupwise.reward import FitReport
 from groupwise.reward.round_fit import fit_round
@@ -126,7 +125,6 @@ def begin_round(
         )
         tree = pool.tree(run.cfg.tree)
     wanted = budget if n_queries is None else n_queries
-    strategy = with_coverage(strategy, loop.coverage_share, run.dataset)  # issue 41; 0: itself
     queries = strategy.propose(pool, wanted, streams.feedback) if wanted > 0 else []
     offered = getattr(strategy, "candidates", None)
     return Offer(
@@ -216,14 +214,8 @@ def end_round(
         callback.on_phase("reward", 0, len(run.dataset))
         multiplier = run.cfg.reward.initial_epoch_multiplier if index == 0 else 1.0
         epochs = max(1, round(run.cfg.reward.epochs * multiplier))
-        report = fit_round(  # the config's objective and reset rule (issue 41) around `fit`
-            run.ensemble,
-            run.dataset,
-            run.cfg.reward,
-            streams.fit,
-            epochs,
-            round_index=index,
-            latest=offer.pool.fragments,
+        report = fit_round(  # the config's objective (issue 41) around `fit`
+            run.ensemble, run.dataset, run.cfg.reward, streams.fit, epochs, offer.pool.fragments
         )
     _learn(run, steps, streams, timer, callback)
     clock_s = math.nan
