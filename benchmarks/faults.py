@@ -279,7 +279,7 @@ class Harness:
                     reopened[kind].append(open_s)
                 except TimeoutError as error:
                     stuck += 1
-                    self.failures.append(str(error))
+                    self.failures.append(f"{error}; the server's log ends:\n{self._log_tail()}")
             usable = self._judge_once(target)
         finally:
             stop.set()
@@ -352,8 +352,10 @@ class Harness:
         TimeoutError after `usable_timeout_s`."""
         deadline = time.monotonic() + self.config.usable_timeout_s
         resumed: float | None = None
+        last: dict[str, Any] | None = None
         while time.monotonic() < deadline:
             state = self._state(target)
+            last = state if state is not None else last
             if state is not None and state["phase"] == "failed":
                 error = str(state["error"])
                 if not error.startswith(WORKER_DIED) and error not in self.failures:
@@ -371,7 +373,19 @@ class Harness:
             if state is not None and state["phase"] == "finished":
                 raise TimeoutError("the session finished: raise FLAGS' --rounds")
             time.sleep(0.05)
-        raise TimeoutError(f"the session was not usable within {self.config.usable_timeout_s} s")
+        seen = "no answer" if last is None else _described(last)
+        raise TimeoutError(
+            f"the session was not usable within {self.config.usable_timeout_s} s (last seen: "
+            f"{seen}; health {self._health(target)})"
+        )
+
+    def _log_tail(self, lines: int = 40) -> str:
+        """The last `lines` lines of the server's log (its worker's included)."""
+        try:
+            text = self.server.log.read_text(errors="replace")
+        except OSError as error:
+            return f"(no log: {error})"
+        return "\n".join(text.splitlines()[-lines:])
 
     def _judge_once(self, target: Target) -> bool:
         """Whether one more judgement is taken (201) after the last recovery."""
@@ -385,6 +399,12 @@ class Harness:
             return False
         self.ledger.answered(body["client_id"], response.status_code, response.text)
         return response.status_code == 201
+
+
+def _described(state: dict[str, Any]) -> str:
+    """The fields of a session's state that say where it stands."""
+    keys = ("phase", "round", "error", "failed_phase", "progress")
+    return ", ".join(f"{k} {state.get(k)!r}" for k in keys if k in state)
 
 
 def _alive(pids: set[int]) -> int:
