@@ -127,7 +127,7 @@ def label(config: dict[str, Any], dm: str) -> str:
 def ppo_preset(config: dict[str, Any]) -> str:
     """The name of the `PPO_PRESETS` entry the run's PPO settings equal, else "custom".
     Imported here: `render` and `check` read CSVs alone and need no groupwise."""
-    from groupwise.config import PPO_PRESETS
+    from groupwise.recipes import PPO_PRESETS
 
     ppo = config.get("ppo", {})
     for name, preset in PPO_PRESETS.items():

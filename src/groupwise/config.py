@@ -159,20 +159,6 @@ class PPOConfig:
         return self
 
 
-PPO_PRESETS: dict[str, PPOConfig] = {
-    "study": PPOConfig(),
-    "mujoco": PPOConfig(
-        learning_rate=3e-4, clip_range=0.2, gamma=0.99, ent_coef=0.0, net_arch=(64, 64)
-    ),
-}
-"""Named PPO settings. "study": SPEC §3's, from the paper's simulation study (short
-behaviours, small nets). "mujoco": PPO's own MuJoCo settings (Schulman et al. 2017, also
-SB3's defaults: lr 3e-4, clip 0.2, γ 0.99, no entropy bonus, 64 × 64) at the same rollout
-and minibatch size, for the case studies' 1,000-step locomotion episodes. PPO on a target's
-own step score (`study.case_studies.target_reference`) with "study" lost what it had learned
-(issue 20)."""
-
-
 @dataclass(frozen=True, config=_STRICT)
 class LoopConfig:
     """The RLHF rounds (SPEC §3)."""
@@ -400,10 +386,6 @@ class RunConfig:
     @classmethod
     def load(cls, path: Path) -> "RunConfig":
         return cls.from_dict(json.loads(path.read_text()))
-
-
-PPOPreset = Literal["study", "mujoco"]
-"""A key of `PPO_PRESETS`."""
 
 
 _RUN_CONFIG = TypeAdapter(RunConfig)

@@ -1,6 +1,7 @@
-"""Named teaching recipes (issue 39): the parts a recipe sets in a run (pre-training, pool
-variants, the PPO preset), per kind of env, and what each measured. A recipe applies to a
-`config.RunConfig` as a pure function; every part can still be changed on its own after it.
+"""Named PPO settings (`PPO_PRESETS`) and teaching recipes (issue 39): the parts a recipe sets
+in a run (pre-training, pool variants, the PPO preset), per kind of env, and what each
+measured. A recipe applies to a `config.RunConfig` as a pure function; every part can still
+be changed on its own after it.
 """
 
 import dataclasses
@@ -9,7 +10,23 @@ from typing import Annotated, Literal
 from pydantic import Field
 from pydantic.dataclasses import dataclass
 
-from groupwise.config import _STRICT, PPO_PRESETS, PPOPreset, RunConfig
+from groupwise.config import _STRICT, PPOConfig, RunConfig
+
+PPO_PRESETS: dict[str, PPOConfig] = {
+    "study": PPOConfig(),
+    "mujoco": PPOConfig(
+        learning_rate=3e-4, clip_range=0.2, gamma=0.99, ent_coef=0.0, net_arch=(64, 64)
+    ),
+}
+"""Named PPO settings. "study": SPEC §3's, from the paper's simulation study (short
+behaviours, small nets). "mujoco": PPO's own MuJoCo settings (Schulman et al. 2017, also
+SB3's defaults: lr 3e-4, clip 0.2, γ 0.99, no entropy bonus, 64 × 64) at the same rollout
+and minibatch size, for the case studies' 1,000-step locomotion episodes. PPO on a target's
+own step score (`study.case_studies.target_reference`) with "study" lost what it had learned
+(issue 20)."""
+
+PPOPreset = Literal["study", "mujoco"]
+"""A key of `PPO_PRESETS`."""
 
 RecipeName = Literal["teach", "paper"]
 """A key of `RECIPES`."""

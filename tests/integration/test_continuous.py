@@ -184,7 +184,8 @@ def test_train_continuous_from_the_command_line(tmp_path, capsys):
 def test_a_continuous_round_refits_when_due_and_an_undo_counts(tmp_path):
     from groupwise.preferences.judgement import LEFT_BETTER, Judgement
     from groupwise.run.continuous import ContinuousRound
-    from groupwise.run.round import begin_round, derive_pairs
+    from groupwise.run.pairs import derive_pairs
+    from groupwise.run.round import begin_round
     from groupwise.run.streams import round_streams
     from groupwise.teachers import DECISION_MAKERS
 

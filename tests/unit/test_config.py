@@ -8,7 +8,6 @@ import pytest
 from pydantic import TypeAdapter
 
 from groupwise.config import (
-    PPO_PRESETS,
     LoopConfig,
     PPOConfig,
     RewardConfig,
@@ -17,6 +16,7 @@ from groupwise.config import (
     TrainingConfig,
     TreeConfig,
 )
+from groupwise.recipes import PPO_PRESETS
 from groupwise.storage.settings import SessionSettings
 
 

@@ -167,8 +167,7 @@ def add_pool_arguments(parser: argparse.ArgumentParser) -> None:
 def add_recipe_arguments(parser: argparse.ArgumentParser) -> None:
     """--recipe and --ppo (`groupwise.recipes.RECIPES`, `PPO_PRESETS`): the recipe, and its PPO
     part on its own (its other parts: `add_pool_arguments`)."""
-    from groupwise.config import PPO_PRESETS
-    from groupwise.recipes import DEFAULT_RECIPE, RECIPES
+    from groupwise.recipes import DEFAULT_RECIPE, PPO_PRESETS, RECIPES
 
     parser.add_argument(
         "--recipe",
@@ -181,7 +180,7 @@ def add_recipe_arguments(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--ppo",
         choices=sorted(PPO_PRESETS),
-        help="PPO settings (config.PPO_PRESETS): the study's (SPEC §3) or PPO's own MuJoCo "
+        help="PPO settings (recipes.PPO_PRESETS): the study's (SPEC §3) or PPO's own MuJoCo "
         "settings (lr 3e-4, clip 0.2, γ 0.99, 64 × 64); default: the recipe's; --config's "
         "ppo fields change it",
     )
@@ -189,8 +188,7 @@ def add_recipe_arguments(parser: argparse.ArgumentParser) -> None:
 
 def with_recipe(cfg: "RunConfig", args: argparse.Namespace, env: str) -> "RunConfig":
     """`cfg` with --recipe's parts for `env` and --ppo's preset, when given."""
-    from groupwise.config import PPO_PRESETS
-    from groupwise.recipes import DEFAULT_RECIPE, RECIPES
+    from groupwise.recipes import DEFAULT_RECIPE, PPO_PRESETS, RECIPES
 
     cfg = RECIPES[args.recipe or DEFAULT_RECIPE].apply(cfg, env)
     return cfg if args.ppo is None else dataclasses.replace(cfg, ppo=PPO_PRESETS[args.ppo])

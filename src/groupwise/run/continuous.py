@@ -35,13 +35,13 @@ from groupwise.pool.sampling import windows_to_sample
 from groupwise.preferences.judgement import Judgement
 from groupwise.reward import FitReport, fit
 from groupwise.rl.recording import RolloutRecorder, record_rollouts
+from groupwise.run.pairs import derive_pairs
 from groupwise.run.progress import RunCallback, as_callback
 from groupwise.run.records import PhaseTimer, RoundRecord
 from groupwise.run.round import (
     Offer,
     begin_round,
     clock_before,
-    derive_pairs,
     finish_round,
     pool_size,
 )

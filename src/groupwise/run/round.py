@@ -30,11 +30,11 @@ from groupwise.config import LoopConfig, RunConfig
 from groupwise.pool.sampling import sample_pool
 from groupwise.pool.sources import PoolSource, pool_sources
 from groupwise.preferences.judgement import Judgement
-from groupwise.preferences.pairs import Pair, cap_pairs, judgement_pairs
 from groupwise.query.strategies import Query, QueryStrategy
 from groupwise.reward import FitReport
 from groupwise.reward.round_fit import fit_round
 from groupwise.rl.rollout import Evaluation, evaluate_episodes
+from groupwise.run.pairs import round_pairs
 from groupwise.run.progress import RunCallback, as_callback
 from groupwise.run.records import PhaseTimer, RoundRecord
 from groupwise.run.run import Run
@@ -135,49 +135,6 @@ def begin_round(
         candidates=float(len(offered(pool))) if callable(offered) else math.nan,
         sample_s=sample_s,
     )
-
-
-def derive_pairs(
-    judgements: Sequence[Judgement],
-    loop: LoopConfig,
-    round_index: int,
-    keys: Sequence[int] | None = None,
-) -> list[Pair]:
-    """Each judgement's preference pairs (`preferences.pairs.judgement_pairs`, by
-    `loop.pair_derivation` × `loop.pair_oversample`), keyed by `keys`: by default its place
-    in the list."""
-    keys = range(len(judgements)) if keys is None else keys
-    if len(keys) != len(judgements):
-        raise ValueError(f"{len(keys)} keys for {len(judgements)} judgements")
-    return [
-        pair
-        for judgement, key in zip(judgements, keys, strict=True)
-        for pair in judgement_pairs(
-            judgement,
-            loop.pair_derivation,
-            loop.pair_oversample,
-            seed=loop.seed,
-            round_index=round_index,
-            key=key,
-        )
-    ]
-
-
-def round_pairs(
-    judgements: Sequence[Judgement],
-    loop: LoopConfig,
-    round_index: int,
-    budget: int,
-    rng: np.random.Generator,
-    keys: Sequence[int] | None = None,
-) -> list[Pair]:
-    """The round's preference pairs (`derive_pairs`), then at most ⌊pair_cap × budget⌋ of
-    them when `loop.pair_cap` is set (the budget of a round without one: its judgements),
-    drawn from `rng`."""
-    pairs = derive_pairs(judgements, loop, round_index, keys)
-    if loop.pair_cap is None:
-        return pairs
-    return cap_pairs(pairs, math.floor(loop.pair_cap * (budget or len(judgements))), rng)
 
 
 def end_round(

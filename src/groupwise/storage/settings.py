@@ -28,19 +28,24 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_valida
 
 from groupwise.clips.timing import ClipTiming, default_clip_seconds, env_clip_timing
 from groupwise.config import (
-    PPO_PRESETS,
     ExplorationFraction,
     LoopConfig,
     PairCap,
     PairDerivation,
     PairOversample,
-    PPOPreset,
     RunConfig,
     Seed,
     TrainingConfig,
 )
 from groupwise.preferences.judgement import MAX_GROUP
-from groupwise.recipes import DEFAULT_RECIPE, RECIPES, RecipeName, RecipeParts
+from groupwise.recipes import (
+    DEFAULT_RECIPE,
+    PPO_PRESETS,
+    RECIPES,
+    PPOPreset,
+    RecipeName,
+    RecipeParts,
+)
 
 __all__ = [
     "HUMAN",

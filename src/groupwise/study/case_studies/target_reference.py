@@ -22,9 +22,10 @@ from typing import Any, SupportsFloat
 import gymnasium as gym
 import numpy as np
 
-from groupwise.config import PPO_PRESETS, PPOConfig
+from groupwise.config import PPOConfig
 from groupwise.envs import TARGETS, Target, make_env
 from groupwise.envs.targets import TARGET_SCORE_KEY
+from groupwise.recipes import PPO_PRESETS
 from groupwise.rl.ppo import PPOAgent
 from groupwise.study.case_studies.target_evaluation import evaluate_target
 

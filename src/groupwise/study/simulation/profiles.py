@@ -32,13 +32,12 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 from groupwise.config import (
-    PPO_PRESETS,
     LoopConfig,
     PPOConfig,
     RewardConfig,
     RunConfig,
 )
-from groupwise.recipes import RECIPES, RecipeName
+from groupwise.recipes import PPO_PRESETS, RECIPES, RecipeName
 from groupwise.study.simulation.ablations import ablate
 
 

@@ -8,7 +8,7 @@ import pytest
 from groupwise.cli import main
 from groupwise.config import LoopConfig, RunConfig
 from groupwise.preferences.judgement import LEFT_BETTER, Judgement
-from groupwise.run.round import round_pairs
+from groupwise.run.pairs import round_pairs
 from groupwise.study.simulation import runner
 from groupwise.study.simulation.ablations import ABLATIONS, ablate
 from groupwise.study.simulation.cells import Cell, planned_cells, write_plan

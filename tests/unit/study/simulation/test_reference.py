@@ -5,7 +5,7 @@ from pathlib import Path
 
 import pytest
 
-from groupwise.config import PPO_PRESETS
+from groupwise.recipes import PPO_PRESETS
 from groupwise.study.simulation.cells import Cell, discover_cells, env_directory
 from groupwise.study.simulation.profiles import DMC, SMOKE
 from groupwise.study.simulation.reference import train_on_true_reward
