@@ -11,11 +11,8 @@ import pytest
 from groupwise.cli import build_parser
 from groupwise.commands.arguments import with_recipe
 from groupwise.commands.case_study import case_config
-from groupwise.config import (
-    PPO_PRESETS,
-    RunConfig,
-)
-from groupwise.recipes import DEFAULT_RECIPE, RECIPES
+from groupwise.config import RunConfig
+from groupwise.recipes import DEFAULT_RECIPE, PPO_PRESETS, RECIPES
 from groupwise.storage.settings import SessionSettings
 from groupwise.study.simulation.profiles import PROFILES
 
