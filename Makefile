@@ -27,7 +27,7 @@ run: $(STAMPS)/python $(WEB_BUILD)
 # a server with its training worker and a Chromium: two at once only fight for the cores)
 test: $(STAMPS)/dev $(WEB_BUILD) test-web
 	GROUPWISE_PG_REQUIRED=1 $(BIN)/python -m pytest -n 2 --dist loadfile -q --durations=25 -m "not slow and not e2e"
-	GROUPWISE_E2E_REQUIRED=1 $(BIN)/python -m pytest -q --durations=25 tests/e2e
+	GROUPWISE_E2E_REQUIRED=1 $(BIN)/python -m pytest -q --durations=25 -m "not slow" tests/e2e
 
 test-web: $(STAMPS)/web
 	cd web && $(NPM) test

@@ -48,6 +48,7 @@ def _answer_one(page: Page, ui: Any) -> None:
     expect(page.locator(".toast")).to_contain_text("Saved")
 
 
+@pytest.mark.slow  # trains and evaluates Hopper-backflip (the heaviest browser test, ~25 s)
 def test_a_target_sessions_results_show_its_episode_score_in_its_unit(
     own_server: Server, page: Page, ui: Any, shot: Any
 ) -> None:

@@ -36,6 +36,7 @@ def _cluster(server: Any, sid: str, taken: set[str]) -> tuple[str, list[str]]:
     return found[0]
 
 
+@pytest.mark.slow  # 1,000 Hopper behaviours (test_chart_focus has a 1,000 round in GridWorld)
 def test_a_round_of_1000_behaviours_with_clips_on_demand(own_server: Any, page: Any, ui: Any):
     sid = own_server.new_session("groupwise", pool_size=N, frame_size=32, render_workers=2)
     clips: dict[str, int] = {}

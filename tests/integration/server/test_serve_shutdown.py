@@ -28,7 +28,15 @@ def ready(client: httpx.Client, session: str) -> bool:
         return False
 
 
-@pytest.mark.parametrize("stop", [signal.SIGINT, signal.SIGTERM], ids=["SIGINT", "SIGTERM"])
+@pytest.mark.parametrize(
+    "stop",
+    [
+        signal.SIGINT,
+        # the same shutdown path as SIGINT (12 s on 2 cores): make test-slow runs it
+        pytest.param(signal.SIGTERM, marks=pytest.mark.slow),
+    ],
+    ids=["SIGINT", "SIGTERM"],
+)
 def test_a_stopped_server_leaks_no_semaphore(tmp_path, stop):
     # the resource tracker warns through `warnings`: PYTHONWARNINGS=ignore would hide it
     env = {k: v for k, v in os.environ.items() if k != "PYTHONWARNINGS"}
