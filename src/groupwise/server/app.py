@@ -77,9 +77,9 @@ def create_app(config: AppConfig) -> FastAPI:
     @contextlib.asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         task = asyncio.create_task(context.supervisor.run()) if config.start_worker else None
-        if config.start_worker:  # a served app: its clip renderer starts with it
-            await asyncio.to_thread(start_renderer, app.state, context)
-        try:
+        try:  # from here on a failed startup stops the worker too
+            if config.start_worker:  # a served app: its clip renderer starts with it
+                await asyncio.to_thread(start_renderer, app.state, context)
             yield
         finally:
             if task is not None:

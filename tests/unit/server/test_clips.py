@@ -124,3 +124,16 @@ def test_a_served_app_starts_its_clip_renderer_with_it(tmp_path):
     with make_client(tmp_path, start_worker=True) as client:
         backend = client.app.state.clip_renderer.backend  # type: ignore[attr-defined]  # app.state is untyped
         assert backend._executor is not None  # started, not waiting for a first request
+
+
+def test_a_served_app_whose_clip_renderer_cannot_start_serves_all_the_same(tmp_path, caplog):
+    """Starting the render processes with the server saves the first clip's wait; a renderer
+    that cannot start then (here: no render process allowed) is logged and the server
+    serves. Its failed startup had left `groupwise serve` alive but refusing every
+    connection, waiting at exit for its training worker, which trained on."""
+    from tests.unit.server.conftest import make_client
+
+    with make_client(tmp_path, start_worker=True, clip_workers=0) as client:
+        assert client.get("/api/health").status_code == 200
+        assert client.get("/api/sessions").status_code == 200
+    assert "the clip render processes did not start" in caplog.text

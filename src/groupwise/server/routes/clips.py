@@ -5,6 +5,7 @@ request, by render processes of the server (or Ray tasks with ``serve --ray``), 
 file from then on.
 """
 
+import logging
 import threading
 from typing import Annotated, Any
 
@@ -23,6 +24,8 @@ from groupwise.server.context import AppContext
 from groupwise.server.deps import Context
 from groupwise.server.routes import ERRORS
 
+log = logging.getLogger(__name__)
+
 router = APIRouter(prefix="/clips", tags=["clips"], responses=ERRORS)
 
 IMMUTABLE = "public, max-age=31536000, immutable"
@@ -40,8 +43,17 @@ def renderer(request: Request, context: Context) -> OnDemandClips:
 
 def start_renderer(state: Any, context: AppContext) -> None:
     """Make the app's renderer and start its processes, so that the first clip a person
-    asks for does not wait for them to start (10-11 s on a busy 2-core machine)."""
-    app_renderer(state, context).backend.start()
+    asks for does not wait for them to start (10-11 s on a busy 2-core machine).
+
+    Only a head start: a renderer that cannot start now (no process can be started, say)
+    is logged and the server serves; the first clip asked for tries again (a broken
+    process pool is started anew, `clips.on_demand.ProcessBackend`). Raising here failed
+    the app's startup, which left the server process bound but not listening, waiting
+    for its training worker at exit while the worker trained on."""
+    try:
+        app_renderer(state, context).backend.start()
+    except Exception:
+        log.exception("the clip render processes did not start; the first clip starts them")
 
 
 def app_renderer(state: Any, context: AppContext) -> OnDemandClips:
