@@ -279,7 +279,11 @@ class Harness:
                     reopened[kind].append(open_s)
                 except TimeoutError as error:
                     stuck += 1
-                    self.failures.append(f"{error}; the server's log ends:\n{self._log_tail()}")
+                    code = self.server.process.poll() if self.server.process else None
+                    alive = "runs" if code is None else f"exited with {code}"  # -9: killed
+                    self.failures.append(
+                        f"{error}; the server process {alive}; its log ends:\n{self._log_tail()}"
+                    )
             usable = self._judge_once(target)
         finally:
             stop.set()
