@@ -17,6 +17,7 @@ import numpy as np
 import torch
 from stable_baselines3 import PPO
 from stable_baselines3.common.logger import Logger
+from stable_baselines3.common.utils import configure_logger
 from stable_baselines3.common.policies import ActorCriticPolicy
 from stable_baselines3.common.running_mean_std import RunningMeanStd
 from stable_baselines3.common.vec_env import DummyVecEnv, VecEnv, VecMonitor, VecNormalize
@@ -69,6 +70,7 @@ class PPOAgent:
             device="cpu",
             verbose=0,
         )
+        self._logger: Logger | None = None
 
     @property
     def num_timesteps(self) -> int:
@@ -107,9 +109,7 @@ class PPOAgent:
                 if self.step_norm is not None:
                     self.step_norm.stats = RunningMeanStd(shape=())
             self.model.set_env(self.venv, force_reset=True)
-        if self.model.tensorboard_log is None:
-            # without one, SB3 makes an empty /tmp/SB3-<time> folder on every learn call
-            self.model.set_logger(Logger(folder=None, output_formats=[]))
+        self.model.set_logger(self.logger())
         callback = ProgressCallback(steps, report, stop)
         before = self.model.num_timesteps
         self.model.learn(
@@ -210,7 +210,23 @@ class PPOAgent:
                 stats.mean, stats.var = data["step_mean"], data["step_var"]
                 stats.count = float(data["step_count"])
 
+    def logger(self) -> Logger:
+        """The one logger of every `learn` call: TensorBoard's ``ppo_0`` folder under the
+        agent's log directory, else none. Left to SB3, each call would open a new
+        TensorBoard writer (a thread and an events file, never closed: thousands over a
+        continuous session's slices) or, without TensorBoard, a /tmp/SB3-<time> folder."""
+        if self._logger is None:
+            folder = self.model.tensorboard_log
+            self._logger = (
+                Logger(folder=None, output_formats=[])
+                if folder is None
+                else configure_logger(0, folder, "ppo", reset_num_timesteps=False)
+            )
+        return self._logger
+
     def close(self) -> None:
+        if self._logger is not None:
+            self._logger.close()
         self.venv.close()
 
     def _normaliser(self) -> VecNormalize:

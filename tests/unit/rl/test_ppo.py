@@ -152,3 +152,23 @@ def test_standardised_reward_statistics_are_saved_and_restored(tmp_path):
     assert restored.step_norm.stats.count == agent.step_norm.stats.count
     np.testing.assert_allclose(restored.step_norm.stats.mean, agent.step_norm.stats.mean)
     assert PPOAgent(make, SMALL, seed=0, reward_fn=lambda obs, acts: obs[:, 0]).step_norm is None
+
+
+def test_every_learn_call_writes_to_one_tensorboard_writer_closed_with_the_agent(tmp_path):
+    """SB3 left alone opens a TensorBoard writer (a thread and an events file) per `learn`
+    call and never closes it: a continuous session learns one rollout per call."""
+    import threading
+
+    cfg = dataclasses.replace(SMALL, tensorboard=True)
+    agent = PPOAgent(
+        make, cfg, seed=0, reward_fn=lambda obs, acts: -np.abs(acts[:, 0]), log_dir=tmp_path
+    )
+    agent.learn(128, seed=1)
+    threads = threading.active_count()
+    for _ in range(4):
+        agent.learn(128, seed=None)
+    assert threading.active_count() == threads
+    (folder,) = tmp_path.iterdir()
+    assert folder.name == "ppo_0" and len(list(folder.iterdir())) == 1  # one events file
+    agent.close()
+    assert threading.active_count() < threads  # the writer's thread ended with the agent
