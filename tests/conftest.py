@@ -7,6 +7,7 @@ PostgreSQL installed the PostgreSQL cases skip, or fail when ``GROUPWISE_PG_REQU
 (`make test` sets it, as ``GROUPWISE_E2E_REQUIRED`` for the browser tests).
 """
 
+import multiprocessing
 import os
 from collections.abc import Iterator
 from pathlib import Path
@@ -17,6 +18,18 @@ from tests.postgres import PostgresCluster, find_bin_dir
 
 # Tiny nets: torch's intra-op threads only contend with pytest-xdist's other worker (see cli.py).
 torch.set_num_threads(1)
+
+
+@pytest.fixture(autouse=True)
+def _children_end_with_their_test() -> Iterator[None]:
+    """Processes a test started and left (a dropped `Worker`'s curve evaluator, ~390 MB,
+    lives until the garbage collector gets to it) end with the test; those of wider-scoped
+    fixtures, started before it, are left alone."""
+    before = set(multiprocessing.active_children())
+    yield
+    for child in set(multiprocessing.active_children()) - before:
+        child.terminate()
+        child.join(5)
 
 
 @pytest.fixture(scope="session")

@@ -154,15 +154,19 @@ class Worker:
                 if not self.work_once():
                     time.sleep(self.poll_s)
         finally:
-            # stopping: end the render and evaluation processes rather than wait for their
-            # work (one may still be starting), so this process exits, and unlinks its
-            # semaphores, before the supervisor's kill would leak them (issue 40)
-            for child in multiprocessing.active_children():
-                child.terminate()
-            self._close_render_pools()
-            if self._continuous is not None:
-                self._continuous.close()
+            self.close()
         _exit_if_orphaned()
+
+    def close(self) -> None:
+        """End the render and evaluation processes rather than wait for their work (one may
+        still be starting), so that a stopping worker exits, and unlinks its semaphores,
+        before the supervisor's kill would leak them (issue 40)."""
+        for child in multiprocessing.active_children():
+            child.terminate()
+        self._close_render_pools()
+        if self._continuous is not None:
+            self._continuous.close()
+            self._continuous = None
 
     def work_once(self) -> bool:
         """The waiting job of one session, else one slice of continuous training: a job
