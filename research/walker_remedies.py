@@ -1,8 +1,9 @@
-"""Issue 41's remedies on the case studies: each alone and combined, several seeds in parallel.
+"""Issue 41's remedies on the case studies: the best recipe with each remedy (a partial
+config), several seeds in parallel, with the learned reward's rank diagnostic per round.
 
     python research/walker_remedies.py OUT --seeds 0 1 2 3 4 --parallel 16
     python research/walker_remedies.py OUT --seeds 0 1 2 3 4 --parallel 16 \\
-        --targets halfcheetah-standup hopper-backflip --setups baseline all
+        --targets halfcheetah-standup hopper-backflip --setups baseline
     python research/walker_remedies.py OUT --table          # the table of what OUT holds
 
 Every run is the best recipe of issue 20 (docs/results/case-studies/pretrain-variants/run.sh
@@ -36,17 +37,13 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
 
-SETUPS: dict[str, dict[str, Any]] = {
-    "baseline": {},
-    # SURF: confident pseudo-labels, with QPA's 20 temporal crops of each labelled pair
-    "surf": {"reward": {"pseudo_labels": 0.95, "crops": 20}},
-    "crops": {"reward": {"crops": 20}},
-}
-"""Setup name -> the partial config it adds to the best recipe (issue 41's remedies). PPE's
-coverage-mixed queries, PoLiCER's reward resets and all three combined were measured with
-no gain and left the code (docs/case-studies.md, "Measured and removed": their setups and
-code are in commit 2710cd9; the table still reads their run folders)."""
-DEFAULT_SETUPS = ("baseline", "surf")
+SETUPS: dict[str, dict[str, Any]] = {"baseline": {}}
+"""Setup name -> the partial config it adds to the best recipe. Issue 41's remedies measured
+no gain on the splits and left the code (docs/case-studies.md, "Measured and removed"):
+PPE's coverage-mixed queries ("coverage"), PoLiCER's reward resets ("reset") and the
+three combined ("all") are setups at commit 2710cd9, SURF's pseudo-labels with QPA's crops
+("surf") at 5fed786. `--table` still reads their run folders."""
+DEFAULT_SETUPS = ("baseline",)
 
 COMPARISONS = {"walker-splits": 240, "halfcheetah-standup": 260, "hopper-backflip": 380}
 """The paper-pairs setup's comparisons per target (docs/results/case-studies/paper-pairs)."""

@@ -101,12 +101,6 @@ class RewardConfig:
     swing up; a cost has the form of every SPEC env's true reward and cannot pay an action
     only in some states. Pendulum-v1 at SPEC noise, 5 seeds: −166 ± 68 against −564 ± 290
     for "joint" (docs/results/peer)."""
-    crops: Annotated[int, Field(ge=0, le=100)] = 0
-    """Research (issue 41): score each labelled pair on this many temporal crops of both
-    fragments per minibatch (QPA's 20; `reward.augment.TemporalCrops`); 0: the whole pairs."""
-    pseudo_labels: Annotated[float, Field(ge=0.5, le=1)] | None = None
-    """Research (issue 41): add pairs of the round's pool pseudo-labelled where a member is
-    at least this sure (SURF's 0.95; `reward.augment.PseudoLabels`); None: none."""
 
 
 @dataclass(frozen=True, config=_STRICT)

@@ -32,6 +32,8 @@ REMOVED_FIELDS: dict[str, dict[str, Any]] = {
         "exploration_decay": 0.5,
         "reset_every": None,
         "reset_margin": None,
+        "crops": 0,
+        "pseudo_labels": None,
     },
     "loop": {
         "pool_variants_greedy": False,

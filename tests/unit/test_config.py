@@ -117,13 +117,14 @@ def test_configs_stored_with_an_oracle_read_it_as_the_decision_maker():
 
 
 def test_configs_of_removed_mechanisms_load_without_them(caplog):
-    """Runs written before issues 38 and 41 carry the fields of 9 mechanisms that measured
+    """Runs written before issues 38 and 41 carry the fields of 11 mechanisms that measured
     no gain; they still load, and a warning names a removed mechanism the run actually used."""
     stored = json.loads(RunConfig(loop=LoopConfig(pool_variants=8)).to_json())
     stored["loop"] |= {"pool_variants_greedy": False, "pool_lookahead": 0}
     stored["reward"] |= {"exploration_bonus": 0.0, "pessimism": 0.0, "exploration_decay": 0.5}
     stored["training"] |= {"continue_from": "last", "continue_episodes": 3}
-    stored["reward"] |= {"reset_every": None, "reset_margin": None}
+    stored["reward"] |= {"reset_every": None, "reset_margin": None, "crops": 0}
+    stored["reward"]["pseudo_labels"] = None
     stored["loop"]["coverage_share"] = 0.0
     with caplog.at_level("WARNING", logger="groupwise.config"):
         assert RunConfig.from_dict(stored) == RunConfig(loop=LoopConfig(pool_variants=8))

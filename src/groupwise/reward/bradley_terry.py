@@ -37,7 +37,6 @@ from torch.nn.functional import binary_cross_entropy_with_logits
 from groupwise.config import RewardConfig
 from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.reward.ensemble import RewardEnsemble
-from groupwise.reward.objective import BradleyTerryLoss, Objective
 from groupwise.types import IntArray
 
 log = logging.getLogger(__name__)
@@ -103,8 +102,6 @@ def fit(
     cfg: RewardConfig,
     rng: np.random.Generator,
     epochs: int,
-    *,
-    objective: Objective | None = None,
 ) -> FitReport:
     """Train `ensemble` in place on `dataset` for `epochs` epochs and report how it went.
 
@@ -119,9 +116,6 @@ def fit(
     are not capped: an epoch is ceil(0.8·P / batch_size) steps of about 1.5 ms on one CPU
     thread, so 3 epochs over 1,200 pairs take about 1.5 s. (The first fit in a process also
     pays ~1.4 s for torch's one-time `torch._dynamo` import when the optimiser is built.)
-
-    `objective` is each minibatch's loss (`reward.objective`; default SPEC §3's
-    `BradleyTerryLoss`; issue 41's variants: `reward.round_fit.objective_of`).
 
     Raises ValueError when the dataset's dims differ from the ensemble's, a label lies
     outside [0, 1], or `epochs` < 0.
@@ -149,7 +143,6 @@ def fit(
     train, val = np.flatnonzero(~held_out), np.flatnonzero(held_out)
     samples = _resamples(train, ensemble.size, cfg.bootstrap, rng)  # (K, n_train)
 
-    criterion = BradleyTerryLoss() if objective is None else objective
     optimiser = torch.optim.AdamW(mlp.parameters(), lr=cfg.lr, weight_decay=0.0)
     k, length = ensemble.size, fragments.shape[1]
     params = list(mlp.parameters())
@@ -161,10 +154,12 @@ def fit(
             for batch in order.split(cfg.batch_size, dim=1):  # (K, b) pair indices
                 x = fragments[pairs[batch]]  # (K, b, 2, L, D)
                 rewards = mlp(x.reshape(k, -1, x.shape[-1])).reshape(*batch.shape, 2, length)
-                ce = criterion.loss(net, rewards, labels[batch], rng)  # (K,)
-                total = (ce + ensemble.l2_weight * mlp.l2_penalty()).sum()
+                returns = rewards.sum(dim=-1)
+                logits = returns[..., 0] - returns[..., 1]
+                ce = binary_cross_entropy_with_logits(logits, labels[batch], reduction="none")
+                objective = (ce.mean(dim=1) + ensemble.l2_weight * mlp.l2_penalty()).sum()
                 optimiser.zero_grad(set_to_none=True)
-                total.backward()
+                objective.backward()
                 optimiser.step()
                 steps += 1
                 if steps % _FLUSH_EVERY == 0:

@@ -31,8 +31,7 @@ from groupwise.pool.sampling import sample_pool
 from groupwise.pool.sources import PoolSource, pool_sources
 from groupwise.preferences.judgement import Judgement
 from groupwise.query.strategies import Query, QueryStrategy
-from groupwise.reward import FitReport
-from groupwise.reward.round_fit import fit_round
+from groupwise.reward import FitReport, fit
 from groupwise.rl.rollout import Evaluation, evaluate_episodes
 from groupwise.run.pairs import round_pairs
 from groupwise.run.progress import RunCallback, as_callback
@@ -171,9 +170,7 @@ def end_round(
         callback.on_phase("reward", 0, len(run.dataset))
         multiplier = run.cfg.reward.initial_epoch_multiplier if index == 0 else 1.0
         epochs = max(1, round(run.cfg.reward.epochs * multiplier))
-        report = fit_round(  # the config's objective (issue 41) around `fit`
-            run.ensemble, run.dataset, run.cfg.reward, streams.fit, epochs, offer.pool.fragments
-        )
+        report = fit(run.ensemble, run.dataset, run.cfg.reward, streams.fit, epochs)
     _learn(run, steps, streams, timer, callback)
     clock_s = math.nan
     if run.cfg.teacher.pace_s is not None and asked is not None:
