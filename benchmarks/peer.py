@@ -31,7 +31,10 @@ which groupwise's venv cannot hold); groupwise's envs are imported there from `s
 cell is a subprocess; two run at a time (one per core). Prints a table per env (wall, PPO
 and non-PPO seconds, final true return ± SD over seeds, rounds after the peak where the
 return fell) and writes the per-round curves to `peer.png` and every cell to `peer.jsonl`
-in `--out`. About 45 min for the default (4 envs × 5 seeds × 2 sides) on two cores.
+in `--out`. About 45 min for the four envs without MuJoCo locomotion (Pendulum, Reacher,
+MountainCarContinuous, GridWorld; 5 seeds × 2 sides) on two cores; Hopper-v4 and Walker2d-v4
+(`env_kwargs` in `ENVS`: a fall ends no episode, as imitation's fixed horizons need) take
+longer.
 """
 
 import argparse
@@ -52,6 +55,10 @@ ENVS = {
     # standard Gymnasium envs with fixed horizons and dense rewards
     "Pendulum-v1": {"fragment_length": 25},
     "Reacher-v4": {"fragment_length": 10},
+    # MuJoCo locomotion (v4: in gymnasium 0.29 and 1.x alike); a fall does not end the episode
+    # (imitation needs fixed horizons), it only stops the healthy reward: 1,000 steps each
+    "Hopper-v4": {"fragment_length": 50, "env_kwargs": {"terminate_when_unhealthy": False}},
+    "Walker2d-v4": {"fragment_length": 50, "env_kwargs": {"terminate_when_unhealthy": False}},
     # two of ours
     "MountainCarContinuous": {
         "fragment_length": 25,

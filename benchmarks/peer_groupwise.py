@@ -100,7 +100,7 @@ def main(spec: dict) -> dict:
     changes = VARIANTS[variant]
 
     def make():
-        return make_env(spec["env"])
+        return make_env(spec["env"], **spec.get("env_kwargs", {}))
 
     loop = LoopConfig(
         env=spec["env"],

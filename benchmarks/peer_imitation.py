@@ -38,7 +38,7 @@ def make_env_factory(spec: dict):
         cls = getattr(__import__(module, fromlist=[name]), name)
         if env_id not in gym.registry:  # importing groupwise.envs registers them already
             gym.register(env_id, entry_point=cls, max_episode_steps=spec["horizon"])
-    return lambda: gym.make(env_id)
+    return lambda: gym.make(env_id, **spec.get("env_kwargs", {}))
 
 
 def evaluate(model: PPO, norm: VecNormalize, make, seeds: list[int]) -> list[float]:
