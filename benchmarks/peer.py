@@ -56,7 +56,9 @@ ENVS = {
     "Pendulum-v1": {"fragment_length": 25},
     "Reacher-v4": {"fragment_length": 10},
     # MuJoCo locomotion (v4: in gymnasium 0.29 and 1.x alike); a fall does not end the episode
-    # (imitation needs fixed horizons), it only stops the healthy reward: 1,000 steps each
+    # (imitation needs fixed horizons), it only stops the healthy reward: 1,000 steps each.
+    # Fragments of 50 steps (0.4 s, about a stride: a guess, not measured) unless --noise spec
+    # sets SPEC's 30
     "Hopper-v4": {"fragment_length": 50, "env_kwargs": {"terminate_when_unhealthy": False}},
     "Walker2d-v4": {"fragment_length": 50, "env_kwargs": {"terminate_when_unhealthy": False}},
     # two of ours

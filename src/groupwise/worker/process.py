@@ -160,7 +160,8 @@ class Worker:
     def close(self) -> None:
         """End the render and evaluation processes rather than wait for their work (one may
         still be starting), so that a stopping worker exits, and unlinks its semaphores,
-        before the supervisor's kill would leak them (issue 40)."""
+        before the supervisor's kill would leak them (issue 40). It ends every child of
+        this process: for the worker process, which has no others."""
         for child in multiprocessing.active_children():
             child.terminate()
         self._close_render_pools()
