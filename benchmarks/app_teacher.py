@@ -30,6 +30,7 @@ at the moment of the judgement: median / max) and End round → next round open 
 
 import argparse
 import dataclasses
+import re
 import shutil
 import statistics
 import sys
@@ -215,8 +216,21 @@ def _take_marks(
         copy = out / f"{cell.target}-s{cell.seed}-m{minute:g}"
         shutil.rmtree(copy, ignore_errors=True)
         source = data / session_directory(session)
-        shutil.copytree(source, copy, ignore=shutil.ignore_patterns("round-*"))
+        shutil.copytree(source, copy, ignore=_pool_directories(source))
         cell.marks[minute] = copy
+
+
+def _pool_directories(session: Path):
+    """A `copytree` ignore: the session's round pools (its top-level round-NNNN folders,
+    clips and all), not the committed checkpoints of the same name under checkpoints/."""
+    pools = re.compile(r"round-\d{4}")
+
+    def ignore(directory: str, names: list[str]) -> list[str]:
+        if Path(directory) != session:
+            return []
+        return [name for name in names if pools.fullmatch(name)]
+
+    return ignore
 
 
 def evaluate_copy(cell: Cell, minute: float, copy: Path) -> None:
@@ -224,9 +238,9 @@ def evaluate_copy(cell: Cell, minute: float, copy: Path) -> None:
     mid-round checkpoints), measured on the target env."""
     cfg = RunConfig.load(copy / CONFIG_FILE)
     with Run.create(cfg, copy) as run:
-        run.restore()
-        round_index = run.next_round
-        run.restore_mid_round(round_index)
+        committed = run.restore()
+        if not run.restore_mid_round(run.next_round) and not committed:
+            raise RuntimeError(f"{copy} holds no checkpoint to evaluate")
         cell.ppo_steps[minute] = int(run.agent.num_timesteps)
         target = TARGETS[cell.target]
         rng = np.random.default_rng([cell.seed, int(minute)])
