@@ -90,6 +90,36 @@ def reward_correlations(
         # the learned reward's offset against its spread over these steps: a large offset
         # inflates the return std PPO's reward normaliser divides by
         "reward_mean_over_sd": float(ppo_reward.mean() / ppo_reward.std()),
+        **health_gaps(make, obs, loop_reward, true),
+    }
+
+
+def health_gaps(make, obs: np.ndarray, learned: np.ndarray, true: np.ndarray) -> dict:
+    """On a locomotion env that pays for staying healthy (Hopper, Walker2d: height and torso
+    angle in range), how much more a healthy step earns than a fallen one, in sds of each
+    reward over the same steps: does the learned reward pay for not falling as the true one
+    does? Empty on other envs."""
+    env = make().unwrapped
+    z_range = getattr(env, "_healthy_z_range", None)
+    angle_range = getattr(env, "_healthy_angle_range", None)
+    if z_range is None or angle_range is None:
+        return {}
+    healthy = (
+        (obs[:, 0] > z_range[0])
+        & (obs[:, 0] < z_range[1])
+        & (obs[:, 1] > angle_range[0])
+        & (obs[:, 1] < angle_range[1])
+    )
+    if healthy.all() or not healthy.any():
+        return {"healthy_share": float(healthy.mean())}
+
+    def gap(r: np.ndarray) -> float:
+        return float((r[healthy].mean() - r[~healthy].mean()) / r.std())
+
+    return {
+        "healthy_share": float(healthy.mean()),
+        "health_gap": gap(learned),
+        "true_health_gap": gap(true),
     }
 
 
