@@ -22,14 +22,18 @@ worker published (a person sees them in the clips); everything else goes through
     python -m benchmarks.app_teacher [--targets hopper-backflip ...] [--seeds 0 1 2]
                                      [--minutes 10 20] [--pace S] [--label-error 0.12]
                                      [--training continuous|rounds] [--out DIR] [--log FILE]
+    python -m benchmarks.app_teacher --figure curves.png OUT/*/cells.jsonl
 
 Prints one row per target and seed: success after each mark, PPO steps, the pool's age
 when judged (PPO steps between the policy that sampled the judged behaviours and the policy
-at the moment of the judgement: median / max) and End round → next round open (median).
+at the moment of the judgement: median / max) and End round → next round open (median), and
+appends each cell to OUT/cells.jsonl; `--figure` draws the success rate against the
+teacher's minutes from such files.
 """
 
 import argparse
 import dataclasses
+import json
 import re
 import shutil
 import statistics
@@ -273,6 +277,52 @@ def table(cells: Sequence[Cell], marks: Sequence[float]) -> str:
     return "\n".join(lines)
 
 
+def cell_record(cell: Cell, training: str) -> dict:
+    """One cell as a JSON line (`--figure` reads them back)."""
+    return {
+        "target": cell.target,
+        "seed": cell.seed,
+        "training": training,
+        "success": {f"{m:g}": rate for m, rate in cell.success.items()},
+        "ppo_steps": {f"{m:g}": steps for m, steps in cell.ppo_steps.items()},
+        "comparisons": cell.judgements,
+        "pool_ages": cell.pool_ages,
+        "waits": cell.waits,
+    }
+
+
+def figure(records: Sequence[dict], path: Path) -> None:
+    """Success rate against the teacher's minutes, a panel per target, a line per training
+    mode and seed (thin) with the modes' means (thick)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    targets = list(dict.fromkeys(r["target"] for r in records))
+    fig, axes = plt.subplots(1, len(targets), figsize=(4.2 * len(targets), 3.4), squeeze=False)
+    colours = {"continuous": "tab:blue", "rounds": "tab:orange"}
+    for ax, target in zip(axes[0], targets, strict=True):
+        for training, colour in colours.items():
+            runs = [r for r in records if r["target"] == target and r["training"] == training]
+            if not runs:
+                continue
+            minutes = sorted({float(m) for r in runs for m in r["success"]})
+            rates = np.array([[r["success"].get(f"{m:g}", np.nan) for m in minutes] for r in runs])
+            for row in rates:
+                ax.plot(minutes, row, color=colour, alpha=0.3, lw=1)
+            label = f"{training} ({len(runs)} seeds)"
+            ax.plot(minutes, np.nanmean(rates, axis=0), color=colour, lw=2.5, label=label)
+        ax.axhline(SEED_SUCCESS, color="grey", ls=":", lw=1)
+        ax.set_ylim(-0.05, 1.05)
+        ax.set_title(target)
+        ax.set_xlabel("teacher's minutes")
+        ax.set_ylabel("greedy episodes succeeding")
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+
+
 def _success(cell: Cell, minute: float) -> str:
     rate = cell.success.get(minute)
     if rate is None:
@@ -290,7 +340,18 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--training", choices=("continuous", "rounds"), default="continuous")
     parser.add_argument("--out", type=Path, help="keep the copies here (default: a temp dir)")
     parser.add_argument("--log", type=Path, help="write the servers' and workers' logs here")
+    parser.add_argument(
+        "--figure",
+        nargs="+",
+        type=Path,
+        metavar=("PNG", "JSONL"),
+        help="only draw PNG from earlier runs' cells.jsonl files",
+    )
     args = parser.parse_args([] if argv is None else list(argv))
+    if args.figure:
+        png, *files = args.figure
+        figure([json.loads(line) for f in files for line in f.read_text().splitlines()], png)
+        return
     cells: list[Cell] = []
     with tempfile.TemporaryDirectory() as tmp:
         out = args.out or Path(tmp)
@@ -301,6 +362,8 @@ def main(argv: Sequence[str] | None = None) -> None:
                 for minute, copy in cell.marks.items():
                     evaluate_copy(cell, minute, copy)
                 cells.append(cell)
+                with (out / "cells.jsonl").open("a") as handle:
+                    handle.write(json.dumps(cell_record(cell, args.training)) + "\n")
                 print(
                     f"{time.strftime('%H:%M:%S')} {target} seed {seed}: {cell.success}",
                     file=sys.stderr,
