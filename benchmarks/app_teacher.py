@@ -55,6 +55,7 @@ from groupwise.episodes.ids import behaviour_id, behaviour_index
 from groupwise.pool.files import load_pool
 from groupwise.preferences.judgement import LEFT_BETTER, RIGHT_BETTER
 from groupwise.query.strategies import Query
+from groupwise.run.checkpoint import CHECKPOINTS, STATE_FILE
 from groupwise.run.continuous import PAPER_CASES, paper_pace
 from groupwise.run.run import CONFIG_FILE, Run
 from groupwise.storage.sessions import round_directory, session_directory
@@ -62,6 +63,7 @@ from groupwise.study.case_studies.table import SEED_SUCCESS
 from groupwise.study.case_studies.target_evaluation import evaluate_target
 from groupwise.teachers import DECISION_MAKERS
 from groupwise.teachers.calibration import PEOPLE_LABEL_ERROR
+from groupwise.worker.job import PRETRAINED
 
 ROUNDS = 5
 """Rounds of a session, as the case studies' (the person stops at the last mark first)."""
@@ -244,7 +246,12 @@ def evaluate_copy(cell: Cell, minute: float, copy: Path) -> None:
     with Run.create(cfg, copy) as run:
         committed = run.restore()
         if not run.restore_mid_round(run.next_round) and not committed:
-            raise RuntimeError(f"{copy} holds no checkpoint to evaluate")
+            # round 0 open and no PPO since (rounds mode): the policy pre-training left
+            pretrained = copy / CHECKPOINTS / PRETRAINED
+            if (pretrained / STATE_FILE).is_file():
+                run.load_policy(pretrained)
+            elif cfg.training.pretrain_steps > 0:
+                raise RuntimeError(f"{copy} holds no checkpoint to evaluate")
         cell.ppo_steps[minute] = int(run.agent.num_timesteps)
         target = TARGETS[cell.target]
         rng = np.random.default_rng([cell.seed, int(minute)])
