@@ -318,7 +318,7 @@ def figure(records: Sequence[dict], path: Path) -> None:
             rates = np.array([[r["success"].get(f"{m:g}", np.nan) for m in minutes] for r in runs])
             for row in rates:
                 ax.plot(minutes, row, color=colour, alpha=0.3, lw=1)
-            label = f"{training} ({len(runs)} seeds)"
+            label = f"{training} ({len(runs)} seed{'' if len(runs) == 1 else 's'})"
             ax.plot(minutes, np.nanmean(rates, axis=0), color=colour, lw=2.5, label=label)
         ax.axhline(SEED_SUCCESS, color="grey", ls=":", lw=1)
         ax.set_ylim(-0.05, 1.05)

@@ -37,7 +37,12 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from pathlib import Path
 from typing import Any
 
-SETUPS: dict[str, dict[str, Any]] = {"baseline": {}}
+SETUPS: dict[str, dict[str, Any]] = {
+    "baseline": {},
+    # the learned reward centred and scaled per step, no return scaling (imitation's
+    # NormalizedRewardNet; issue 41, deliverable 3)
+    "std-step": {"ppo": {"standardise_reward": True, "normalize_reward": False}},
+}
 """Setup name -> the partial config it adds to the best recipe. Issue 41's remedies measured
 no gain on the splits and left the code (docs/case-studies.md, "Measured and removed"):
 PPE's coverage-mixed queries ("coverage"), PoLiCER's reward resets ("reset") and the
