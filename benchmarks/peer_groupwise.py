@@ -44,8 +44,10 @@ VARIANTS: dict[str, dict[str, dict[str, Any]]] = {
     # imitation's reward training: 32 pairs a minibatch, no validation split (no adaptive L2)
     "imitation-fit": {"reward": {"batch_size": 32, "validation_fraction": 0.0}},
     # imitation's reward for PPO: running per-step centring and scaling, no return scaling
+    # (the default since issue 41)
     "std-step": {"ppo": {"standardise_reward": True, "normalize_reward": False}},
-    "std-step-ret": {"ppo": {"standardise_reward": True}},
+    # the default before issue 41: the learned reward scaled by the running return std
+    "return-scale": {"ppo": {"standardise_reward": False}},
     "joint": {"reward": {"action_term": "joint"}},  # SPEC §3's one MLP, the old default
     "additive": {"reward": {"action_term": "additive"}},
     "cost": {"reward": {"action_term": "cost"}},

@@ -248,7 +248,8 @@ class StandardisedReward:
 
     Why: the Bradley–Terry reward's offset is not identified by preferences, and an offset
     that is large against the reward's spread inflates the running return std that
-    `VecNormalize` divides by, so PPO sees a flatter reward (docs/results/peer).
+    `VecNormalize` divides by, so PPO sees a flatter reward. The default since issue 41, in
+    place of the return scaling (docs/results/peer: Hopper-v4 and Walker2d-v4 at SPEC noise).
     """
 
     def __init__(self, reward_fn: RewardFn, epsilon: float = 1e-8) -> None:
@@ -333,9 +334,10 @@ def _training_env(make_env: EnvFactory, cfg: PPOConfig, reward_fn: RewardFn | No
     venv: VecEnv = VecMonitor(DummyVecEnv([make_env] * cfg.n_envs))
     if reward_fn is not None:
         venv = LearnedRewardVecEnv(venv, reward_fn)
+    standardised = reward_fn is not None and cfg.standardise_reward  # scaled per step already
     return VecNormalize(
         venv,
         norm_obs=cfg.normalize_obs,
-        norm_reward=cfg.normalize_reward,
+        norm_reward=cfg.normalize_reward and not standardised,
         gamma=cfg.gamma,
     )

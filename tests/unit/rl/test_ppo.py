@@ -151,7 +151,19 @@ def test_standardised_reward_statistics_are_saved_and_restored(tmp_path):
     assert restored.step_norm is not None
     assert restored.step_norm.stats.count == agent.step_norm.stats.count
     np.testing.assert_allclose(restored.step_norm.stats.mean, agent.step_norm.stats.mean)
-    assert PPOAgent(make, SMALL, seed=0, reward_fn=lambda obs, acts: obs[:, 0]).step_norm is None
+    plain = dataclasses.replace(SMALL, standardise_reward=False)
+    assert PPOAgent(make, plain, seed=0, reward_fn=lambda obs, acts: obs[:, 0]).step_norm is None
+
+
+def test_a_learned_reward_is_standardised_per_step_and_the_envs_own_scaled_by_return():
+    """The default (issue 41): a learned reward centred and scaled per step, not also by the
+    running return std; PPO on the env's own reward keeps VecNormalize's return scaling."""
+    learned = PPOAgent(make, SMALL, seed=0, reward_fn=lambda obs, acts: obs[:, 0])
+    assert learned.step_norm is not None
+    assert learned.venv.norm_reward is False
+    assert PPOAgent(make, SMALL, seed=0).venv.norm_reward is True
+    returns = dataclasses.replace(SMALL, standardise_reward=False)
+    assert PPOAgent(make, returns, seed=0, reward_fn=lambda o, a: o[:, 0]).venv.norm_reward
 
 
 def test_every_learn_call_writes_to_one_tensorboard_writer_closed_with_the_agent(tmp_path):

@@ -8,8 +8,8 @@ Each one reproduces a choice of the comparison the paper made that our defaults 
   pairwise DM's count (SPEC §8's capped ablation; ``--cap-pairs``).
 - ``pairs2x``: every judgement yields twice the pairs its derivation gives (the paper's
   reference code draws twice as many pairs per judgement; `LoopConfig.pair_oversample`).
-- ``no-reward-norm``: PPO sees the learned reward unscaled (no running return std,
-  `PPOConfig.normalize_reward`), as a PPO without `VecNormalize` reward scaling would.
+- ``no-reward-norm``: PPO sees the learned reward unscaled (neither standardised per step
+  nor scaled by a running return std: `PPOConfig.standardise_reward`, `normalize_reward`).
 - ``obs-only``: the reward members see the observation alone, not [obs ; act]
   (`RewardConfig.use_actions` off; ARCHITECTURE.md, "Reward inputs").
 - ``calibrated``: the simulated teacher is wrong as often as the paper's people (12 % of
@@ -50,7 +50,8 @@ def _pairs2x(config: RunConfig) -> RunConfig:
 
 
 def _no_reward_norm(config: RunConfig) -> RunConfig:
-    return dataclasses.replace(config, ppo=dataclasses.replace(config.ppo, normalize_reward=False))
+    ppo = dataclasses.replace(config.ppo, normalize_reward=False, standardise_reward=False)
+    return dataclasses.replace(config, ppo=ppo)
 
 
 def _obs_only(config: RunConfig) -> RunConfig:
@@ -77,7 +78,7 @@ ABLATIONS: dict[str, Ablation] = {
         _pairs2x,
     ),
     "no-reward-norm": Ablation(
-        "PPO on the unscaled learned reward (normalize_reward off)",
+        "PPO on the unscaled learned reward (standardise_reward and normalize_reward off)",
         _no_reward_norm,
     ),
     "obs-only": Ablation(

@@ -18,7 +18,7 @@ from groupwise.study.simulation.runner import StudySpec, StudySummary
 INTENDED = {
     "capped": {("loop", "pair_cap"): 1.0},
     "pairs2x": {("loop", "pair_oversample"): 2.0},
-    "no-reward-norm": {("ppo", "normalize_reward"): False},
+    "no-reward-norm": {("ppo", "normalize_reward"): False, ("ppo", "standardise_reward"): False},
     "obs-only": {("reward", "use_actions"): False},
     "calibrated": {("teacher", "label_error"): 0.12},
     "noiseless": {("teacher", "noise_sigma"): 0.0},
