@@ -23,6 +23,8 @@ TOOK_OFF = {"Hopper-v4": 600.0, "Walker2d-v4": 600.0}
 """A final return above which a seed hops or walks on past its first stumble: the runs that
 stay down level off at 200–300 (Hopper) and below 450 (Walker2d)."""
 IMITATION = "imitation"
+MAIN = ("std-step", "return-scale", IMITATION, "true-reward")
+"""The learners drawn thick: groupwise now and before, imitation, the ceiling."""
 
 
 def read_cells(folder: Path) -> dict[tuple[str, str], list[dict]]:
@@ -35,6 +37,13 @@ def read_cells(folder: Path) -> dict[tuple[str, str], list[dict]]:
                 cell = json.loads(line)
                 cells[cell["env"], cell["variant"]].append(cell)
     return {key: sorted(found, key=lambda c: c["seed"]) for key, found in cells.items()}
+
+
+def took_off(env: str, final: np.ndarray) -> str:
+    """How many seeds ended above `TOOK_OFF` of the env ("–" for other envs)."""
+    if env not in TOOK_OFF:
+        return "–"
+    return f"{int((final > TOOK_OFF[env]).sum())}/{len(final)}"
 
 
 def table(cells: dict[tuple[str, str], list[dict]]) -> list[str]:
@@ -53,8 +62,7 @@ def table(cells: dict[tuple[str, str], list[dict]]) -> list[str]:
         spread = f"{final.std(ddof=1):.0f}" if len(final) > 1 else "–"
         lines.append(
             f"| {env} | {learner} | {len(final)} | {final.mean():.0f} ± {spread} | "
-            f"{np.median(final):.0f} | {int((final > TOOK_OFF[env]).sum())}/{len(final)} | "
-            f"{test} |"
+            f"{np.median(final):.0f} | {took_off(env, final)} | {test} |"
         )
     return lines
 
@@ -67,22 +75,26 @@ def plot(cells: dict[tuple[str, str], list[dict]], path: Path) -> None:
 
     envs = sorted({env for env, _ in cells})
     fig, axes = plt.subplots(1, len(envs), figsize=(5.0 * len(envs), 3.6), squeeze=False)
+    learners = sorted({learner for _, learner in cells})
+    colours = {learner: f"C{i % 10}" for i, learner in enumerate(learners)}  # one per learner
     for ax, env in zip(axes[0], envs, strict=True):
         for (of, learner), found in sorted(cells.items()):
             if of != env:
                 continue
             curves = np.array([c["curve"] for c in found])
             rounds = np.arange(1, curves.shape[1] + 1)
-            thick = learner in ("default", IMITATION, "true-reward")
+            thick = learner in MAIN
             ax.plot(
                 rounds,
                 curves.mean(axis=0),
                 marker="o" if thick else None,
                 lw=2.2 if thick else 1.0,
                 alpha=1.0 if thick else 0.6,
+                color=colours[learner],
                 label=f"{learner} ({len(found)})",
             )
         ax.set_title(env)
+        ax.set_xticks(rounds)
         ax.set_xlabel("round")
         ax.set_ylabel("mean true return (10 episodes a seed)")
         ax.legend(fontsize=7)
