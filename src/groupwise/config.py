@@ -140,10 +140,10 @@ class PPOConfig:
     standardise_reward: bool = True
     """Centre and scale the learned reward per step by its running mean and sd over PPO's
     rollouts (imitation's `NormalizedRewardNet`), instead of scaling it by the return std.
-    At SPEC noise it lifted Hopper-v4 from 483 ± 468 to 663 ± 600 and Walker2d-v4 from
-    88 ± 177 to 161 ± 174 (10–12 seeds; imitation 688 and 176), left Pendulum-v1 level
-    (−168 against −166) and the stand-up and backflip at their levels (issue 41,
-    docs/results/peer)."""
+    At SPEC noise, 15 seeds: Hopper-v4 643 ± 620 and Walker2d-v4 195 ± 176, against
+    imitation's 622 and 181 and the return scaling's 483 and 88 (10 seeds); Pendulum-v1
+    level (−168 against −166); the stand-up and the backflip 5/5 (issue 41,
+    docs/results/peer, docs/results/case-studies/std-step)."""
     tensorboard: bool = True
     """Write TensorBoard logs under the run directory."""
 
