@@ -101,9 +101,10 @@ def health_gaps(make, obs: np.ndarray, learned: np.ndarray, true: np.ndarray) ->
     angle in range), how much more a healthy step earns than a fallen one, in sds of each
     reward over the same steps: does the learned reward pay for not falling as the true one
     does? Empty on other envs."""
-    env = make().unwrapped
-    z_range = getattr(env, "_healthy_z_range", None)
-    angle_range = getattr(env, "_healthy_angle_range", None)
+    env = make()
+    z_range = getattr(env.unwrapped, "_healthy_z_range", None)
+    angle_range = getattr(env.unwrapped, "_healthy_angle_range", None)
+    env.close()
     if z_range is None or angle_range is None:
         return {}
     healthy = (
