@@ -23,12 +23,14 @@ worker published (a person sees them in the clips); everything else goes through
                                      [--minutes 10 20] [--pace S] [--label-error 0.12]
                                      [--training continuous|rounds] [--out DIR] [--log FILE]
     python -m benchmarks.app_teacher --figure curves.png OUT/*/cells.jsonl
+    python -m benchmarks.app_teacher --summary OUT/*/cells.jsonl
 
 Prints one row per target and seed: success after each mark, PPO steps, the pool's age
 when judged (PPO steps between the policy that sampled the judged behaviours and the policy
 at the moment of the judgement: median / max) and End round → next round open (median), and
 appends each cell to OUT/cells.jsonl; `--figure` draws the success rate against the
-teacher's minutes from such files.
+teacher's minutes from such files, and `--summary` prints one row per target and training
+mode over their seeds.
 """
 
 import argparse
@@ -330,6 +332,38 @@ def figure(records: Sequence[dict], path: Path) -> None:
     fig.savefig(path, dpi=110)
 
 
+def summary(records: Sequence[dict]) -> str:
+    """One row per target and training mode over the seeds of `records` (`cell_record`s):
+    the seeds that passed at each mark, the mean success rate at the last, the median PPO
+    steps at the last mark and comparisons, and the pooled pool ages and waits."""
+    marks = sorted({float(m) for r in records for m in r["success"]})
+    head = ["target", "training", "seeds", *(f"passed at {m:g} min" for m in marks)]
+    head += [f"mean success at {marks[-1]:g} min", f"PPO steps at {marks[-1]:g} min"]
+    head += ["comparisons", "pool age when judged, median / max", "End round → open, median"]
+    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * 3 + "---:|" * (len(head) - 3)]
+    groups = dict.fromkeys((r["target"], r["training"]) for r in records)
+    for target, training in groups:
+        of = [r for r in records if (r["target"], r["training"]) == (target, training)]
+        seeds = ", ".join(str(r["seed"]) for r in of)
+        row = [target, training, seeds]
+        for m in marks:
+            rates = [r["success"].get(f"{m:g}") for r in of]
+            row.append(f"{sum(x is not None and x >= SEED_SUCCESS for x in rates)}/{len(of)}")
+        last = [r["success"].get(f"{marks[-1]:g}", 0.0) for r in of]
+        row.append(f"{statistics.fmean(last):.0%}")
+        steps = [r["ppo_steps"].get(f"{marks[-1]:g}", 0) for r in of]
+        row += [
+            f"{statistics.median(steps):,.0f}",
+            f"{statistics.median(r['comparisons'] for r in of):g}",
+        ]
+        ages = [a for r in of for a in r.get("pool_ages", [])]
+        waits = [w for r in of for w in r.get("waits", [])]
+        row.append(f"{statistics.median(ages):,.0f} / {max(ages):,}" if ages else "–")
+        row.append(f"{statistics.median(waits):.2f} s ({len(waits)})" if waits else "–")
+        lines.append("| " + " | ".join(row) + " |")
+    return "\n".join(lines)
+
+
 def _success(cell: Cell, minute: float) -> str:
     rate = cell.success.get(minute)
     if rate is None:
@@ -354,7 +388,19 @@ def main(argv: Sequence[str] | None = None) -> None:
         metavar=("PNG", "JSONL"),
         help="only draw PNG from earlier runs' cells.jsonl files",
     )
+    parser.add_argument(
+        "--summary",
+        nargs="+",
+        type=Path,
+        metavar="JSONL",
+        help="only print the rows per target and training mode of earlier runs' cells.jsonl",
+    )
     args = parser.parse_args([] if argv is None else list(argv))
+    if args.summary:
+        print(
+            summary([json.loads(line) for f in args.summary for line in f.read_text().splitlines()])
+        )
+        return
     if args.figure:
         png, *files = args.figure
         figure([json.loads(line) for f in files for line in f.read_text().splitlines()], png)

@@ -5,8 +5,8 @@
 set -euo pipefail
 out=${1:?usage: run.sh OUT [SEEDS]}; seeds=${2:-0}
 for seed in $seeds; do
-  for training in continuous rounds; do
-    for target in halfcheetah-standup hopper-backflip walker-splits; do
+  for target in halfcheetah-standup hopper-backflip walker-splits; do
+    for training in continuous rounds; do
       cell=$out/$target-$seed-$training
       python -m benchmarks.app_teacher --targets "$target" --seeds "$seed" \
         --minutes 2.5 5 7.5 10 --training "$training" --out "$cell" --log "$cell.log" \
