@@ -21,17 +21,22 @@ def point_out(point: TrainingPoint) -> TrainingPointOut:
 
 
 def summary(points: Sequence[TrainingPoint]) -> TrainingSummary | None:
-    """The newest point's steps, fit and pool age, with the newest evaluated return."""
+    """The newest round's newest point's fit and pool (a round's points carry its own
+    pool's position; the ended round's record may come after the next round's opening
+    point), the most PPO steps any point has, and the newest evaluated return: what the
+    page shows (web/src/lib/training.ts, `trainingSummary`)."""
     if not points:
         return None
-    last = points[-1]
+    newest_round = max(p.round for p in points)
+    last = [p for p in points if p.round == newest_round][-1]
+    steps = max(p.ppo_steps for p in points)
     evaluated = [p.true_return for p in points if p.true_return is not None]
     return TrainingSummary(
-        round=last.round,
-        ppo_steps=last.ppo_steps,
+        round=newest_round,
+        ppo_steps=steps,
         pairs=last.pairs,
         reward_val_accuracy=last.reward_val_accuracy,
-        pool_age=last.pool_age,
+        pool_age=max(0, steps - last.pool_steps),
         true_return=evaluated[-1] if evaluated else None,
     )
 

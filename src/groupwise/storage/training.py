@@ -2,10 +2,13 @@
 
 A continuous round gets a point after each refit of the reward model (its pairs and
 validation accuracy) and after each evaluation of the greedy policy's true return
-(`groupwise.worker.continuous`); every trained round, in either training mode, gets one from its
-record's stats when its training is committed (`round_point`, from
-`lifecycle.finish_training` and `finish_final`). Writing a point bumps the session's
-revision, so the event stream sends it (``training``) at once.
+(`groupwise.worker.continuous`); every trained round, in either training mode, gets one
+from its record's stats when its training is committed (`round_point`, from
+`lifecycle.finish_training` and `finish_final`); and every round of an agent after the
+first gets one when it opens, at its own pool's position (`opening_point`), so that the
+page's "Pool sampled … ago" is of the round the person sees, not of the round before
+(issue 39). Writing a point bumps the session's revision, so the event stream sends it
+(``training``) at once.
 """
 
 import math
@@ -76,6 +79,28 @@ def add_point(
     s.add(row)
     s.flush()
     return _point(row)
+
+
+def opening_point(s: DbSession, session_id: str, round_index: int, ppo_steps: int) -> TrainingPoint:
+    """Store the point of round `round_index` opening with a pool the policy at `ppo_steps`
+    played: the fit of the newest point before it (none before the first), no evaluation.
+    Raises NotFoundError."""
+    newest = s.scalars(
+        select(TrainingPointRow)
+        .where(TrainingPointRow.session_id == session_id)
+        .order_by(TrainingPointRow.revision.desc(), TrainingPointRow.id.desc())
+        .limit(1)
+    ).first()
+    return add_point(
+        s,
+        session_id,
+        round_index=round_index,
+        ppo_steps=ppo_steps,
+        true_return=None,
+        pairs=0 if newest is None else newest.pairs,
+        reward_val_accuracy=None if newest is None else newest.reward_val_accuracy,
+        pool_steps=ppo_steps,
+    )
 
 
 def round_point(

@@ -82,7 +82,10 @@ def prepare(
         data_dir, job.session_id, job.env, settings, offer.pool, offer.queries, render,
         progress, offer.sample_s, steps,
     )  # fmt: skip
-    publish_offer(db, job.session_id, offer.pool.round, prepared)
+    # the round's own pool position on the curve: round 0's is the policy's before any
+    # point; a recorded dataset's session has no agent
+    agent_steps = steps if recorded is None and job.round > 0 else None
+    publish_offer(db, job.session_id, offer.pool.round, prepared, agent_steps)
     log.info(
         "session %s: round %d ready (%d behaviours)", job.session_id, job.round, len(offer.pool)
     )

@@ -23,21 +23,32 @@ from groupwise.run.round import Offer
 from groupwise.storage import Database, SessionSettings
 from groupwise.storage.rounds import PreparedRound, store_prepared_round
 from groupwise.storage.sessions import round_directory
+from groupwise.storage.training import opening_point
 from groupwise.worker.offers import prepared_round
 from groupwise.worker.progress import JobProgress
 
 log = logging.getLogger(__name__)
 
 
-def publish_offer(db: Database, session_id: str, round_index: int, prepared: PreparedRound) -> bool:
+def publish_offer(
+    db: Database,
+    session_id: str,
+    round_index: int,
+    prepared: PreparedRound,
+    ppo_steps: int | None = None,
+) -> bool:
     """Open round `round_index` of a session with its offer published by `published_round`
     (clips, tree and candidates in its directory; its queries as the page's suggestions and
-    pairwise queue), stored in one transaction. False (nothing opened) when the session
-    moved on meanwhile."""
+    pairwise queue), stored in one transaction; with `ppo_steps` (a session with an agent,
+    whose policy at `ppo_steps` played the pool) the round's opening point of the learning
+    curve in the same transaction (`storage.training.opening_point`). False (nothing
+    opened) when the session moved on meanwhile."""
     with db.write() as s:
         if not store_prepared_round(s, session_id, round_index, prepared):
             log.warning("session %s moved on while round %d was prepared", session_id, round_index)
             return False
+        if ppo_steps is not None:
+            opening_point(s, session_id, round_index, ppo_steps)
     return True
 
 

@@ -1,11 +1,12 @@
 """A continuous session's next round is cut from PPO's own latest rollouts when the round
 ends (issue 39: fresh pools, `jobs.open_fresh`), opened before the ended round is committed;
 the page's counter follows PPO rollout by rollout; Pause pauses PPO; a worker killed between
-opening and committing commits on resume."""
+opening and committing commits on resume; a rounds-mode round opens with its own pool's
+position."""
 
 import dataclasses
 
-from tests.unit.server.conftest import context_of, post_judgement
+from tests.unit.server.conftest import context_of, new_session, post_judgement, run_worker_once
 from tests.unit.worker.conftest import training_session
 
 from groupwise.pool.files import load_fragments
@@ -84,6 +85,31 @@ def test_each_point_carries_its_own_rounds_pool_position(client):
     # round 1's commit comes after round 2 opened, with round 1's pool position (not the
     # policy round 1 left, the position it used to carry)
     assert (points[-1].round, points[-1].pool_steps) == (1, positions[1])
+    # so the summary the page shows is of round 2's point, not of that later record
+    summary = client.get(f"/api/sessions/{sid}/training").json()["summary"]
+    steps = max(p.ppo_steps for p in points)
+    assert (summary["round"], summary["pool_age"]) == (2, steps - positions[2])
+
+
+def test_a_rounds_mode_round_opens_with_its_own_pool_position(client):
+    """In rounds mode PPO trains between the rounds and the next pool is sampled after it:
+    the page's "Pool sampled … ago" of round 1 is 0 steps, not the steps round 0's pool is
+    older than the policy (20,480 through the app before, issue 39)."""
+    sid = new_session(client, training="rounds", rounds=3)["id"]
+    run_worker_once(client)  # round 0 ready
+    post_judgement(client, sid, ["b0", "b1"], ["b2"])
+    client.post(f"/api/sessions/{sid}/end-round")
+    run_worker_once(client)  # round 0 trained and committed
+    run_worker_once(client)  # round 1 prepared from the policy round 0 left
+    with context_of(client).db.read() as s:
+        points = list_points(s, sid)
+    trained = max(p.ppo_steps for p in points)
+    assert trained > 0
+    assert [(p.round, p.pool_steps) for p in points] == [(0, 0), (1, trained)]
+    assert sampled_at(_pool_dir(client, sid, 1)) == trained
+    summary = client.get(f"/api/sessions/{sid}/training").json()["summary"]
+    assert (summary["round"], summary["pool_age"], summary["ppo_steps"]) == (1, 0, trained)
+    assert summary["pairs"] == points[0].pairs > 0  # the fit round 1 opened with
 
 
 def test_the_step_counter_moves_with_each_rollout_and_pause_stops_ppo(client, monkeypatch):
