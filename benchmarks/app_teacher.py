@@ -333,34 +333,55 @@ def figure(records: Sequence[dict], path: Path) -> None:
 
 
 def summary(records: Sequence[dict]) -> str:
-    """One row per target and training mode over the seeds of `records` (`cell_record`s):
-    the seeds that passed at each mark, the mean success rate at the last, the median PPO
-    steps at the last mark and comparisons, and the pooled pool ages and waits."""
-    marks = sorted({float(m) for r in records for m in r["success"]})
-    head = ["target", "training", "seeds", *(f"passed at {m:g} min" for m in marks)]
-    head += [f"mean success at {marks[-1]:g} min", f"PPO steps at {marks[-1]:g} min"]
-    head += ["comparisons", "pool age when judged, median / max", "End round → open, median"]
-    lines = ["| " + " | ".join(head) + " |", "|" + "---|" * 3 + "---:|" * (len(head) - 3)]
-    groups = dict.fromkeys((r["target"], r["training"]) for r in records)
-    for target, training in groups:
-        of = [r for r in records if (r["target"], r["training"]) == (target, training)]
-        seeds = ", ".join(str(r["seed"]) for r in of)
-        row = [target, training, seeds]
-        for m in marks:
-            rates = [r["success"].get(f"{m:g}") for r in of]
-            row.append(f"{sum(x is not None and x >= SEED_SUCCESS for x in rates)}/{len(of)}")
-        last = [r["success"].get(f"{marks[-1]:g}", 0.0) for r in of]
-        row.append(f"{statistics.fmean(last):.0%}")
-        steps = [r["ppo_steps"].get(f"{marks[-1]:g}", 0) for r in of]
-        row += [
-            f"{statistics.median(steps):,.0f}",
-            f"{statistics.median(r['comparisons'] for r in of):g}",
-        ]
+    """Two tables over the seeds of `records` (`cell_record`s), as docs/results/continuous
+    shows them: per target and training mode, the seeds that passed at each mark, the mean
+    success rate at the last, the median PPO steps there and comparisons, the pooled pool
+    ages (median / max) and End round waits (median, range); then each seed's success rate
+    at each mark."""
+    marks = sorted({float(m) for r in records for m in r["success"]}, key=float)
+    keys = [f"{m:g}" for m in marks]
+    seeds = sorted({r["seed"] for r in records})
+    groups = sorted({(r["target"], r["training"]) for r in records})
+    cells = {(t, mode): sorted((r for r in records if (r["target"], r["training"]) == (t, mode)),
+                               key=lambda r: r["seed"]) for t, mode in groups}  # fmt: skip
+    at = " / ".join(keys)
+    lines = [
+        f"| target | training | passed at {at} min (seeds) | mean success at {keys[-1]} min "
+        f"| PPO steps at {keys[-1]} min, median | comparisons | pool age when judged, median / "
+        "max (PPO steps) | End round → next round open, median (range) |",
+        "|---|---|---:|---:|---:|---:|---:|---:|",
+    ]
+    for (target, training), of in cells.items():
+        passed = " / ".join(
+            str(sum(r["success"].get(k, 0.0) >= SEED_SUCCESS for r in of)) for k in keys
+        )
+        mean = statistics.fmean(r["success"].get(keys[-1], 0.0) for r in of)
+        steps = statistics.median(r["ppo_steps"].get(keys[-1], 0) for r in of)
+        judged = statistics.median(r["comparisons"] for r in of)
         ages = [a for r in of for a in r.get("pool_ages", [])]
         waits = [w for r in of for w in r.get("waits", [])]
-        row.append(f"{statistics.median(ages):,.0f} / {max(ages):,}" if ages else "–")
-        row.append(f"{statistics.median(waits):.2f} s ({len(waits)})" if waits else "–")
-        lines.append("| " + " | ".join(row) + " |")
+        age = f"{statistics.median(ages):,.0f} / {max(ages):,}" if ages else "–"
+        wait = (
+            f"{statistics.median(waits):.2f} s ({min(waits):.1f}–{max(waits):.1f})"
+            if waits
+            else "–"
+        )
+        lines.append(
+            f"| {target} | {training} | {passed} (of {len(of)}) | {mean:.0%} | {steps:,.0f} | "
+            f"{judged:g} | {age} | {wait} |"
+        )
+    lines += ["", f"Per seed, success at {at} min (share of {EPISODES} greedy episodes):", ""]
+    lines.append("| target | training | " + " | ".join(f"seed {s}" for s in seeds) + " |")
+    lines.append("|---|---|" + "---|" * len(seeds))
+    for (target, training), of in cells.items():
+        by_seed = {r["seed"]: r["success"] for r in of}
+        row = [
+            " / ".join(f"{100 * by_seed[s].get(k, 0.0):.0f}" for k in keys) + " %"
+            if s in by_seed
+            else "–"
+            for s in seeds
+        ]
+        lines.append(f"| {target} | {training} | " + " | ".join(row) + " |")
     return "\n".join(lines)
 
 

@@ -37,11 +37,6 @@ class TrainingPoint:
     """PPO steps of the policy that sampled round `round`'s pool."""
     revision: int = 0
 
-    @property
-    def pool_age(self) -> int:
-        """PPO steps since round `round`'s pool was sampled."""
-        return self.ppo_steps - self.pool_steps
-
 
 def finite(value: float | None) -> float | None:
     """`value`, or None for None, nan and inf (stored as null)."""

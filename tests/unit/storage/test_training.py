@@ -32,7 +32,7 @@ def test_points_bump_the_revision_and_come_back_in_order(db, open_session):
         (0, -3.5, 0.75),
         (64, None, None),  # nan is stored as null
     ]
-    assert points[1].pool_age == 64 - 32
+    assert points[1].pool_steps == 32
     assert points[0].at.tzinfo is not None
 
 
@@ -52,4 +52,4 @@ def test_a_committed_round_adds_its_point_its_pool_sampled_after_the_round_befor
         assert finish_training(s, sid, 1, "y", {**stats, "env_steps": 4096})
     with db.read() as s:
         last = list_points(s, sid)[-1]
-    assert (last.round, last.pool_steps, last.pool_age) == (1, 2048, 2048)
+    assert (last.round, last.ppo_steps, last.pool_steps) == (1, 4096, 2048)
