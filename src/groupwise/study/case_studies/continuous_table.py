@@ -8,9 +8,10 @@ Each RUN_DIR is a ``groupwise case-study … --teacher-pace S`` run (`--training
 the teacher's seconds, plus in rounds mode the seconds the teacher waited for PPO at
 `ppo_steps_per_s`) and the greedy policy's target score and success rate after the round
 (``case-study.csv``). Printed: one row per run (score after each round at its minute), then
-per target and mode the minutes until the target was passed — the first round whose
-success rate reaches `SUCCESS_SHARE` of the evaluation episodes, as the case studies count
-success — or that it was not, and within how many minutes.
+per target, mode and PPO's reward (the learned reward standardised per step, the default,
+or return-scaled: `PPOConfig.standardise_reward`) the minutes until the target was passed
+— the first round whose success rate reaches `SUCCESS_SHARE` of the evaluation episodes,
+as the case studies count success — or that it was not, and within how many minutes.
 """
 
 import argparse
@@ -21,6 +22,7 @@ import statistics
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 from groupwise.study.case_studies.table import Curve, target_curves_figure
 
@@ -37,6 +39,7 @@ class TimedRun:
     unit: str
     threshold: float
     mode: str
+    reward: str
     seed: int
     minutes: tuple[float, ...]
     scores: tuple[float, ...]
@@ -78,6 +81,7 @@ def read_run(run: Path) -> TimedRun:
         unit=summary["target"]["unit"],
         threshold=float(summary["target"]["threshold"]),
         mode=config["training"]["mode"],
+        reward=reward_scaling(config),
         seed=int(config["loop"]["seed"]),
         minutes=tuple(c / 60.0 for c in clocks),
         scores=tuple(float(r["target_score_mean"]) for r in scored),
@@ -86,12 +90,18 @@ def read_run(run: Path) -> TimedRun:
     )
 
 
+def reward_scaling(config: dict[str, Any]) -> str:
+    """How a run's PPO saw the learned reward: 'per step' (standardised per step, the
+    default since issue 41) or 'return-scaled' (VecNormalize's running return std)."""
+    return "per step" if config.get("ppo", {}).get("standardise_reward", True) else "return-scaled"
+
+
 def run_rows(runs: Sequence[TimedRun]) -> list[str]:
     """The per-run table (Markdown lines)."""
     lines = [
-        "| target | training | seed | PPO steps | target score after each round "
-        "(at the teacher's minute) | passed at |",
-        "|---|---|---:|---:|---|---:|",
+        "| target | training | PPO's reward | seed | PPO steps | target score after each "
+        "round (at the teacher's minute) | passed at |",
+        "|---|---|---|---:|---:|---|---:|",
     ]
     for run in runs:
         points = ", ".join(
@@ -100,23 +110,24 @@ def run_rows(runs: Sequence[TimedRun]) -> list[str]:
         )
         passed = "–" if run.passed_at is None else f"{run.passed_at:.1f} min"
         lines.append(
-            f"| {run.target} | {run.mode} | {run.seed} | {run.env_steps:,} | {points} | {passed} |"
+            f"| {run.target} | {run.mode} | {run.reward} | {run.seed} | {run.env_steps:,} "
+            f"| {points} | {passed} |"
         )
     return lines
 
 
 def summary_rows(runs: Sequence[TimedRun]) -> list[str]:
-    """Per target and mode: runs, final score (mean ± sd), runs passed and the minutes
+    """Per target, mode and PPO's reward: runs, final score (mean ± sd), runs passed and the minutes
     they needed (Markdown lines)."""
     lines = [
-        "| target | training | runs | PPO steps (mean) | final score, mean ± sd "
+        "| target | training | PPO's reward | runs | PPO steps (mean) | final score, mean ± sd "
         "| passed | minutes to pass |",
-        "|---|---|---:|---:|---|---:|---|",
+        "|---|---|---|---:|---:|---|---:|---|",
     ]
-    groups: dict[tuple[str, str], list[TimedRun]] = {}
+    groups: dict[tuple[str, str, str], list[TimedRun]] = {}
     for run in runs:
-        groups.setdefault((run.target, run.mode), []).append(run)
-    for (target, mode), members in groups.items():
+        groups.setdefault((run.target, run.mode, run.reward), []).append(run)
+    for (target, mode, reward), members in groups.items():
         finals = [m.scores[-1] for m in members]
         sd = statistics.stdev(finals) if len(finals) > 1 else 0.0
         passed = [m.passed_at for m in members if m.passed_at is not None]
@@ -128,7 +139,7 @@ def summary_rows(runs: Sequence[TimedRun]) -> list[str]:
         )
         steps = statistics.mean(m.env_steps for m in members)
         lines.append(
-            f"| {target} | {mode} | {len(members)} | {steps:,.0f} "
+            f"| {target} | {mode} | {reward} | {len(members)} | {steps:,.0f} "
             f"| {statistics.mean(finals):.2f} ± {sd:.2f} {members[0].unit} "
             f"| {len(passed)}/{len(members)} | {when} |"
         )
@@ -147,7 +158,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("runs", nargs="+", type=Path, help="timed case-study directories")
     parser.add_argument("--figure", type=Path, help="also draw the curves into this PNG")
     args = parser.parse_args(argv)
-    runs = sorted((read_run(run) for run in args.runs), key=lambda r: (r.target, r.mode, r.seed))
+    runs = sorted(
+        (read_run(run) for run in args.runs), key=lambda r: (r.target, r.mode, r.reward, r.seed)
+    )
     if args.figure:
         figure(runs, args.figure)
     print("\n".join(summary_rows(runs)))

@@ -16,12 +16,19 @@ def test_minutes_to_pass_is_the_first_round_with_enough_successful_episodes():
     assert minutes_to_pass([], []) is None
 
 
-def _run(tmp: Path, name: str, mode: str, clocks: list[str], success: list[float]) -> Path:
+def _run(
+    tmp: Path,
+    name: str,
+    mode: str,
+    clocks: list[str],
+    success: list[float],
+    ppo: dict[str, bool] | None = None,
+) -> Path:
     run = tmp / name
     run.mkdir()
     target = {"name": "hopper-backflip", "unit": "turns", "threshold": 1.0}
     (run / "summary.json").write_text(json.dumps({"target": target, "env_steps": 4096}))
-    config = {"training": {"mode": mode}, "loop": {"seed": 3}}
+    config = {"training": {"mode": mode}, "loop": {"seed": 3}, "ppo": ppo or {}}
     (run / "config.json").write_text(json.dumps(config))
     for file, rows in (
         ("rounds.csv", [{"round": i, "clock_s": c} for i, c in enumerate(clocks)]),
@@ -63,6 +70,20 @@ def test_the_table_says_when_a_mode_did_not_pass(tmp_path, capsys):
     ]
     assert main([str(r) for r in runs]) == 0
     out = capsys.readouterr().out
-    assert "| hopper-backflip | continuous | 1 | 4,096 | 1.50 ± 0.00 turns | 1/1 | 2.0 |" in out
-    rounds = "| hopper-backflip | rounds | 1 | 4,096 | 1.50 ± 0.00 turns | 0/1 |"
+    continuous = "| hopper-backflip | continuous | per step | 1 | 4,096 | 1.50 ± 0.00 turns"
+    assert f"{continuous} | 1/1 | 2.0 |" in out
+    rounds = "| hopper-backflip | rounds | per step | 1 | 4,096 | 1.50 ± 0.00 turns | 0/1 |"
     assert f"{rounds} not passed within 5.0 min |" in out
+
+
+def test_the_learned_reward_s_scaling_is_a_group_of_its_own(tmp_path, capsys):
+    """The ablation of issue 39: the same mode with the reward standardised per step and
+    return-scaled is two rows."""
+    runs = [
+        _run(tmp_path, "s", "continuous", ["600"], [0.0]),
+        _run(tmp_path, "r", "continuous", ["600"], [1.0], {"standardise_reward": False}),
+    ]
+    assert main([str(r) for r in runs]) == 0
+    out = capsys.readouterr().out
+    assert "| continuous | per step | 1 | 4,096 | 0.50 ± 0.00 turns | 0/1 |" in out
+    assert "| continuous | return-scaled | 1 | 4,096 | 0.50 ± 0.00 turns | 1/1 | 10.0 |" in out
