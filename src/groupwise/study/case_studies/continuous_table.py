@@ -65,8 +65,10 @@ def read_run(run: Path) -> TimedRun:
     """A run directory's `TimedRun`.
 
     Raises:
-        ValueError: the run had no timed teacher (no ``clock_s``).
+        ValueError: the run had no timed teacher (no ``clock_s``), or has not finished.
     """
+    if not (run / "summary.json").is_file():
+        raise ValueError(f"{run}: no summary.json (not a finished case-study run)")
     summary = json.loads((run / "summary.json").read_text())
     config = json.loads((run / "config.json").read_text())
     with (run / "rounds.csv").open() as handle:
@@ -158,9 +160,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("runs", nargs="+", type=Path, help="timed case-study directories")
     parser.add_argument("--figure", type=Path, help="also draw the curves into this PNG")
     args = parser.parse_args(argv)
-    runs = sorted(
-        (read_run(run) for run in args.runs), key=lambda r: (r.target, r.mode, r.reward, r.seed)
-    )
+    try:
+        runs = sorted(
+            (read_run(run) for run in args.runs),
+            key=lambda r: (r.target, r.mode, r.reward, r.seed),
+        )
+    except ValueError as error:
+        parser.error(str(error))
     if args.figure:
         figure(runs, args.figure)
     print("\n".join(summary_rows(runs)))

@@ -63,6 +63,14 @@ def test_a_run_without_a_timed_teacher_is_refused(tmp_path):
         read_run(_run(tmp_path, "a", "rounds", ["", ""], [0.0, 0.0]))
 
 
+def test_an_unfinished_run_is_one_line_of_error(tmp_path, capsys):
+    (tmp_path / "running").mkdir()
+    with pytest.raises(SystemExit) as exit_:
+        main([str(tmp_path / "running")])
+    assert exit_.value.code == 2
+    assert "running: no summary.json (not a finished case-study run)" in capsys.readouterr().err
+
+
 def test_the_table_says_when_a_mode_did_not_pass(tmp_path, capsys):
     runs = [
         _run(tmp_path, "c", "continuous", ["60", "120"], [0.0, 1.0]),
