@@ -21,7 +21,8 @@ worker published (a person sees them in the clips); everything else goes through
 
     python -m benchmarks.app_teacher [--targets hopper-backflip ...] [--seeds 0 1 2]
                                      [--minutes 10 20] [--pace S] [--label-error 0.12]
-                                     [--training continuous|rounds] [--out DIR] [--log FILE]
+                                     [--training continuous|rounds] [--research JSON]
+                                     [--out DIR] [--log FILE]
     python -m benchmarks.app_teacher --figure curves.png OUT/*/cells.jsonl
     python -m benchmarks.app_teacher --summary OUT/*/cells.jsonl
 
@@ -30,7 +31,8 @@ when judged (PPO steps between the policy that sampled the judged behaviours and
 at the moment of the judgement: median / max) and End round → next round open (median), and
 appends each cell to OUT/cells.jsonl; `--figure` draws the success rate against the
 teacher's minutes from such files, and `--summary` prints one row per target and training
-mode over their seeds.
+mode (and `--research`, a partial run config given to the session as the New-session API's
+`research`) over their seeds.
 """
 
 import argparse
@@ -138,6 +140,8 @@ def teach(
         "round_seconds": 0,
         "frame_size": 96,
     }
+    if args.research:
+        settings["research"] = args.research
     pace = args.pace or paper_pace(target, pairwise=False)
     feedback = teacher_of("groupwise", args.label_error)
     rng = np.random.default_rng(seed)
@@ -286,12 +290,13 @@ def table(cells: Sequence[Cell], marks: Sequence[float]) -> str:
     return "\n".join(lines)
 
 
-def cell_record(cell: Cell, training: str) -> dict:
+def cell_record(cell: Cell, training: str, research: dict | None = None) -> dict:
     """One cell as a JSON line (`--figure` reads them back)."""
     return {
         "target": cell.target,
         "seed": cell.seed,
         "training": training,
+        "research": research,
         "success": {f"{m:g}": rate for m, rate in cell.success.items()},
         "ppo_steps": {f"{m:g}": steps for m, steps in cell.ppo_steps.items()},
         "comparisons": cell.judgements,
@@ -332,6 +337,12 @@ def figure(records: Sequence[dict], path: Path) -> None:
     fig.savefig(path, dpi=110)
 
 
+def arm(record: dict) -> str:
+    """A cell's training mode, with its research settings when it had any."""
+    research = record.get("research")
+    return record["training"] + (f" {json.dumps(research)}" if research else "")
+
+
 def summary(records: Sequence[dict]) -> str:
     """Two tables over the seeds of `records` (`cell_record`s), as docs/results/continuous
     shows them: per target and training mode, the seeds that passed at each mark, the mean
@@ -341,8 +352,8 @@ def summary(records: Sequence[dict]) -> str:
     marks = sorted({float(m) for r in records for m in r["success"]}, key=float)
     keys = [f"{m:g}" for m in marks]
     seeds = sorted({r["seed"] for r in records})
-    groups = sorted({(r["target"], r["training"]) for r in records})
-    cells = {(t, mode): sorted((r for r in records if (r["target"], r["training"]) == (t, mode)),
+    groups = sorted({(r["target"], arm(r)) for r in records})
+    cells = {(t, mode): sorted((r for r in records if (r["target"], arm(r)) == (t, mode)),
                                key=lambda r: r["seed"]) for t, mode in groups}  # fmt: skip
     at = " / ".join(keys)
     lines = [
@@ -400,6 +411,11 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--pace", type=float, help="seconds per comparison (the paper's)")
     parser.add_argument("--label-error", type=float, default=PEOPLE_LABEL_ERROR)
     parser.add_argument("--training", choices=("continuous", "rounds"), default="continuous")
+    parser.add_argument(
+        "--research",
+        type=json.loads,
+        help='a partial run config for the sessions, e.g. \'{"reward": {"use_actions": false}}\'',
+    )
     parser.add_argument("--out", type=Path, help="keep the copies here (default: a temp dir)")
     parser.add_argument("--log", type=Path, help="write the servers' and workers' logs here")
     parser.add_argument(
@@ -437,7 +453,7 @@ def main(argv: Sequence[str] | None = None) -> None:
                     evaluate_copy(cell, minute, copy)
                 cells.append(cell)
                 with (out / "cells.jsonl").open("a") as handle:
-                    handle.write(json.dumps(cell_record(cell, args.training)) + "\n")
+                    handle.write(json.dumps(cell_record(cell, args.training, args.research)) + "\n")
                 print(
                     f"{time.strftime('%H:%M:%S')} {target} seed {seed}: {cell.success}",
                     file=sys.stderr,
