@@ -8,8 +8,9 @@ Each RUN_DIR is a ``groupwise case-study … --teacher-pace S`` run (`--training
 the teacher's seconds, plus in rounds mode the seconds the teacher waited for PPO at
 `ppo_steps_per_s`) and the greedy policy's target score and success rate after the round
 (``case-study.csv``). Printed: one row per run (score after each round at its minute), then
-per target, mode and PPO's reward (the learned reward standardised per step, the default,
-or return-scaled: `PPOConfig.standardise_reward`) the minutes until the target was passed
+per target, mode and variant (`variants`: the settings that set a run apart from most of
+the runs given, e.g. ``reward.use_actions=True`` in an ablation's arm, or "as most": the
+arms' common settings) the minutes until the target was passed
 — the first round whose success rate reaches `SUCCESS_SHARE` of the evaluation episodes,
 as the case studies count success — or that it was not, and within how many minutes.
 """
@@ -19,7 +20,8 @@ import csv
 import json
 import math
 import statistics
-from collections.abc import Sequence
+from collections import Counter
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -39,7 +41,8 @@ class TimedRun:
     unit: str
     threshold: float
     mode: str
-    reward: str
+    config: Mapping[str, Any]
+    """The run's settings, flattened: "ppo.standardise_reward" → False."""
     seed: int
     minutes: tuple[float, ...]
     scores: tuple[float, ...]
@@ -83,7 +86,7 @@ def read_run(run: Path) -> TimedRun:
         unit=summary["target"]["unit"],
         threshold=float(summary["target"]["threshold"]),
         mode=config["training"]["mode"],
-        reward=reward_scaling(config),
+        config=flat_settings(config),
         seed=int(config["loop"]["seed"]),
         minutes=tuple(c / 60.0 for c in clocks),
         scores=tuple(float(r["target_score_mean"]) for r in scored),
@@ -92,44 +95,73 @@ def read_run(run: Path) -> TimedRun:
     )
 
 
-def reward_scaling(config: dict[str, Any]) -> str:
-    """How a run's PPO saw the learned reward: 'per step' (standardised per step, the
-    default since issue 41) or 'return-scaled' (VecNormalize's running return std)."""
-    return "per step" if config.get("ppo", {}).get("standardise_reward", True) else "return-scaled"
+SAME_ARM = frozenset({"loop.seed", "training.mode"})
+"""Settings runs of one variant differ in: the seed, and the mode (a column of its own)."""
 
 
-def run_rows(runs: Sequence[TimedRun]) -> list[str]:
-    """The per-run table (Markdown lines)."""
+def flat_settings(config: Mapping[str, Any], prefix: str = "") -> dict[str, Any]:
+    """A run's ``config.json`` as dotted keys, lists as tuples: {"ppo.gamma": 0.99, ...}."""
+    flat: dict[str, Any] = {}
+    for key, value in config.items():
+        if isinstance(value, Mapping):
+            flat |= flat_settings(value, f"{prefix}{key}.")
+        else:
+            flat[f"{prefix}{key}"] = tuple(value) if isinstance(value, list) else value
+    return flat
+
+
+def variants(runs: Sequence["TimedRun"]) -> list[str]:
+    """Each run's variant: the settings in which it differs from most of `runs` (the most
+    common value of each setting, the seed and mode aside), "key=value, ..." in key order,
+    or "as most" when it differs in none. The arms of an ablation run beside its
+    defaults are told apart without naming them."""
+    keys = sorted({key for run in runs for key in run.config} - SAME_ARM)
+    common = {
+        key: Counter(repr(run.config.get(key)) for run in runs).most_common(1)[0][0] for key in keys
+    }
+    return [
+        ", ".join(
+            f"{key}={run.config.get(key)}"
+            for key in keys
+            if repr(run.config.get(key)) != common[key]
+        )
+        or "as most"
+        for run in runs
+    ]
+
+
+def run_rows(runs: Sequence[TimedRun], labels: Sequence[str]) -> list[str]:
+    """The per-run table (Markdown lines); `labels`, each run's variant."""
     lines = [
-        "| target | training | PPO's reward | seed | PPO steps | target score after each "
+        "| target | training | variant | seed | PPO steps | target score after each "
         "round (at the teacher's minute) | passed at |",
         "|---|---|---|---:|---:|---|---:|",
     ]
-    for run in runs:
+    for run, label in zip(runs, labels, strict=True):
         points = ", ".join(
             f"{score:.2f} ({clock:.1f})"
             for score, clock in zip(run.scores, run.minutes, strict=True)
         )
         passed = "–" if run.passed_at is None else f"{run.passed_at:.1f} min"
         lines.append(
-            f"| {run.target} | {run.mode} | {run.reward} | {run.seed} | {run.env_steps:,} "
+            f"| {run.target} | {run.mode} | {label} | {run.seed} | {run.env_steps:,} "
             f"| {points} | {passed} |"
         )
     return lines
 
 
-def summary_rows(runs: Sequence[TimedRun]) -> list[str]:
-    """Per target, mode and PPO's reward: runs, final score (mean ± sd), runs passed and the minutes
-    they needed (Markdown lines)."""
+def summary_rows(runs: Sequence[TimedRun], labels: Sequence[str]) -> list[str]:
+    """Per target, mode and variant (`labels`, each run's): runs, final score (mean ± sd),
+    runs passed and the minutes they needed (Markdown lines)."""
     lines = [
-        "| target | training | PPO's reward | runs | PPO steps (mean) | final score, mean ± sd "
+        "| target | training | variant | runs | PPO steps (mean) | final score, mean ± sd "
         "| passed | minutes to pass |",
         "|---|---|---|---:|---:|---|---:|---|",
     ]
     groups: dict[tuple[str, str, str], list[TimedRun]] = {}
-    for run in runs:
-        groups.setdefault((run.target, run.mode, run.reward), []).append(run)
-    for (target, mode, reward), members in groups.items():
+    for run, label in zip(runs, labels, strict=True):
+        groups.setdefault((run.target, run.mode, label), []).append(run)
+    for (target, mode, variant), members in groups.items():
         finals = [m.scores[-1] for m in members]
         sd = statistics.stdev(finals) if len(finals) > 1 else 0.0
         passed = [m.passed_at for m in members if m.passed_at is not None]
@@ -141,7 +173,7 @@ def summary_rows(runs: Sequence[TimedRun]) -> list[str]:
         )
         steps = statistics.mean(m.env_steps for m in members)
         lines.append(
-            f"| {target} | {mode} | {reward} | {len(members)} | {steps:,.0f} "
+            f"| {target} | {mode} | {variant} | {len(members)} | {steps:,.0f} "
             f"| {statistics.mean(finals):.2f} ± {sd:.2f} {members[0].unit} "
             f"| {len(passed)}/{len(members)} | {when} |"
         )
@@ -161,17 +193,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--figure", type=Path, help="also draw the curves into this PNG")
     args = parser.parse_args(argv)
     try:
-        runs = sorted(
-            (read_run(run) for run in args.runs),
-            key=lambda r: (r.target, r.mode, r.reward, r.seed),
-        )
+        read = [read_run(run) for run in args.runs]
     except ValueError as error:
         parser.error(str(error))
+    rows = sorted(
+        zip(read, variants(read), strict=True),
+        key=lambda row: (row[0].target, row[0].mode, row[1], row[0].seed),
+    )
+    runs, labels = [run for run, _ in rows], [label for _, label in rows]
     if args.figure:
         figure(runs, args.figure)
-    print("\n".join(summary_rows(runs)))
+    print("\n".join(summary_rows(runs, labels)))
     print()
-    print("\n".join(run_rows(runs)))
+    print("\n".join(run_rows(runs, labels)))
     return 0
 
 

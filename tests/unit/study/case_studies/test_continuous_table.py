@@ -7,7 +7,12 @@ from pathlib import Path
 
 import pytest
 
-from groupwise.study.case_studies.continuous_table import main, minutes_to_pass, read_run
+from groupwise.study.case_studies.continuous_table import (
+    main,
+    minutes_to_pass,
+    read_run,
+    variants,
+)
 
 
 def test_minutes_to_pass_is_the_first_round_with_enough_successful_episodes():
@@ -78,20 +83,32 @@ def test_the_table_says_when_a_mode_did_not_pass(tmp_path, capsys):
     ]
     assert main([str(r) for r in runs]) == 0
     out = capsys.readouterr().out
-    continuous = "| hopper-backflip | continuous | per step | 1 | 4,096 | 1.50 ± 0.00 turns"
+    continuous = "| hopper-backflip | continuous | as most | 1 | 4,096 | 1.50 ± 0.00 turns"
     assert f"{continuous} | 1/1 | 2.0 |" in out
-    rounds = "| hopper-backflip | rounds | per step | 1 | 4,096 | 1.50 ± 0.00 turns | 0/1 |"
+    rounds = "| hopper-backflip | rounds | as most | 1 | 4,096 | 1.50 ± 0.00 turns | 0/1 |"
     assert f"{rounds} not passed within 5.0 min |" in out
 
 
-def test_the_learned_reward_s_scaling_is_a_group_of_its_own(tmp_path, capsys):
-    """The ablation of issue 39: the same mode with the reward standardised per step and
-    return-scaled is two rows."""
+def test_an_ablation_s_arm_is_a_group_of_its_own(tmp_path, capsys):
+    """The ablation of issue 39: runs of the same mode that differ in one setting from most
+    of the runs given are a row of their own, named by that setting."""
     runs = [
-        _run(tmp_path, "s", "continuous", ["600"], [0.0]),
+        _run(tmp_path, "s0", "continuous", ["600"], [0.0], {"standardise_reward": True}),
+        _run(tmp_path, "s1", "continuous", ["600"], [0.0], {"standardise_reward": True}),
         _run(tmp_path, "r", "continuous", ["600"], [1.0], {"standardise_reward": False}),
     ]
     assert main([str(r) for r in runs]) == 0
     out = capsys.readouterr().out
-    assert "| continuous | per step | 1 | 4,096 | 0.50 ± 0.00 turns | 0/1 |" in out
-    assert "| continuous | return-scaled | 1 | 4,096 | 0.50 ± 0.00 turns | 1/1 | 10.0 |" in out
+    assert "| continuous | as most | 2 | 4,096 | 0.50 ± 0.00 turns | 0/2 |" in out
+    arm = "| continuous | ppo.standardise_reward=False | 1 | 4,096 | 0.50 ± 0.00 turns | 1/1 |"
+    assert f"{arm} 10.0 |" in out
+
+
+def test_a_variant_is_what_a_run_changes_and_neither_its_seed_nor_its_mode(tmp_path):
+    runs = [
+        read_run(_run(tmp_path, "c", "continuous", ["60"], [0.0], {"gamma": 0.99})),
+        read_run(_run(tmp_path, "r", "rounds", ["60"], [0.0], {"gamma": 0.99})),
+        read_run(_run(tmp_path, "g", "continuous", ["60"], [0.0], {"gamma": 0.9})),
+    ]
+    object.__setattr__(runs[1], "seed", 4)
+    assert variants(runs) == ["as most", "as most", "ppo.gamma=0.9"]
