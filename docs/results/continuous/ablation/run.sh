@@ -7,8 +7,8 @@
 #   return-scale   PPO's reward return-scaled by VecNormalize instead (return-scale.json)
 #   obs-act        the reward over observation and action, a learned control cost: the
 #                  app's default reward inputs (obs-act.json)
-#   two-pools      two rounds of the 63 comparisons, so a fresh pool of the policy then opens
-#                  at 5 minutes, as the app's round 1 did at about 7 minutes (its rounds were 44)
+#   two-pools      two rounds of the 63 comparisons, 44 then 19 (two-pools.json), so a fresh
+#                  pool of the policy opens at 7 minutes, as the app's round 1 did (rounds of 44)
 #   explore        25 % random actions in the sampled part of a pool: the app's default (explore.json)
 #   rate           PPO at 2,100 steps a second of the teacher's time, the app's rate on this
 #                  2-core machine (1.0-1.4 M steps in 10 minutes), not one free core's 3,000 (rate.json)
