@@ -86,6 +86,8 @@ class Cell:
     ppo_steps: dict[float, int] = field(default_factory=dict)
     success: dict[float, float] = field(default_factory=dict)
     """minute → the success rate of the copy's greedy episodes."""
+    scores: dict[float, float] = field(default_factory=dict)
+    """minute → the mean target score of the copy's greedy episodes (the target's unit)."""
     pool_ages: list[int] = field(default_factory=list)
     waits: list[float] = field(default_factory=list)
     judgements: int = 0
@@ -265,6 +267,7 @@ def evaluate_copy(cell: Cell, minute: float, copy: Path) -> None:
             lambda: make_env(target.env), run.agent.policy(deterministic=True), EPISODES, rng
         )
         cell.success[minute] = evaluation.success_rate(target)
+        cell.scores[minute] = float(evaluation.scores.mean())
 
 
 def table(cells: Sequence[Cell], marks: Sequence[float]) -> str:
@@ -298,6 +301,7 @@ def cell_record(cell: Cell, training: str, research: dict | None = None) -> dict
         "training": training,
         "research": research,
         "success": {f"{m:g}": rate for m, rate in cell.success.items()},
+        "scores": {f"{m:g}": score for m, score in cell.scores.items()},
         "ppo_steps": {f"{m:g}": steps for m, steps in cell.ppo_steps.items()},
         "comparisons": cell.judgements,
         "pool_ages": cell.pool_ages,
@@ -346,9 +350,9 @@ def arm(record: dict) -> str:
 def summary(records: Sequence[dict]) -> str:
     """Two tables over the seeds of `records` (`cell_record`s), as docs/results/continuous
     shows them: per target and training mode, the seeds that passed at each mark, the mean
-    success rate at the last, the median PPO steps there and comparisons, the pooled pool
-    ages (median / max) and End round waits (median, range); then each seed's success rate
-    at each mark."""
+    success rate and each seed's mean target score at the last, the median PPO steps there
+    and comparisons, the pooled pool ages (median / max) and End round waits (median,
+    range); then each seed's success rate at each mark."""
     marks = sorted({float(m) for r in records for m in r["success"]}, key=float)
     keys = [f"{m:g}" for m in marks]
     seeds = sorted({r["seed"] for r in records})
@@ -358,15 +362,19 @@ def summary(records: Sequence[dict]) -> str:
     at = " / ".join(keys)
     lines = [
         f"| target | training | passed at {at} min (seeds) | mean success at {keys[-1]} min "
+        f"| target score at {keys[-1]} min, per seed "
         f"| PPO steps at {keys[-1]} min, median | comparisons | pool age when judged, median / "
         "max (PPO steps) | End round → next round open, median (range) |",
-        "|---|---|---:|---:|---:|---:|---:|---:|",
+        "|---|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
     for (target, training), of in cells.items():
         passed = " / ".join(
             str(sum(r["success"].get(k, 0.0) >= SEED_SUCCESS for r in of)) for k in keys
         )
         mean = statistics.fmean(r["success"].get(keys[-1], 0.0) for r in of)
+        scores = ", ".join(
+            f"{r['scores'][keys[-1]]:.2f}" if keys[-1] in r.get("scores", {}) else "–" for r in of
+        )
         steps = statistics.median(r["ppo_steps"].get(keys[-1], 0) for r in of)
         judged = statistics.median(r["comparisons"] for r in of)
         ages = [a for r in of for a in r.get("pool_ages", [])]
@@ -378,8 +386,8 @@ def summary(records: Sequence[dict]) -> str:
             else "–"
         )
         lines.append(
-            f"| {target} | {training} | {passed} (of {len(of)}) | {mean:.0%} | {steps:,.0f} | "
-            f"{judged:g} | {age} | {wait} |"
+            f"| {target} | {training} | {passed} (of {len(of)}) | {mean:.0%} | {scores} "
+            f"| {steps:,.0f} | {judged:g} | {age} | {wait} |"
         )
     lines += ["", f"Per seed, success at {at} min (share of {EPISODES} greedy episodes):", ""]
     lines.append("| target | training | " + " | ".join(f"seed {s}" for s in seeds) + " |")
