@@ -104,9 +104,11 @@ def test_a_target_env_with_chosen_settings_is_created_as_shown(
         "Teach (measured: stand-up 5/5, backflip 4/5, splits 2/5 seeds; docs/results/case-studies)"
     )
     expect(page.get_by_label("Pretrain steps")).to_have_value("100000")
+    expect(page.get_by_label("Reward inputs")).to_have_value("obs")
     page.get_by_label("Recipe").select_option("paper")  # no pre-training: the test stays fast
     expect(recipe_help).to_contain_text("Paper (measured: ")
     expect(page.get_by_label("Pretrain steps")).to_have_value("0")
+    expect(page.get_by_label("Reward inputs")).to_have_value("obs-act")
     page.get_by_label("Pool variants").fill("4")
     page.get_by_label("PPO preset").select_option("mujoco")
     page.get_by_text("Advanced: clips, the worker and shared sessions").click()
@@ -126,6 +128,7 @@ def test_a_target_env_with_chosen_settings_is_created_as_shown(
     assert (settings["ppo_steps_per_round"], settings["final_steps"]) == (4096, 8192)
     assert (settings["pool_variants"], settings["ppo_preset"]) == (4, "mujoco")
     assert (settings["recipe"], settings["pretrain_steps"]) == ("paper", 0)
+    assert settings["reward_inputs"] == "obs-act"
     # exactly what the form showed, every field of it
     assert settings["driver"] == "app"
     differ = {key: (text, _at(settings, key)) for key, text in shown.items()}

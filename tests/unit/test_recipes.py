@@ -30,6 +30,8 @@ def test_teach_sets_the_measured_parts_on_mujoco_envs_and_the_papers_elsewhere()
     assert DEFAULT_RECIPE == "teach"
     hopper = teach.apply(RunConfig(), "Hopper-backflip")
     assert _parts(hopper) == (100_000, 8, 3e-4) and hopper.ppo == PPO_PRESETS["mujoco"]
+    assert not hopper.reward.use_actions  # the observation alone
+    assert paper.apply(hopper, "Hopper").reward.use_actions
     assert teach.apply(RunConfig(), "GridWorld") == RunConfig()
     assert teach.apply(RunConfig(), "Pendulum-v1") == RunConfig()
     assert paper.apply(RunConfig(), "Walker2d") == RunConfig()  # the defaults: SPEC §8's
@@ -81,12 +83,15 @@ def test_the_apps_settings_reach_the_run_config():
     assert _parts(paper) == (0, 0, 2e-3) and paper.ppo == PPO_PRESETS["study"]
     mixed = SessionSettings(pretrain_steps=500, ppo_preset="study").run_config("Hopper")
     assert _parts(mixed) == (500, 8, 2e-3)
+    assert not teach.reward.use_actions and paper.reward.use_actions
+    assert SessionSettings(reward_inputs="obs-act").run_config("Hopper").reward.use_actions
     stored = SessionSettings().for_env("Walker2d")  # what a new session stores: resolved
-    assert (stored.pretrain_steps, stored.pool_variants, stored.ppo_preset) == (
-        100_000,
-        8,
-        "mujoco",
-    )
+    assert (
+        stored.pretrain_steps,
+        stored.pool_variants,
+        stored.ppo_preset,
+        stored.reward_inputs,
+    ) == (100_000, 8, "mujoco", "obs")
 
 
 def test_a_session_stored_before_recipes_keeps_its_parts():
@@ -99,6 +104,15 @@ def test_a_session_stored_before_recipes_keeps_its_parts():
     ).run_config("Hopper")
     new = SessionSettings().for_env("Hopper")
     assert SessionSettings.stored(json.loads(new.model_dump_json())) == new
+
+
+def test_a_session_stored_before_reward_inputs_keeps_the_action_in_its_reward():
+    """Its reward model was built on [obs ; act]: the recipe's "obs" would not load it."""
+    before = json.loads(SessionSettings().for_env("Hopper").model_dump_json())
+    del before["reward_inputs"]
+    settings = SessionSettings.stored(before)
+    assert settings.reward_inputs == "obs-act" and settings.recipe == "teach"
+    assert settings.run_config("Hopper").reward.use_actions
 
 
 def test_an_old_config_json_loads_unchanged(tmp_path):

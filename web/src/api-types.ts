@@ -1298,8 +1298,9 @@ export interface components {
          * @description What a session does each round; every number is a default, not a constant.
          *
          *     `recipe` (`recipes.RECIPES`, default "teach") gives the parts `ppo_preset`,
-         *     `pretrain_steps` and `pool_variants` left empty; `for_env` stores them resolved. A
-         *     session stored before recipes has none (`stored`): it keeps the parts it stored.
+         *     `pretrain_steps`, `pool_variants` and `reward_inputs` left empty; `for_env` stores them
+         *     resolved. A session stored before recipes has none (`stored`): it keeps the parts it
+         *     stored.
          */
         SessionSettings: {
             /**
@@ -1429,6 +1430,11 @@ export interface components {
             research?: {
                 [key: string]: unknown;
             } | null;
+            /**
+             * Reward Inputs
+             * @description what the learned reward sees: obs (what a clip shows) or obs-act (the action too, a control cost; null: the recipe's)
+             */
+            reward_inputs?: ("obs" | "obs-act") | null;
             /**
              * Round Seconds
              * @description round time budget in seconds (0 = no limit)

@@ -71,6 +71,7 @@ describe("settingFields", () => {
       "ppo_preset",
       "pretrain_steps",
       "pool_variants",
+      "reward_inputs",
       "seed",
       "eval_episodes",
     ]);
@@ -105,6 +106,7 @@ describe("settingFields", () => {
     expect(field("pair_derivation")).toMatchObject({ kind: "choice", choices: ["cover", "cartesian"] });
     expect(field("ppo_preset")).toMatchObject({ kind: "choice", choices: ["study", "mujoco"], nullable: true });
     expect(field("pool_variants")).toMatchObject({ kind: "integer", min: 0, max: 32, nullable: true });
+    expect(field("reward_inputs")).toMatchObject({ kind: "choice", choices: ["obs", "obs-act"], nullable: true });
     expect(field("recipe")).toMatchObject({ kind: "choice", choices: ["teach", "paper"] });
     expect(nestedField("ppo.net_arch")).toMatchObject({ kind: "list", integerItems: true });
     expect(nestedField("ppo.l2_range")).toMatchObject({ kind: "list", integerItems: false });

@@ -67,9 +67,9 @@ CASE_STEPS_PER_ROUND = 100_000
 
 def case_config(args: argparse.Namespace, partial: dict[str, Any]) -> "RunConfig":
     """The run config of a case study: the defaults with `CASE_DEFAULTS`, the target's env
-    and clip length, reward members on the observation alone (a target has no action cost,
-    and a clip shows states), the recipe --recipe (default "teach") and the PPO preset
-    --ppo; then `partial` (--config) merged over it; then the options given.
+    and clip length, the recipe --recipe (default "teach": among its parts a reward over the
+    observation alone, as a target has no action cost and a clip shows states) and the PPO
+    preset --ppo; then `partial` (--config) merged over it; then the options given.
 
     Raises:
         ValueError: `partial` names another env than the target's, or a field fails
@@ -92,7 +92,6 @@ def case_config(args: argparse.Namespace, partial: dict[str, Any]) -> "RunConfig
                 "steps": CASE_STEPS_PER_ROUND * CASE_DEFAULTS["rounds"],
                 "fragment_length": clip_timing(env_step_seconds(target.env), seconds).steps,
             },
-            "reward": {"use_actions": False},
         }
     )
     cfg = with_recipe(base, args, target.env).merged(partial)

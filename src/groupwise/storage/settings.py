@@ -33,6 +33,7 @@ from groupwise.config import (
     PairCap,
     PairDerivation,
     PairOversample,
+    RewardConfig,
     RunConfig,
     Seed,
     TrainingConfig,
@@ -45,6 +46,7 @@ from groupwise.recipes import (
     PPOPreset,
     RecipeName,
     RecipeParts,
+    RewardInputs,
 )
 
 __all__ = [
@@ -96,8 +98,9 @@ class SessionSettings(BaseModel):
     """What a session does each round; every number is a default, not a constant.
 
     `recipe` (`recipes.RECIPES`, default "teach") gives the parts `ppo_preset`,
-    `pretrain_steps` and `pool_variants` left empty; `for_env` stores them resolved. A
-    session stored before recipes has none (`stored`): it keeps the parts it stored."""
+    `pretrain_steps`, `pool_variants` and `reward_inputs` left empty; `for_env` stores them
+    resolved. A session stored before recipes has none (`stored`): it keeps the parts it
+    stored."""
 
     model_config = ConfigDict(frozen=True, extra="forbid")
 
@@ -177,6 +180,11 @@ class SessionSettings(BaseModel):
         description="PPO steps the agent first explores, seeking new states, so the first "
         "behaviours differ more (null: the recipe's)",
     )
+    reward_inputs: RewardInputs | None = Field(
+        default=None,
+        description="what the learned reward sees: obs (what a clip shows) or obs-act (the "
+        "action too, a control cost; null: the recipe's)",
+    )
     # -- advanced knobs (the New-session page's "Advanced") ------------------------------
     driver: Literal["app", "library"] = Field(
         default="app",
@@ -253,19 +261,22 @@ class SessionSettings(BaseModel):
     def stored(cls, data: Any) -> "SessionSettings":
         """Settings as a session stored them: one stored before recipes (no "recipe") has
         none, so it keeps the parts it stored (and the paper's for those it did not store,
-        the defaults then).
+        the defaults then); one stored before `reward_inputs` keeps the observation and the
+        action its reward was built on.
 
         Raises:
             pydantic.ValidationError: a field fails validation.
         """
         if isinstance(data, dict) and "recipe" not in data:
             data = {**data, "recipe": None}
+        if isinstance(data, dict) and "reward_inputs" not in data:
+            data = {**data, "reward_inputs": "obs-act"}
         return cls.model_validate(data)
 
     def recipe_parts(self, env: str) -> RecipeParts:
-        """The pre-training, pool variants and PPO preset of a session on `env`: each set
-        here, else the recipe's (`recipes.RECIPES`; none: the paper's, the defaults before
-        recipes)."""
+        """The pre-training, pool variants, PPO preset and reward inputs of a session on
+        `env`: each set here, else the recipe's (`recipes.RECIPES`; none: the paper's, the
+        defaults before recipes)."""
         parts = RECIPES[self.recipe or "paper"].parts(env)
         return RecipeParts(
             pretrain_steps=parts.pretrain_steps
@@ -273,6 +284,7 @@ class SessionSettings(BaseModel):
             else self.pretrain_steps,
             pool_variants=parts.pool_variants if self.pool_variants is None else self.pool_variants,
             ppo=parts.ppo if self.ppo_preset is None else self.ppo_preset,
+            reward_inputs=parts.reward_inputs if self.reward_inputs is None else self.reward_inputs,
         )
 
     @model_validator(mode="before")
@@ -331,13 +343,14 @@ class SessionSettings(BaseModel):
         """
         if self.final_steps is None:
             return self.model_copy(update={"final_steps": self.final_ppo_steps}).for_env(env)
-        if None in (self.pretrain_steps, self.pool_variants, self.ppo_preset):
+        if None in (self.pretrain_steps, self.pool_variants, self.ppo_preset, self.reward_inputs):
             parts = self.recipe_parts(env)
             return self.model_copy(
                 update={
                     "pretrain_steps": parts.pretrain_steps,
                     "pool_variants": parts.pool_variants,
                     "ppo_preset": parts.ppo,
+                    "reward_inputs": parts.reward_inputs,
                 }
             ).for_env(env)
         timing = self.clip_timing(env)
@@ -386,5 +399,6 @@ class SessionSettings(BaseModel):
             seed=self.seed,
         )
         training = TrainingConfig(mode=self.training, pretrain_steps=parts.pretrain_steps)
-        cfg = RunConfig(loop=loop, ppo=PPO_PRESETS[parts.ppo], training=training)
+        reward = RewardConfig(use_actions=parts.reward_inputs == "obs-act")
+        cfg = RunConfig(loop=loop, ppo=PPO_PRESETS[parts.ppo], training=training, reward=reward)
         return cfg.merged(self.research) if self.research else cfg

@@ -80,6 +80,7 @@ export const GROUPS: Readonly<Record<Exclude<GroupId, "advanced">, readonly stri
     "ppo_preset",
     "pretrain_steps",
     "pool_variants",
+    "reward_inputs",
     "seed",
     "eval_episodes",
   ],
