@@ -1,5 +1,6 @@
 """Named PPO settings (`PPO_PRESETS`) and teaching recipes (issue 39): the parts a recipe sets
-in a run (pre-training, pool variants, the PPO preset, the reward's inputs), per kind of env,
+in a run (pre-training, pool variants, the PPO preset, the reward's inputs, the pool's random
+actions), per kind of env,
 and what each measured. A recipe applies to a `config.RunConfig` as a pure function; every
 part can still be changed on its own after it.
 """
@@ -10,7 +11,7 @@ from typing import Annotated, Literal
 from pydantic import Field
 from pydantic.dataclasses import dataclass
 
-from groupwise.config import _STRICT, PPOConfig, RunConfig
+from groupwise.config import _STRICT, ExplorationFraction, PPOConfig, RunConfig
 
 PPO_PRESETS: dict[str, PPOConfig] = {
     "study": PPOConfig(),
@@ -38,8 +39,8 @@ learned control cost, `RewardConfig.action_term`); `RewardConfig.use_actions`.""
 
 @dataclass(frozen=True, config=_STRICT)
 class RecipeParts:
-    """What a recipe sets in a run: pre-training, pool variants, the PPO preset and the
-    reward's inputs."""
+    """What a recipe sets in a run: pre-training, pool variants, the PPO preset, the reward's
+    inputs and the share of random actions in a pool."""
 
     pretrain_steps: Annotated[int, Field(ge=0)]
     """`TrainingConfig.pretrain_steps`: state-entropy pre-training before round 0."""
@@ -49,9 +50,18 @@ class RecipeParts:
     """The PPO settings, a key of `PPO_PRESETS`."""
     reward_inputs: RewardInputs
     """`RewardConfig.use_actions`: "obs-act" on, "obs" off."""
+    exploration_fraction: ExplorationFraction
+    """`LoopConfig.exploration_fraction`: the share of a pool's sampled steps with random
+    actions."""
 
 
-_PAPER_PARTS = RecipeParts(pretrain_steps=0, pool_variants=0, ppo="study", reward_inputs="obs-act")
+_PAPER_PARTS = RecipeParts(
+    pretrain_steps=0,
+    pool_variants=0,
+    ppo="study",
+    reward_inputs="obs-act",
+    exploration_fraction=0.05,
+)
 
 
 @dataclass(frozen=True, config=_STRICT)
@@ -82,12 +92,17 @@ class Recipe:
 
     def apply(self, cfg: RunConfig, env: str | None = None) -> RunConfig:
         """`cfg` with this recipe's parts for `env` (default: `cfg.loop.env`): its
-        pre-training steps, pool variants, PPO preset (the whole `PPOConfig`) and the
-        reward's inputs."""
+        pre-training steps, pool variants, PPO preset (the whole `PPOConfig`), the
+        reward's inputs and the pool's random actions."""
         parts = self.parts(env or cfg.loop.env)
+        loop = dataclasses.replace(
+            cfg.loop,
+            pool_variants=parts.pool_variants,
+            exploration_fraction=parts.exploration_fraction,
+        )
         return dataclasses.replace(
             cfg,
-            loop=dataclasses.replace(cfg.loop, pool_variants=parts.pool_variants),
+            loop=loop,
             training=dataclasses.replace(cfg.training, pretrain_steps=parts.pretrain_steps),
             ppo=PPO_PRESETS[parts.ppo],
             reward=dataclasses.replace(cfg.reward, use_actions=parts.reward_inputs == "obs-act"),
@@ -104,10 +119,14 @@ RECIPES: dict[RecipeName, Recipe] = {
         Recipe(
             name="teach",
             description="state-entropy pre-training (100,000 steps), 8 pool variants, PPO's "
-            "MuJoCo settings and a reward over the observation alone on MuJoCo envs; the "
-            "paper's parts elsewhere",
+            "MuJoCo settings, a reward over the observation alone and 5 % random actions in a "
+            "pool on MuJoCo envs; the paper's parts elsewhere",
             mujoco=RecipeParts(
-                pretrain_steps=100_000, pool_variants=8, ppo="mujoco", reward_inputs="obs"
+                pretrain_steps=100_000,
+                pool_variants=8,
+                ppo="mujoco",
+                reward_inputs="obs",
+                exploration_fraction=0.05,
             ),
             other=_PAPER_PARTS,
             measured="stand-up 5/5, backflip 4/5, splits 2/5 seeds",
@@ -116,7 +135,8 @@ RECIPES: dict[RecipeName, Recipe] = {
         Recipe(
             name="paper",
             description="SPEC §8's study protocol: no pre-training, no pool variants, the "
-            "study's PPO and a reward over the observation and the action (SPEC §3)",
+            "study's PPO, a reward over the observation and the action, 5 % random actions in "
+            "a pool (SPEC §3)",
             mujoco=_PAPER_PARTS,
             other=_PAPER_PARTS,
             measured="stand-up 3/5, backflip 1/5, splits 1/5 seeds with its pool, MuJoCo PPO "
@@ -134,8 +154,10 @@ study's PPO is SPEC §3's for its small envs; 100,000 pre-training steps would a
 GridWorld run of 100,000 steps. The reward over the observation alone: a clip shows states,
 not torques, and the targets have no action cost; the case studies measured the recipe so,
 and through the app the stand-up in continuous mode passed at 10 minutes on 0 of 3 seeds
-with the learned control cost ("obs-act") against 2 of 3 without it
-(docs/results/continuous, "Why continuous lost the stand-up"). Where a simulated
+with the learned control cost ("obs-act") and 25 % random actions in a pool (the app's
+values before), against 2 of 3 without the cost, 2 of 2 with 5 % random actions and 2 of
+3 with both (docs/results/continuous, "Why continuous lost the stand-up"). 5 % is SPEC §3's
+share for studies (0.25 its interactive one, the app's default before). Where a simulated
 decision-maker's reward charges for the action (Reacher's a², the session study), "obs-act"
 measured better: set `reward.use_actions` there. "paper": SPEC §8's protocol, the
 `RunConfig` defaults, which the simulation study (`groupwise study`) keeps."""

@@ -84,6 +84,11 @@ def test_the_apps_settings_reach_the_run_config():
     mixed = SessionSettings(pretrain_steps=500, ppo_preset="study").run_config("Hopper")
     assert _parts(mixed) == (500, 8, 2e-3)
     assert not teach.reward.use_actions and paper.reward.use_actions
+    assert teach.loop.exploration_fraction == paper.loop.exploration_fraction == 0.05
+    assert (
+        SessionSettings(exploration_fraction=0.25).run_config("Hopper").loop.exploration_fraction
+        == 0.25
+    )
     assert SessionSettings(reward_inputs="obs-act").run_config("Hopper").reward.use_actions
     stored = SessionSettings().for_env("Walker2d")  # what a new session stores: resolved
     assert (
@@ -91,7 +96,8 @@ def test_the_apps_settings_reach_the_run_config():
         stored.pool_variants,
         stored.ppo_preset,
         stored.reward_inputs,
-    ) == (100_000, 8, "mujoco", "obs")
+        stored.exploration_fraction,
+    ) == (100_000, 8, "mujoco", "obs", 0.05)
 
 
 def test_a_session_stored_before_recipes_keeps_its_parts():
@@ -99,9 +105,8 @@ def test_a_session_stored_before_recipes_keeps_its_parts():
     settings = SessionSettings.stored({**old, "stage_after_s": 60})  # a removed setting too
     assert settings.recipe is None and "stage_after_s" not in settings.model_dump()
     assert _parts(settings.run_config("Hopper")) == (0, 0, 2e-3)
-    assert SessionSettings.stored({}).run_config("Hopper") == SessionSettings(
-        recipe="paper"
-    ).run_config("Hopper")
+    before = SessionSettings(recipe="paper", exploration_fraction=0.25)  # the app's then
+    assert SessionSettings.stored({}).run_config("Hopper") == before.run_config("Hopper")
     new = SessionSettings().for_env("Hopper")
     assert SessionSettings.stored(json.loads(new.model_dump_json())) == new
 
@@ -113,6 +118,12 @@ def test_a_session_stored_before_reward_inputs_keeps_the_action_in_its_reward():
     settings = SessionSettings.stored(before)
     assert settings.reward_inputs == "obs-act" and settings.recipe == "teach"
     assert settings.run_config("Hopper").reward.use_actions
+
+
+def test_a_session_stored_without_random_actions_keeps_the_apps_then():
+    before = json.loads(SessionSettings().for_env("Hopper").model_dump_json())
+    del before["exploration_fraction"]
+    assert SessionSettings.stored(before).run_config("Hopper").loop.exploration_fraction == 0.25
 
 
 def test_an_old_config_json_loads_unchanged(tmp_path):

@@ -1274,7 +1274,6 @@ export interface components {
              *       "comparisons_per_round": 20,
              *       "driver": "app",
              *       "eval_episodes": 5,
-             *       "exploration_fraction": 0.25,
              *       "frame_size": 240,
              *       "lease_s": 60,
              *       "overlap_share": 0.1,
@@ -1298,9 +1297,9 @@ export interface components {
          * @description What a session does each round; every number is a default, not a constant.
          *
          *     `recipe` (`recipes.RECIPES`, default "teach") gives the parts `ppo_preset`,
-         *     `pretrain_steps`, `pool_variants` and `reward_inputs` left empty; `for_env` stores them
-         *     resolved. A session stored before recipes has none (`stored`): it keeps the parts it
-         *     stored.
+         *     `pretrain_steps`, `pool_variants`, `reward_inputs` and `exploration_fraction` left
+         *     empty; `for_env` stores them resolved. A session stored before recipes has none
+         *     (`stored`): it keeps the parts it stored.
          */
         SessionSettings: {
             /**
@@ -1334,10 +1333,9 @@ export interface components {
             eval_episodes: number;
             /**
              * Exploration Fraction
-             * @description share of sampled steps with random actions
-             * @default 0.25
+             * @description share of a pool's sampled steps with random actions (null: the recipe's)
              */
-            exploration_fraction: number;
+            exploration_fraction?: number | null;
             /**
              * Final Steps
              * @description PPO env steps on the learned reward after the last round (null: 2 × ppo_steps_per_round)

@@ -72,6 +72,7 @@ describe("settingFields", () => {
       "pretrain_steps",
       "pool_variants",
       "reward_inputs",
+      "exploration_fraction",
       "seed",
       "eval_episodes",
     ]);

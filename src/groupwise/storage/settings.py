@@ -22,6 +22,7 @@ The New-session page shows the fields its groups name first (`web/src/lib/settin
 and the others under "Advanced" (clips, the worker, shared sessions), `research` never.
 """
 
+import dataclasses
 from typing import Any, Literal
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, model_validator
@@ -98,9 +99,9 @@ class SessionSettings(BaseModel):
     """What a session does each round; every number is a default, not a constant.
 
     `recipe` (`recipes.RECIPES`, default "teach") gives the parts `ppo_preset`,
-    `pretrain_steps`, `pool_variants` and `reward_inputs` left empty; `for_env` stores them
-    resolved. A session stored before recipes has none (`stored`): it keeps the parts it
-    stored."""
+    `pretrain_steps`, `pool_variants`, `reward_inputs` and `exploration_fraction` left
+    empty; `for_env` stores them resolved. A session stored before recipes has none
+    (`stored`): it keeps the parts it stored."""
 
     model_config = ConfigDict(frozen=True, extra="forbid")
 
@@ -211,7 +212,10 @@ class SessionSettings(BaseModel):
         description="a shared session: share of answered suggestions asked again of another "
         "annotator, to measure agreement",
     )
-    exploration_fraction: ExplorationFraction = 0.25
+    exploration_fraction: ExplorationFraction | None = Field(
+        default=None,
+        description="share of a pool's sampled steps with random actions (null: the recipe's)",
+    )
     eval_episodes: int = Field(
         default=5, ge=0, le=100, description="episodes measuring the true return after training"
     )
@@ -262,7 +266,7 @@ class SessionSettings(BaseModel):
         """Settings as a session stored them: one stored before recipes (no "recipe") has
         none, so it keeps the parts it stored (and the paper's for those it did not store,
         the defaults then); one stored before `reward_inputs` keeps the observation and the
-        action its reward was built on.
+        action its reward was built on, one without `exploration_fraction` the 0.25 then.
 
         Raises:
             pydantic.ValidationError: a field fails validation.
@@ -271,21 +275,23 @@ class SessionSettings(BaseModel):
             data = {**data, "recipe": None}
         if isinstance(data, dict) and "reward_inputs" not in data:
             data = {**data, "reward_inputs": "obs-act"}
+        if isinstance(data, dict) and data.get("exploration_fraction") is None:
+            data = {**data, "exploration_fraction": 0.25}
         return cls.model_validate(data)
 
     def recipe_parts(self, env: str) -> RecipeParts:
-        """The pre-training, pool variants, PPO preset and reward inputs of a session on
-        `env`: each set here, else the recipe's (`recipes.RECIPES`; none: the paper's, the
-        defaults before recipes)."""
+        """The pre-training, pool variants, PPO preset, reward inputs and random actions of a
+        session on `env`: each set here, else the recipe's (`recipes.RECIPES`; none: the
+        paper's, the defaults before recipes)."""
+        given: dict[str, Any] = {
+            "pretrain_steps": self.pretrain_steps,
+            "pool_variants": self.pool_variants,
+            "ppo": self.ppo_preset,
+            "reward_inputs": self.reward_inputs,
+            "exploration_fraction": self.exploration_fraction,
+        }
         parts = RECIPES[self.recipe or "paper"].parts(env)
-        return RecipeParts(
-            pretrain_steps=parts.pretrain_steps
-            if self.pretrain_steps is None
-            else self.pretrain_steps,
-            pool_variants=parts.pool_variants if self.pool_variants is None else self.pool_variants,
-            ppo=parts.ppo if self.ppo_preset is None else self.ppo_preset,
-            reward_inputs=parts.reward_inputs if self.reward_inputs is None else self.reward_inputs,
-        )
+        return dataclasses.replace(parts, **{k: v for k, v in given.items() if v is not None})
 
     @model_validator(mode="before")
     @classmethod
@@ -343,7 +349,14 @@ class SessionSettings(BaseModel):
         """
         if self.final_steps is None:
             return self.model_copy(update={"final_steps": self.final_ppo_steps}).for_env(env)
-        if None in (self.pretrain_steps, self.pool_variants, self.ppo_preset, self.reward_inputs):
+        parts_given = (
+            self.pretrain_steps,
+            self.pool_variants,
+            self.ppo_preset,
+            self.reward_inputs,
+            self.exploration_fraction,
+        )
+        if None in parts_given:
             parts = self.recipe_parts(env)
             return self.model_copy(
                 update={
@@ -351,6 +364,7 @@ class SessionSettings(BaseModel):
                     "pool_variants": parts.pool_variants,
                     "ppo_preset": parts.ppo,
                     "reward_inputs": parts.reward_inputs,
+                    "exploration_fraction": parts.exploration_fraction,
                 }
             ).for_env(env)
         timing = self.clip_timing(env)
@@ -388,7 +402,7 @@ class SessionSettings(BaseModel):
             steps=self.ppo_steps_per_round * self.rounds,
             final_steps=self.final_ppo_steps,
             fragment_length=self.clip_timing(env).steps,
-            exploration_fraction=self.exploration_fraction,
+            exploration_fraction=parts.exploration_fraction,
             pool_cap=max(2, self.pool_size),
             eval_episodes=self.eval_episodes,
             pair_derivation=self.pair_derivation,

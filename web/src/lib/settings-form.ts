@@ -81,6 +81,7 @@ export const GROUPS: Readonly<Record<Exclude<GroupId, "advanced">, readonly stri
     "pretrain_steps",
     "pool_variants",
     "reward_inputs",
+    "exploration_fraction",
     "seed",
     "eval_episodes",
   ],
