@@ -1,8 +1,7 @@
 """Named PPO settings (`PPO_PRESETS`) and teaching recipes (issue 39): the parts a recipe sets
 in a run (pre-training, pool variants, the PPO preset, the reward's inputs, the pool's random
-actions), per kind of env,
-and what each measured. A recipe applies to a `config.RunConfig` as a pure function; every
-part can still be changed on its own after it.
+actions), per kind of env, and what each measured. A recipe applies to a `config.RunConfig`
+as a pure function; every part can still be changed on its own after it.
 """
 
 import dataclasses

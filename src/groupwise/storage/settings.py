@@ -85,6 +85,15 @@ REMOVED_SETTINGS = frozenset({"stage_after_s"})
 """Settings of mechanisms removed since (the stager of continuous rounds, gone with fresh
 pools, issue 39): stored sessions that carry them load without them."""
 
+RECIPE_FIELDS: dict[str, str] = {
+    "pretrain_steps": "pretrain_steps",
+    "pool_variants": "pool_variants",
+    "ppo_preset": "ppo",
+    "reward_inputs": "reward_inputs",
+    "exploration_fraction": "exploration_fraction",
+}
+"""The settings a recipe fills when left empty: setting → its `recipes.RecipeParts` field."""
+
 LEGACY_SECTIONS = frozenset({"ppo", "reward"})
 """Settings stored before issue 38 held these core configs whole; they are `research` now."""
 
@@ -283,13 +292,7 @@ class SessionSettings(BaseModel):
         """The pre-training, pool variants, PPO preset, reward inputs and random actions of a
         session on `env`: each set here, else the recipe's (`recipes.RECIPES`; none: the
         paper's, the defaults before recipes)."""
-        given: dict[str, Any] = {
-            "pretrain_steps": self.pretrain_steps,
-            "pool_variants": self.pool_variants,
-            "ppo": self.ppo_preset,
-            "reward_inputs": self.reward_inputs,
-            "exploration_fraction": self.exploration_fraction,
-        }
+        given = {part: getattr(self, name) for name, part in RECIPE_FIELDS.items()}
         parts = RECIPES[self.recipe or "paper"].parts(env)
         return dataclasses.replace(parts, **{k: v for k, v in given.items() if v is not None})
 
@@ -349,24 +352,10 @@ class SessionSettings(BaseModel):
         """
         if self.final_steps is None:
             return self.model_copy(update={"final_steps": self.final_ppo_steps}).for_env(env)
-        parts_given = (
-            self.pretrain_steps,
-            self.pool_variants,
-            self.ppo_preset,
-            self.reward_inputs,
-            self.exploration_fraction,
-        )
-        if None in parts_given:
+        if any(getattr(self, name) is None for name in RECIPE_FIELDS):
             parts = self.recipe_parts(env)
-            return self.model_copy(
-                update={
-                    "pretrain_steps": parts.pretrain_steps,
-                    "pool_variants": parts.pool_variants,
-                    "ppo_preset": parts.ppo,
-                    "reward_inputs": parts.reward_inputs,
-                    "exploration_fraction": parts.exploration_fraction,
-                }
-            ).for_env(env)
+            resolved = {name: getattr(parts, part) for name, part in RECIPE_FIELDS.items()}
+            return self.model_copy(update=resolved).for_env(env)
         timing = self.clip_timing(env)
         if self.fragment_length is None:
             seconds = self.clip_seconds or default_clip_seconds(env)
