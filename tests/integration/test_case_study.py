@@ -124,7 +124,7 @@ def test_backflip_case_study_writes_rounds_video_and_strip(tmp_path, capsys):
     assert config["env"] == "Hopper-backflip" and config["decision_maker"] == "groupwise"
     assert config["fragment_length"] == 30 and config["steps"] == 4096
     saved = json.loads((out / CONFIG_FILE).read_text())
-    assert saved["reward"]["use_actions"] is False  # a target has no action cost
+    assert saved["reward"]["use_actions"] is True  # recipe `paper`: [obs ; act], as published
     summary = json.loads((out / SUMMARY_FILE).read_text())
     assert summary["target"]["threshold"] == TARGETS["hopper-backflip"].threshold
     assert summary["final"]["score_mean"] == pytest.approx(float(rows[1]["target_score_mean"]))
