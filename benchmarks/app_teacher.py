@@ -6,8 +6,9 @@ each round (`…/shown`), asks the page's next group suggestion (`…/next-sugge
 answers it with the case studies' calibrated teacher (the Groupwise-DM's teacher with the
 paper's people's label error, 12 % by default, its σ set per pool), one comparison every
 `--pace` seconds (default: the paper's pace for the target, `run.continuous.paper_pace`),
-and lets the round close itself at its comparison budget (or ends it when the suggestions
-run out). The worker trains as it would for a person.
+and lets the round close itself at its comparison budget (`--comparisons`; default: the
+paper's pairs of the target in `ROUNDS` rounds, 44 to 76; the app's New-session default is
+20) or ends it when the suggestions run out. The worker trains as it would for a person.
 
 The teacher's time is the wall time since round 0 opened (answers and waits alike). At each
 mark of `--minutes` the benchmark copies the session's run directory (its committed
@@ -22,6 +23,7 @@ worker published (a person sees them in the clips); everything else goes through
     python -m benchmarks.app_teacher [--targets hopper-backflip ...] [--seeds 0 1 2]
                                      [--minutes 10 20] [--pace S] [--label-error 0.12]
                                      [--training continuous|rounds] [--research JSON]
+                                     [--comparisons N]
                                      [--out DIR] [--log FILE]
     python -m benchmarks.app_teacher --figure curves.png OUT/*/cells.jsonl
     python -m benchmarks.app_teacher --summary OUT/*/cells.jsonl
@@ -38,6 +40,7 @@ mode (and `--research`, a partial run config given to the session as the New-ses
 import argparse
 import dataclasses
 import json
+import math
 import re
 import shutil
 import statistics
@@ -133,18 +136,20 @@ def teach(
     """One session of `target` taught by the simulated person until the last mark."""
     env = TARGETS[target].env
     pairs, _ = PAPER_CASES[target]
-    comparisons = round(pairs / 2.71 / ROUNDS)  # the paper's pairs in ROUNDS rounds
+    comparisons = args.comparisons or round(pairs / 2.71 / ROUNDS)  # the paper's pairs
+    pace = args.pace or paper_pace(target, pairwise=False)
+    # enough rounds that the session outlasts the last mark, ROUNDS at the least
+    rounds = max(ROUNDS, math.ceil(max(marks) * 60 / (comparisons * pace)) + 1)
     settings = {
         "seed": seed,
         "training": args.training,
-        "rounds": ROUNDS,
+        "rounds": rounds,
         "comparisons_per_round": comparisons,
         "round_seconds": 0,
         "frame_size": 96,
     }
     if args.research:
         settings["research"] = args.research
-    pace = args.pace or paper_pace(target, pairwise=False)
     feedback = teacher_of("groupwise", args.label_error)
     rng = np.random.default_rng(seed)
     cell = Cell(target, seed)
@@ -293,13 +298,17 @@ def table(cells: Sequence[Cell], marks: Sequence[float]) -> str:
     return "\n".join(lines)
 
 
-def cell_record(cell: Cell, training: str, research: dict | None = None) -> dict:
-    """One cell as a JSON line (`--figure` reads them back)."""
+def cell_record(
+    cell: Cell, training: str, research: dict | None = None, comparisons: int | None = None
+) -> dict:
+    """One cell as a JSON line (`--figure` reads them back); `comparisons` is a round's
+    budget where `--comparisons` set it (None: the paper's pairs in `ROUNDS` rounds)."""
     return {
         "target": cell.target,
         "seed": cell.seed,
         "training": training,
         "research": research,
+        "comparisons_per_round": comparisons,
         "success": {f"{m:g}": rate for m, rate in cell.success.items()},
         "scores": {f"{m:g}": score for m, score in cell.scores.items()},
         "ppo_steps": {f"{m:g}": steps for m, steps in cell.ppo_steps.items()},
@@ -342,9 +351,14 @@ def figure(records: Sequence[dict], path: Path) -> None:
 
 
 def arm(record: dict) -> str:
-    """A cell's training mode, with its research settings when it had any."""
-    research = record.get("research")
-    return record["training"] + (f" {json.dumps(research)}" if research else "")
+    """A cell's training mode, with its research settings and its rounds' comparison budget
+    when it had them."""
+    research, budget = record.get("research"), record.get("comparisons_per_round")
+    return (
+        record["training"]
+        + (f" {json.dumps(research)}" if research else "")
+        + (f", {budget} comparisons a round" if budget else "")
+    )
 
 
 def summary(records: Sequence[dict]) -> str:
@@ -418,6 +432,12 @@ def main(argv: Sequence[str] | None = None) -> None:
     parser.add_argument("--minutes", nargs="+", type=float, default=[10.0, 20.0])
     parser.add_argument("--pace", type=float, help="seconds per comparison (the paper's)")
     parser.add_argument("--label-error", type=float, default=PEOPLE_LABEL_ERROR)
+    parser.add_argument(
+        "--comparisons",
+        type=int,
+        help=f"a round's comparison budget (default: the paper's pairs in {ROUNDS} rounds; "
+        "the app's New-session default is 20)",
+    )
     parser.add_argument("--training", choices=("continuous", "rounds"), default="continuous")
     parser.add_argument(
         "--research",
@@ -461,7 +481,12 @@ def main(argv: Sequence[str] | None = None) -> None:
                     evaluate_copy(cell, minute, copy)
                 cells.append(cell)
                 with (out / "cells.jsonl").open("a") as handle:
-                    handle.write(json.dumps(cell_record(cell, args.training, args.research)) + "\n")
+                    handle.write(
+                        json.dumps(
+                            cell_record(cell, args.training, args.research, args.comparisons)
+                        )
+                        + "\n"
+                    )
                 print(
                     f"{time.strftime('%H:%M:%S')} {target} seed {seed}: {cell.success}",
                     file=sys.stderr,
