@@ -15,6 +15,7 @@ learning-curve points). It measures PPO's single-core throughput the same way as
 `ppo_throughput` (CPU time, learned reward) and prints a Markdown table.
 
     python -m benchmarks.continuous [--env Hopper] [--rounds 10] [--minutes 1.5] [--pace 5]
+                                    [--budget N]
                                     [--recipe teach] [--pretrain-steps 0] [--frame-size 240]
                                     [--research JSON] [--stage-after 60] [--log FILE]
 
@@ -136,6 +137,13 @@ def main(argv: Sequence[str] | None = None) -> None:
         help='a partial run config for the session\'s "research" setting, as JSON (e.g. '
         '\'{"loop": {"pool_oversample": 1}}\')',
     )
+    parser.add_argument(
+        "--budget",
+        type=int,
+        default=0,
+        help="comparisons a round: the person's last one ends it at its budget, and the "
+        "worker cuts the next pool during it (default 0: End round after --minutes)",
+    )
     parser.add_argument("--log", type=Path, help="write the server's and worker's log here")
     args = parser.parse_args([] if argv is None else list(argv))
     rng = np.random.default_rng(0)
@@ -154,6 +162,7 @@ def main(argv: Sequence[str] | None = None) -> None:
                 settings = {
                     **SETTINGS,
                     "rounds": args.rounds + 1,
+                    "comparisons_per_round": args.budget,
                     "recipe": args.recipe,
                     "pretrain_steps": args.pretrain_steps,
                     "frame_size": args.frame_size,
@@ -177,7 +186,8 @@ def main(argv: Sequence[str] | None = None) -> None:
                 watcher.start()
                 for round_index in range(args.rounds):
                     end = time.monotonic() + 60 * args.minutes
-                    while time.monotonic() < end:
+                    given = 0
+                    while time.monotonic() < end if not args.budget else given < args.budget:
                         a, b, c = (f"b{i}" for i in rng.choice(pool, size=3, replace=False))
                         body = {
                             "client_id": str(uuid.uuid4()),
@@ -187,14 +197,20 @@ def main(argv: Sequence[str] | None = None) -> None:
                             "label": "left",
                             "source": "explored",
                         }
+                        if args.budget and given == args.budget - 1:
+                            time.sleep(args.pace)  # the last comparison, then its budget
+                            ended.append(time.time())  # ends the round: the wait begins
                         tick = time.perf_counter()
                         answer = http.post(f"/api/sessions/{session}/judgements", json=body)
                         latencies.append(time.perf_counter() - tick)
                         answer.raise_for_status()
-                        time.sleep(args.pace)
-                    tick = time.perf_counter()
-                    ended.append(time.time())
-                    http.post(f"/api/sessions/{session}/end-round").raise_for_status()
+                        given += 1
+                        if not args.budget:
+                            time.sleep(args.pace)
+                    if not args.budget:
+                        tick = time.perf_counter()
+                        ended.append(time.time())
+                        http.post(f"/api/sessions/{session}/end-round").raise_for_status()
                     _wait_open(http, session, round_index + 1)
                     waits.append(time.perf_counter() - tick)
                     opened.append(time.time())
@@ -223,8 +239,15 @@ def main(argv: Sequence[str] | None = None) -> None:
     print(
         f"{args.env}, one continuous session (recipe {args.recipe}, pre-training "
         f"{args.pretrain_steps:,} steps, {args.frame_size} px clips{research}), a comparison "
-        f"every {args.pace:g} s for {args.minutes:g} min a round, next pool cut from the "
-        f"latest rollouts at its end, {args.rounds} rounds, {os.cpu_count()} CPUs, "
+        f"every {args.pace:g} s, "
+        + (
+            f"{args.budget} a round (its budget ends it), next pool cut from the latest "
+            "rollouts during the last"
+            if args.budget
+            else f"for {args.minutes:g} min a round, next pool cut from the latest rollouts "
+            "at its end"
+        )
+        + f", {args.rounds} rounds, {os.cpu_count()} CPUs, "
         f"load average {os.getloadavg()[0]:.1f}\n"
     )
     _print_waits(waits, openings)
@@ -272,6 +295,10 @@ def _print_waits(waits: list[float], openings: list[dict | None]) -> None:
         for part, meaning in PARTS.items():
             values = [o["parts_s"].get(part, 0.0) for o in found]
             rows.append((f"· {part}: {meaning}", values))
+        for part in ("sample", "cut", "publish"):  # a pool cut during the last comparison
+            staged = [o["staged_s"][part] for o in found if "staged_s" in o]
+            if staged:
+                rows.append((f"cut during the last comparison, not waited for: {part}", staged))
         rows.append(("the job's CPU time (worker process)", [o["job_cpu_s"] for o in found]))
     for name, values in rows:
         p50, p95 = np.percentile(values, [50, 95])

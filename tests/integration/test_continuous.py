@@ -100,10 +100,12 @@ def test_ppo_runs_while_the_teacher_answers_and_the_reward_changes_between_rollo
     asked = [r.queries_asked for r in records]
     assert records[0].clock_s == asked[0] * PACE
     assert records[1].clock_s == (asked[0] + asked[1]) * PACE
-    # PPO ran on that clock, in whole rollouts, what was left under one rollout dropped
+    # PPO ran on that clock, in whole rollouts, what was left under one rollout dropped; it
+    # waited out round 0's last answer, while round 1's pool was cut (`cut_next`)
     steps_before = 0
-    for record, before in zip(records, [0.0, records[0].clock_s], strict=True):
-        owed = (record.clock_s - before) * RATE
+    waits = [PACE, 0.0]
+    for record, before, waited in zip(records, [0.0, records[0].clock_s], waits, strict=True):
+        owed = (record.clock_s - before - waited) * RATE
         trained = record.env_steps - steps_before
         assert trained % ROLLOUT == 0 and owed - ROLLOUT < trained <= owed
         steps_before = record.env_steps

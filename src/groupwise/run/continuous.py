@@ -10,11 +10,13 @@ reward ensemble refits between rollouts as soon as
 whichever comes first. A rollout's rewards therefore all come from one fit: the policy's
 reward (`ensemble.mean_reward`, refitted in place) changes only between `learn` calls,
 which are whole rollouts. A round is the teacher's unit of *fresh behaviours*: its pool is
-cut from PPO's own latest rollouts when the round begins (issue 39: `ContinuousRound` records
-PPO's episodes, `rl.recording`, the latest ones across rounds, and `begin_round` reads them
-through `pool.recent.fresh_sources`), so the teacher judges what the agent does now and the
-pool costs no sampling; round 0, or a round after a restart, samples what the recorded
-rollouts lack from the policy.
+cut from PPO's own latest rollouts (issue 39: `ContinuousRound` records PPO's episodes,
+`rl.recording`, the latest ones across rounds, and `begin_round` reads them through
+`pool.recent.fresh_sources`, sampling what they lack from the policy), so the teacher judges
+what the agent does now. It is cut while the teacher answers the round before's last query,
+and PPO waits for that answer (`cut_next`): the pool is the policy's when its round opens,
+and the app opens it without a wait (`worker.continuous_round`). Round 0, or a round after a
+restart, is cut when it begins.
 
 In a **rounds** round the teacher answers the whole offer first and PPO trains afterwards
 (`round.end_round`); with a timed teacher its record's `clock_s` adds the answers' time and
@@ -28,11 +30,13 @@ another core than PPO, as the app's worker will run them.
 import dataclasses
 import time
 from collections.abc import Callable, Sequence
+from typing import NamedTuple
 
 from groupwise.clips.timing import clip_timing, step_seconds
 from groupwise.pool.recent import fresh_sources
 from groupwise.pool.sampling import windows_to_sample
 from groupwise.preferences.judgement import Judgement
+from groupwise.query.strategies import QueryStrategy
 from groupwise.reward import FitReport, fit
 from groupwise.rl.recording import RolloutRecorder, record_rollouts
 from groupwise.run.pairs import derive_pairs
@@ -50,10 +54,50 @@ from groupwise.run.streams import RoundStreams, round_streams
 from groupwise.teachers.base import Feedback
 
 
+class NextRound(NamedTuple):
+    """The next round's offer, cut while the teacher answered this round's last query
+    (`continuous_round`), and the round streams it was cut with (its teacher goes on with
+    their `feedback` stream)."""
+
+    offer: Offer
+    streams: RoundStreams
+
+
+def cut_next(
+    run: Run,
+    strategy: QueryStrategy,
+    budget: int,
+    round_index: int,
+    n_queries: int | None = None,
+) -> NextRound:
+    """Round `round_index`'s offer of `budget` comparisons (`n_queries` proposed, default
+    `budget`), cut now from the run's latest rollouts (`pool.recent.fresh_sources`) while
+    round `round_index` − 1 is open (the app's `worker.jobs.cut_fresh` cuts it alike)."""
+    streams = round_streams(run.cfg.loop.seed, round_index)
+    offer = begin_round(
+        run,
+        strategy,
+        budget,
+        n_queries=n_queries,
+        streams=streams,
+        round_index=round_index,
+        sources=fresh_sources(run.cfg.loop),
+    )
+    return NextRound(offer, streams)
+
+
 def continuous_round(
-    run: Run, feedback: Feedback, budget: int, callback: RunCallback | None = None
-) -> RoundRecord:
-    """One round of continuous training with a timed simulated teacher (module docstring).
+    run: Run,
+    feedback: Feedback,
+    budget: int,
+    callback: RunCallback | None = None,
+    *,
+    staged: NextRound | None = None,
+    following: int | None = None,
+) -> tuple[RoundRecord, NextRound | None]:
+    """One round of continuous training with a timed simulated teacher (module docstring):
+    its record, and with `following` (the next round's budget) the next round cut during
+    the last answer, which PPO waits out (`cut_next`; pass it back as `staged`).
 
     Raises:
         ValueError: the teacher has no pace, or `pair_cap` is set (a cap needs the whole
@@ -65,28 +109,37 @@ def continuous_round(
     if pace is None:
         raise ValueError("continuous training needs a timed teacher (TeacherConfig.pace_s)")
     rollout = run.ppo.rollout_steps
-    streams = round_streams(cfg.loop.seed, run.next_round)
-    offer = begin_round(
-        run, feedback.queries, budget, streams=streams, sources=fresh_sources(cfg.loop)
-    )
+    if staged is not None and staged.offer.round == run.next_round:
+        offer, streams = staged
+    else:
+        streams = round_streams(cfg.loop.seed, run.next_round)
+        offer = begin_round(
+            run, feedback.queries, budget, streams=streams, sources=fresh_sources(cfg.loop)
+        )
     clock = clock_before(run)
     continuous = ContinuousRound(run, offer, streams, clock, callback)
     timer = continuous.timer
     judgements: list[Judgement] = []
     credit = 0.0
-    for query in offer.queries:
-        credit += pace * cfg.training.ppo_steps_per_s
-        rollouts = int(credit // rollout)
-        if rollouts:
-            continuous.learn(rollouts * rollout)
-            credit -= rollouts * rollout
+    following_round = None
+    for i, query in enumerate(offer.queries):
+        if following and i == len(offer.queries) - 1:
+            # the round's end is in sight: its next pool is cut now, and PPO waits for the
+            # last answer, so that the pool is the policy's when the round opens
+            following_round = cut_next(run, feedback.queries, following, offer.round + 1)
+        else:
+            credit += pace * cfg.training.ppo_steps_per_s
+            rollouts = int(credit // rollout)
+            if rollouts:
+                continuous.learn(rollouts * rollout)
+                credit -= rollouts * rollout
         clock += pace
         tick = time.perf_counter()
         judgements += feedback.teacher.answer(offer.pool, [query], streams.feedback)
         timer.seconds["feedback_s"] += time.perf_counter() - tick
         continuous.update(list(enumerate(judgements)), clock)
     continuous.update(list(enumerate(judgements)), clock, final=True)
-    return finish_round(
+    record = finish_round(
         run,
         offer,
         judgements,
@@ -96,6 +149,7 @@ def continuous_round(
         asked=len(offer.queries),
         clock_s=clock,
     )
+    return record, following_round
 
 
 class ContinuousRound:

@@ -61,12 +61,16 @@ def run_rounds(
     (`run.pretrain.setup_hooks`: state-entropy pre-training when asked)."""
     plan = round_plan(run.cfg.loop)
     before_first_round(run, callback)
+    staged = None  # a continuous round's next round, cut during its last answer
     while run.next_round < len(plan):
         budget, steps = plan[run.next_round]
         if budget == 0:  # the final row: PPO on the frozen reward
             train_frozen(run, steps, callback=callback)
         elif run.cfg.training.mode == "continuous":  # PPO's steps come from the clock
-            continuous_round(run, feedback, budget, callback)
+            following = plan[run.next_round + 1][0] if run.next_round + 1 < len(plan) else 0
+            _, staged = continuous_round(
+                run, feedback, budget, callback, staged=staged, following=following or None
+            )
         else:
             run_round(run, feedback, budget, steps, callback)
     return run.records

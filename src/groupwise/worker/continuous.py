@@ -6,7 +6,9 @@ with ``training: "continuous"`` one slice (`continuous_round.train_slice`: the j
 the reward refitted when due, one PPO rollout), the sessions taking turns. A session whose
 timer is paused trains no PPO until it is resumed, so "Pause" pauses the agent too.
 
-The round's end (the person, its budget or its timer) queues its training job and stops
+A round's next pool is cut during its last comparison when its budget ends it
+(`continuous_round.stage_due`), and PPO waits for that comparison. The round's end (the
+person, its budget or its timer) queues its training job and stops
 the slice in progress (`continuous_round.round_ended`); the job takes
 the round's run from here (`take`): the next round's pool is cut from that run's latest
 rollouts and opened, then the round is committed (`jobs.train`, `jobs.open_fresh`), and the
@@ -20,6 +22,7 @@ import logging
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from groupwise.storage import Database
 from groupwise.storage.phases import READY, TRAINING
@@ -28,6 +31,10 @@ from groupwise.worker import curve
 from groupwise.worker.continuous_round import ContinuousTraining, train_slice
 from groupwise.worker.job import Job
 from groupwise.worker.resume import resume, resume_round
+
+if TYPE_CHECKING:
+    from groupwise.clips.render import RenderPool
+    from groupwise.worker.jobs import CutRound
 
 log = logging.getLogger(__name__)
 
@@ -42,12 +49,19 @@ class ContinuousSessions:
     docstring)."""
 
     def __init__(
-        self, db: Database, data_dir: Path, serves: Callable[[str], bool] = lambda _: True
+        self,
+        db: Database,
+        data_dir: Path,
+        serves: Callable[[str], bool] = lambda _: True,
+        render: "Callable[[int], RenderPool] | None" = None,
     ) -> None:
         self.db = db
         self.data_dir = data_dir
         self.serves = serves
         """Whether this worker serves a session (`process.Worker.serves`)."""
+        self.render = render
+        """The worker's render pool of a number of workers, to cut a round's next pool
+        during its last comparison (`continuous_round.stage_due`); None: cut at its end."""
         self._rounds: dict[str, ContinuousTraining] = {}
         self._turns: dict[str, int] = {}
         self._turn = 0
@@ -70,7 +84,9 @@ class ContinuousSessions:
             self._turns[job.session_id] = self._turn
             tick = time.perf_counter()
             try:
-                trained = train_slice(self._training(job), self.db, self.evaluator)
+                trained = train_slice(
+                    self._training(job), self.db, self.evaluator, *self._stager(job)
+                )
             except Exception:
                 log.exception(
                     "session %s: continuous training of round %d failed",
@@ -112,6 +128,21 @@ class ContinuousSessions:
         except Exception:
             training.run.close()
             raise
+
+    def _stager(self, job: Job) -> "tuple[Callable[[ContinuousTraining], CutRound] | None, int]":
+        """How `train_slice` cuts `job`'s next round during its last comparison, and the
+        round's budget (none for the session's last round, or without a render pool)."""
+        settings, render = job.settings, self.render
+        if render is None or job.round + 1 >= settings.rounds:
+            return None, 0
+
+        def stage(training: ContinuousTraining) -> "CutRound":
+            from groupwise.worker.jobs import cut_fresh
+
+            pool = render(settings.render_workers)
+            return cut_fresh(job, self.data_dir, training.continuous, pool)
+
+        return stage, settings.comparisons_per_round
 
     def evaluator(self) -> curve.Evaluator:
         """The process that evaluates the curve's points, started on first use."""

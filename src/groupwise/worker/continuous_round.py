@@ -10,6 +10,15 @@ rollout in progress when the round ends stops there, untrained (`round_ended`, r
 `STOP_POLL_S` seconds): the round's training job, which opens the next round while the
 person waits, then waits for no more PPO (issue 39; it waited 1.3 s on Hopper).
 
+A round that ends at its comparison budget is seen coming: once the person has given all
+but the last comparison, a slice cuts and publishes the next round's pool from the latest
+rollouts (`stage_due`, `jobs.cut_fresh`) and PPO then waits for the last comparison
+(`holds`, at most `HOLD_S` seconds), so the pool is still the policy's when the round ends,
+and the round's training job opens it at once (`jobs.train`'s `staged`) instead of sampling
+while the person waits (issue 39: End round → next round ≤ 2 s). The next pool is chosen
+and its suggestions made without the last comparison's pairs; a round the person ends
+early, or its timer, is cut when it ends.
+
 The page sees the agent learn (`worker.curve`): each refit stores a point of the session's
 learning curve (PPO steps, pairs, validation accuracy), and so does each evaluation of the
 greedy policy's true return, the first before the round's first rollout, then whenever the
@@ -28,6 +37,7 @@ from collections.abc import Callable, Iterator
 from concurrent.futures import Future
 from contextlib import contextmanager
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 from groupwise.run.continuous import ContinuousRound
 from groupwise.run.run import Run
@@ -38,6 +48,9 @@ from groupwise.storage.sessions import get_session
 from groupwise.storage.training import add_point
 from groupwise.worker import curve
 
+if TYPE_CHECKING:
+    from groupwise.worker.jobs import CutRound
+
 log = logging.getLogger(__name__)
 
 CHECKPOINT_S = 30.0
@@ -47,6 +60,9 @@ ACCOUNT_S = 60.0
 STOP_POLL_S = 0.1
 """Least seconds between two reads, during a PPO rollout, of whether its round has ended
 (a read is about a millisecond; an ended round's rollout stops within this)."""
+HOLD_S = 60.0
+"""Most seconds PPO waits for a round's last comparison once the next round is cut
+(`holds`): a person who stops one short of the budget does not stop the agent for long."""
 PROGRESS_S = 1.0
 """Least seconds between two points that only say how many PPO steps ran (one a rollout
 on a slow env; a tiny env's rollouts would write dozens a second)."""
@@ -78,6 +94,14 @@ class ContinuousTraining:
     """Worker seconds by activity since `accounted` (`timed`): what is not PPO is PPO's
     loss, logged every `ACCOUNT_S` seconds."""
     accounted: float = dataclasses.field(default_factory=time.monotonic)
+    staged: "CutRound | None" = None
+    """The next round, cut during this round's last comparison (`stage_due`); PPO waits
+    while it is held (`holds`), and the round's training job opens it at once."""
+    staged_at: float = 0.0
+    """`time.monotonic()` when `staged` was cut."""
+    declined: int | None = None
+    """The round's judgement count at which a held stage ran out (`HOLD_S`): not staged
+    again at that count."""
 
     @contextmanager
     def timed(self, activity: str) -> Iterator[None]:
@@ -107,10 +131,17 @@ class ContinuousTraining:
 
 
 def train_slice(
-    training: ContinuousTraining, db: Database, evaluator: Callable[[], curve.Evaluator]
+    training: ContinuousTraining,
+    db: Database,
+    evaluator: Callable[[], curve.Evaluator],
+    stage: "Callable[[ContinuousTraining], CutRound] | None" = None,
+    budget: int = 0,
 ) -> bool:
     """Refit when due and train one rollout (module docstring); False when the round has
-    no pairs yet. `evaluator` gives the process that evaluates the curve's points."""
+    no pairs yet, or PPO waits for the round's last comparison. `evaluator` gives the
+    process that evaluates the curve's points; `stage` cuts the next round
+    (`jobs.cut_fresh`) once `budget` − 1 of the round's `budget` comparisons are in
+    (`stage_due`; `budget` 0: the round has no budget, or it is the last)."""
     with training.timed("reads"), db.read() as s:
         keyed = round_judgements(s, training.session_id, training.round)
     with training.timed("refits"):
@@ -120,6 +151,22 @@ def train_slice(
         training.spent.clear()  # waiting for them is no loss of PPO's: not accounted
         training.accounted = time.monotonic()
         return False
+    if stage is not None and stage_due(training, len(keyed), budget):
+        with training.timed("staging"):
+            training.staged = stage(training)
+        training.staged_at = time.monotonic()
+        log.info(
+            "session %s: round %d cut during round %d's last comparison",
+            training.session_id,
+            training.round + 1,
+            training.round,
+        )
+    if training.staged is not None:
+        if holds(training, len(keyed), budget):
+            return False
+        if time.monotonic() - training.staged_at >= HOLD_S:
+            training.declined = len(keyed)
+        training.staged = None  # PPO trains on; the round's end cuts the pool anew
     if refitted or training.evaluated_s is None:
         _point(training, db, evaluator, refit=refitted, evaluate=training.evaluated_s is None)
     tick = time.perf_counter()
@@ -141,6 +188,34 @@ def train_slice(
         training.checkpointed = time.monotonic()
     training.account()
     return True
+
+
+def stage_due(training: ContinuousTraining, judged: int, budget: int) -> bool:
+    """Whether to cut the next round now: `judged` is one short of the round's `budget`
+    (its end in sight: the person's next comparison closes it), nothing is staged, and no
+    stage ran out at this count (`declined`)."""
+    if training.declined is not None and judged != training.declined:
+        training.declined = None
+    return (
+        budget > 0
+        and judged == budget - 1
+        and training.staged is None
+        and training.declined is None
+    )
+
+
+def holds(training: ContinuousTraining, judged: int, budget: int) -> bool:
+    """Whether PPO keeps waiting for the round's last comparison, so that the staged pool
+    stays the policy's: the round is still one short of its budget (or the last came in
+    and its job is on the way), the stage is younger than `HOLD_S` and no PPO step ran
+    since it was cut."""
+    staged = training.staged
+    return (
+        staged is not None
+        and judged >= budget - 1
+        and time.monotonic() - training.staged_at < HOLD_S
+        and staged.steps == training.run.agent.num_timesteps
+    )
 
 
 def round_ended(training: ContinuousTraining, db: Database, every_s: float) -> Callable[[], bool]:

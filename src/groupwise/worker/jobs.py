@@ -25,6 +25,7 @@ import logging
 import time
 from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -43,9 +44,10 @@ from groupwise.storage import Database
 from groupwise.storage.judgements import round_judgements
 from groupwise.storage.lifecycle import advance_before_commit, finish_training, record_training
 from groupwise.storage.models import utcnow
-from groupwise.storage.rounds import store_prepared_round
+from groupwise.storage.rounds import PreparedRound, store_prepared_round
 from groupwise.storage.sessions import get_round, round_directory
 from groupwise.storage.training import add_point
+from groupwise.types import IntArray
 from groupwise.worker.job import Job, checkpoint_of, offered_queries, open_run, session_strategy
 from groupwise.worker.progress import JobProgress
 from groupwise.worker.publishing import (
@@ -56,6 +58,22 @@ from groupwise.worker.publishing import (
 )
 
 log = logging.getLogger(__name__)
+
+
+@dataclass
+class CutRound:
+    """Round `round`'s pool cut from a continuous run's latest rollouts and published, not
+    opened yet (`cut_fresh`; `open_cut` opens it)."""
+
+    round: int
+    prepared: PreparedRound
+    steps: int
+    """PPO steps of the policy when the pool was cut."""
+    ages: IntArray
+    """Each behaviour's age then, in PPO steps (`pool.recent.pool_ages`)."""
+    seconds: dict[str, float]
+    """Wall seconds of the cut's parts: "sample" (what the rollouts lack), "cut" (the
+    distances, the tree and the queries), "publish" (clips, posters, pool files)."""
 
 
 def prepare(
@@ -98,6 +116,7 @@ def train(
     progress: JobProgress,
     continuous: ContinuousRound | None = None,
     render: RenderPool | None = None,
+    staged: CutRound | None = None,
 ) -> bool:
     """End round `job.round` on its stored judgements and queue the next round or the final
     phase (module docstring); True when the next round opened here. With `continuous` (a
@@ -107,7 +126,8 @@ def train(
     cut from that run's rollouts and opens *before* the round is committed (`open_fresh`):
     the person compares again while the
     worker evaluates and checkpoints (a worker killed meanwhile commits it when it resumes:
-    `worker.resume`)."""
+    `worker.resume`). `staged`: the next round as cut during the round's last comparison
+    (`worker.continuous_round`), opened at once while no PPO step has run since."""
     r = job.round
     opened = False
     if continuous is None:
@@ -116,10 +136,14 @@ def train(
         clock = OpeningClock()
         progress.on_phase("load", 0, 1)
         keyed = _judgements(db, job.session_id, r)
-        with clock("refit"):
-            continuous.update(keyed, time.monotonic(), final=True)
-        if render is not None:
-            opened = open_fresh(job, db, data_dir, continuous, render, progress, clock)
+        fresh = staged is not None and staged.steps == continuous.run.agent.num_timesteps
+        if render is not None and staged is not None and fresh:
+            opened = open_cut(job, db, data_dir, continuous, staged, clock, staged=True)
+        else:
+            with clock("refit"):
+                continuous.update(keyed, time.monotonic(), final=True)
+            if render is not None:
+                opened = open_fresh(job, db, data_dir, continuous, render, progress, clock)
         record = commit_continuous(continuous, keyed, job.elapsed_s, progress)
     checkpoint = checkpoint_of(job.session_id, r)
     stats = {**record.stats(), "pool_steps": pool_steps_of(db, data_dir, job.session_id, r)}
@@ -139,28 +163,20 @@ def train(
     return opened
 
 
-def open_fresh(
+def cut_fresh(
     job: Job,
-    db: Database,
     data_dir: Path,
     continuous: ContinuousRound,
     render: RenderPool,
     progress: JobProgress | None = None,
-    clock: "OpeningClock | None" = None,
-) -> bool:
+) -> CutRound:
     """Cut round `job.round + 1`'s pool from the latest rollouts of `continuous`'s run
-    (`pool.recent.fresh_sources`: what they lack sampled from the policy), publish it and
-    open it in the transaction that queues it, before round `job.round` is committed; False
-    when that was the last round or the session moved on. Logs the pool's ages (PPO steps
-    from the policy that played each behaviour to the policy now) and the wait since the
-    round ended, and writes where that wait went (`clock`, started with the job) to the
-    round's ``opening.json`` (`OpeningClock`)."""
+    (`pool.recent.fresh_sources`: what they lack sampled from the policy) and publish it
+    (clips, tree, candidates), while round `job.round` is still open."""
     settings, run, r = job.settings, continuous.run, job.round
-    if r + 1 >= settings.rounds:
-        return False
-    clock = clock or OpeningClock()
-    # PPO waits for this job: the distances take the free cores
-    with clock("cut"), kernel_threads(free_cores(FREE_PROBE_S)):
+    tick = time.perf_counter()
+    # PPO waits for this: the distances take the free cores
+    with kernel_threads(free_cores(FREE_PROBE_S)):
         offer = begin_round(
             run,
             session_strategy(run.cfg, job.mode),
@@ -170,38 +186,84 @@ def open_fresh(
             sources=fresh_sources(run.cfg.loop),
             callback=progress,
         )
+    cut_s = time.perf_counter() - tick
     now = run.agent.num_timesteps
     ages = pool_ages(offer.pool, continuous.recorder, now)
-    oldest = now - int(ages.max(initial=0))
-    with clock("publish"):
-        prepared = published_round(
-            data_dir, job.session_id, job.env, settings, offer.pool, offer.queries, render,
-            progress, offer.sample_s, oldest, ages.tolist(),
-        )  # fmt: skip
+    tick = time.perf_counter()
+    prepared = published_round(
+        data_dir, job.session_id, job.env, settings, offer.pool, offer.queries, render,
+        progress, offer.sample_s, now - int(ages.max(initial=0)), ages.tolist(),
+    )  # fmt: skip
+    seconds = {
+        "sample": offer.sample_s,
+        "cut": cut_s - offer.sample_s,
+        "publish": time.perf_counter() - tick,
+    }
+    return CutRound(r + 1, prepared, now, ages, seconds)
+
+
+def open_fresh(
+    job: Job,
+    db: Database,
+    data_dir: Path,
+    continuous: ContinuousRound,
+    render: RenderPool,
+    progress: JobProgress | None = None,
+    clock: "OpeningClock | None" = None,
+) -> bool:
+    """Cut round `job.round + 1`'s pool now (`cut_fresh`) and open it (`open_cut`); False
+    when that was the last round or the session moved on."""
+    if job.round + 1 >= job.settings.rounds:
+        return False
+    clock = clock or OpeningClock()
+    cut = cut_fresh(job, data_dir, continuous, render, progress)
+    clock.seconds.update(cut.seconds)
+    return open_cut(job, db, data_dir, continuous, cut, clock)
+
+
+def open_cut(
+    job: Job,
+    db: Database,
+    data_dir: Path,
+    continuous: ContinuousRound,
+    cut: CutRound,
+    clock: "OpeningClock",
+    staged: bool = False,
+) -> bool:
+    """Open round `cut.round` with its published pool in the transaction that queues round
+    `job.round`'s commit, before that commit; False when the session moved on. Logs the
+    pool's ages (PPO steps from the policy that played each behaviour to the policy now)
+    and the wait since the round ended, and writes where that wait went (`clock`, started
+    with the job) to the round's ``opening.json`` (`OpeningClock`); `staged`: the pool was
+    cut during the round's last comparison (`worker.continuous_round`), its parts no part
+    of the wait."""
+    run, r = continuous.run, job.round
+    oldest = cut.steps - int(cut.ages.max(initial=0))
     accuracy = None if continuous.report is None else continuous.report.validation_accuracy
     with clock("store"), db.write() as s:
         ended = get_round(s, job.session_id, r).closed_at
         opened = advance_before_commit(s, job.session_id, r) and store_prepared_round(
-            s, job.session_id, r + 1, prepared
+            s, job.session_id, cut.round, cut.prepared
         )
         if opened:
             add_point(
-                s, job.session_id, round_index=r + 1, ppo_steps=now, true_return=None,
+                s, job.session_id, round_index=cut.round, ppo_steps=cut.steps, true_return=None,
                 pairs=len(run.dataset), reward_val_accuracy=accuracy, pool_steps=oldest,
             )  # fmt: skip
     if opened:
         waited = (utcnow() - ended).total_seconds() if ended is not None else float("nan")
-        clock.seconds["sample"] = offer.sample_s
-        clock.seconds["cut"] -= offer.sample_s  # the distances, the tree and the queries
-        clock.write(data_dir / round_directory(job.session_id, r + 1) / OPENING_FILE, waited)
+        path = data_dir / round_directory(job.session_id, cut.round) / OPENING_FILE
+        clock.write(path, waited, cut.seconds if staged else None)
+        ages = cut.ages
         log.info(
             "session %s: round %d opened %.1f s after round %d ended, %d behaviours of the "
-            "latest rollouts, %s PPO steps old (median %s)",
+            "latest rollouts%s, %s PPO steps old (median %s)",
             job.session_id,
-            r + 1,
+            cut.round,
             waited,
             r,
-            len(offer.pool),
+            len(ages),
+            " cut during its last comparison" if staged else "",
             f"{int(ages.min()) if len(ages) else 0:,}–{int(ages.max(initial=0)):,}",
             f"{int(np.median(ages)) if len(ages) else 0:,}",
         )
@@ -233,10 +295,11 @@ class OpeningClock:
         finally:
             self.seconds[part] = self.seconds.get(part, 0.0) + time.perf_counter() - tick
 
-    def write(self, path: Path, waited: float) -> None:
+    def write(self, path: Path, waited: float, staged: dict[str, float] | None = None) -> None:
         """Write the parts to `path` as JSON with `waited`, the seconds from the round's end
         to its opening: what the job did not take of it ("before": the slice in progress
-        and picking the job up)."""
+        and picking the job up); `staged`, the parts of a pool cut before the round ended
+        (`CutRound.seconds`), apart as "staged_s"."""
         job = time.perf_counter() - self.started
         parts = {"before": waited - job, **self.seconds}
         parts["other"] = job - sum(self.seconds.values())
@@ -244,6 +307,11 @@ class OpeningClock:
             "waited_s": waited,
             "job_cpu_s": time.process_time() - self.cpu,
             "parts_s": {name: round(value, 4) for name, value in parts.items()},
+            **(
+                {}
+                if staged is None
+                else {"staged_s": {name: round(value, 4) for name, value in staged.items()}}
+            ),
         }
         path.write_text(json.dumps(record, indent=1) + "\n")
 

@@ -134,7 +134,9 @@ class Worker:
         if self._continuous is None:
             from groupwise.worker.continuous import ContinuousSessions
 
-            self._continuous = ContinuousSessions(self.db, self.data_dir, self.serves)
+            self._continuous = ContinuousSessions(
+                self.db, self.data_dir, self.serves, self._render_pool
+            )
         return self._continuous
 
     def serves(self, session_id: str) -> bool:
@@ -211,8 +213,9 @@ class Worker:
                     opened = False
                     try:
                         opened = jobs.train(
-                            job, self.db, self.data_dir, progress, training.continuous, render
-                        )
+                            job, self.db, self.data_dir, progress, training.continuous, render,
+                            training.staged,
+                        )  # fmt: skip
                     finally:  # the run trains on into the round it opened, or closes
                         self.continuous.keep(job, training, opened)
                 else:

@@ -7,7 +7,9 @@ import json
 import pytest
 from tests.unit.server.conftest import context_of, new_session, post_judgement, run_worker_once
 
+from groupwise.storage.sessions import round_directory
 from groupwise.worker import continuous_round
+from groupwise.worker.jobs import OPENING_FILE
 from groupwise.worker.process import Worker
 
 ROLLOUT = 32  # TINY's PPO: 1 env × 32 steps
@@ -103,3 +105,36 @@ def test_a_session_with_nothing_to_learn_from_passes_its_turn(client):
         assert worker.train_continuous()  # both slices go to the session with pairs
     assert worker.continuous._rounds[busy].run.agent.num_timesteps == 2 * ROLLOUT
     assert worker.continuous._rounds[idle].run.agent.num_timesteps == 0
+
+
+def test_ppo_waits_for_the_last_comparison_only_while_the_cut_pool_stays_the_policys(
+    client, monkeypatch
+):
+    """Issue 39: one short of the budget the next pool is cut and PPO waits; an undone
+    judgement drops it (the end is no longer in sight), and so does a person who stops one
+    short for `HOLD_S` (the agent trains on); the round's end then cuts the pool anew."""
+    sid = new_session(client, training="continuous", comparisons_per_round=3)["id"]
+    run_worker_once(client)  # round 0 ready
+    worker = _worker(client)
+    post_judgement(client, sid, ["b0", "b1"], ["b2"])
+    assert worker.train_continuous()
+    training = worker.continuous._rounds[sid]
+    second = post_judgement(client, sid, ["b3"], ["b4"])
+    assert not worker.train_continuous()  # cut, and PPO waits
+    assert training.staged is not None and training.run.agent.num_timesteps == ROLLOUT
+    client.delete(f"/api/sessions/{sid}/judgements/{second['id']}")
+    assert worker.train_continuous()  # two short again: PPO trains on, the cut dropped
+    assert training.staged is None and training.run.agent.num_timesteps == 2 * ROLLOUT
+    post_judgement(client, sid, ["b3"], ["b4"])
+    assert not worker.train_continuous()  # cut again
+    monkeypatch.setattr(continuous_round, "HOLD_S", 0.0)  # the person stopped one short
+    assert worker.train_continuous()
+    assert training.staged is None and training.declined == 2
+    assert worker.train_continuous()  # not cut again at that count
+    assert training.run.agent.num_timesteps == 4 * ROLLOUT
+    post_judgement(client, sid, ["b5"], ["b6"])  # the budget: the round ends
+    assert worker.run_next()
+    opened = context_of(client).data_dir / round_directory(sid, 1)
+    opening = json.loads((opened / OPENING_FILE).read_text())
+    assert "staged_s" not in opening and "sample" in opening["parts_s"]
+    worker.continuous.close()

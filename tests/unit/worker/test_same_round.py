@@ -9,13 +9,20 @@ judgements → `end_round` on a `Run` of the session's own config. In continuous
 run's latest rollouts; the headless side drives `run.continuous.ContinuousRound` alike.
 """
 
+import json
 import uuid
 from pathlib import Path
 
 import numpy as np
 import torch
 from sqlalchemy import select
-from tests.unit.server.conftest import TINY, context_of, new_session, run_worker_once
+from tests.unit.server.conftest import (
+    TINY,
+    context_of,
+    new_session,
+    post_judgement,
+    run_worker_once,
+)
 
 from groupwise.config import RunConfig
 from groupwise.episodes.ids import behaviour_index
@@ -23,7 +30,7 @@ from groupwise.pool.files import load_fragments
 from groupwise.pool.recent import fresh_sources
 from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.preferences.judgement import LEFT_BETTER, RIGHT_BETTER, Judgement
-from groupwise.run.continuous import ContinuousRound
+from groupwise.run.continuous import ContinuousRound, cut_next
 from groupwise.run.progress import RunCallback
 from groupwise.run.round import begin_round, end_round, finish_round
 from groupwise.run.run import CONFIG_FILE, Run
@@ -32,6 +39,7 @@ from groupwise.storage.models import PairQueueRow, RoundRow, SuggestionRow
 from groupwise.storage.sessions import round_directory
 from groupwise.storage.settings import SessionSettings
 from groupwise.worker.job import offered_queries, session_strategy
+from groupwise.worker.jobs import OPENING_FILE
 from groupwise.worker.process import Worker
 
 # round → (left, right, label, undone) in the order given; the undone one keeps its key
@@ -229,3 +237,76 @@ def test_a_continuous_app_round_and_a_headless_continuous_round_are_the_same_rou
     assert [
         (tuple(map(behaviour_index, q.left)), tuple(map(behaviour_index, q.right))) for q in stored
     ] == [(q.left, q.right) for q in following.queries]
+
+
+def test_a_round_ended_by_its_budget_opens_the_pool_cut_during_its_last_comparison(
+    client, tmp_path
+):
+    """Issue 39, End round ≤ 2 s: once all but the last of the round's comparisons are in,
+    the worker cuts and publishes the next pool and PPO waits; the last comparison ends the
+    round at its budget and the job opens that pool at once, the same pool and suggestions
+    as the headless continuous round cuts at that point (`run.continuous.cut_next`)."""
+    chosen = {"seed": 5, "training": "continuous", "comparisons_per_round": 3}
+    slices = 6
+    sid = new_session(client, **chosen)["id"]
+    context = context_of(client)
+    settings = SessionSettings.model_validate({**TINY, **chosen}).for_env("GridWorld")
+    run_worker_once(client)  # prepare round 0
+    answers = [(["b0", "b1"], ["b2"]), (["b5"], ["b3", "b4"]), (["b7"], ["b6"])]
+    post_judgement(client, sid, *answers[0])
+    worker = Worker(context.db, context.data_dir, poll_s=0.1)
+    for _ in range(slices):
+        assert worker.train_continuous()
+    post_judgement(client, sid, *answers[1])  # one short of the budget: the next pool is cut
+    assert not worker.train_continuous()  # … and PPO waits for the last comparison
+    assert not worker.train_continuous()
+    staged = load_fragments(context.data_dir / round_directory(sid, 1))
+    post_judgement(client, sid, *answers[2])
+    assert client.get(f"/api/sessions/{sid}").json()["phase"] == "training"  # its budget
+    assert worker.run_next()  # round 1 opened with the staged pool, round 0 committed
+    worker.continuous.close()
+    assert client.get(f"/api/sessions/{sid}").json()["round"] == 1
+    opening = json.loads((context.data_dir / round_directory(sid, 1) / OPENING_FILE).read_text())
+    assert set(opening["staged_s"]) == {"sample", "cut", "publish"}
+    assert "sample" not in opening["parts_s"] and "refit" not in opening["parts_s"]
+    cfg = RunConfig.load(context.data_dir / "sessions" / sid / CONFIG_FILE)
+
+    judgements = [
+        Judgement(
+            tuple(map(behaviour_index, left)), tuple(map(behaviour_index, right)), LEFT_BETTER
+        )
+        for left, right in answers  # post_judgement's "left"
+    ]
+    budget = settings.comparisons_per_round
+    with Run.create(cfg, tmp_path / "headless") as run:
+        offer = begin_round(
+            run,
+            session_strategy(cfg, "groupwise"),
+            budget,
+            n_queries=offered_queries(settings),
+            sources=fresh_sources(cfg.loop),
+        )
+        continuous = ContinuousRound(run, offer, round_streams(cfg.loop.seed, 0), 0.0)
+        continuous.update(list(enumerate(judgements[:1])), 0.0)
+        for _ in range(slices):
+            continuous.learn(run.ppo.rollout_steps)
+        continuous.update(list(enumerate(judgements[:2])), 1.0)  # no refit due
+        following = cut_next(
+            run, session_strategy(cfg, "groupwise"), budget, 1, offered_queries(settings)
+        )
+        continuous.update(list(enumerate(judgements)), 2.0, final=True)
+        assert run.agent.num_timesteps == slices * run.ppo.rollout_steps
+    _same_pool(staged, following.offer.pool)
+    _same_pool(load_fragments(context.data_dir / round_directory(sid, 1)), following.offer.pool)
+    with context.db.read() as s:
+        round_id = s.scalar(
+            select(RoundRow.id).where(RoundRow.session_id == sid, RoundRow.index == 1)
+        )
+        stored = s.scalars(
+            select(SuggestionRow)
+            .where(SuggestionRow.round_id == round_id)
+            .order_by(SuggestionRow.rank)
+        ).all()
+    assert [
+        (tuple(map(behaviour_index, q.left)), tuple(map(behaviour_index, q.right))) for q in stored
+    ] == [(q.left, q.right) for q in following.offer.queries]
