@@ -212,7 +212,7 @@ def teach(
                     if not pending:
                         break
                     tick = time.monotonic()
-                    last = round_index + 1 >= ROUNDS
+                    last = round_index + 1 >= rounds
                     if last or not wait_open(http, session, round_index + 1, tick + 1800):
                         break
                     cell.waits.append(time.monotonic() - tick)
