@@ -158,6 +158,22 @@ def test_an_app_round_and_a_headless_round_are_the_same_round(client, tmp_path):
     assert sum(len(j["pairs"]) for j in listed) == len(our_data)
 
 
+def _suggestions(context, sid: str, round_index: int) -> list[tuple[tuple[int, ...], ...]]:
+    """Round `round_index`'s stored suggestions, in their order, as (left, right) indices."""
+    with context.db.read() as s:
+        round_id = s.scalar(
+            select(RoundRow.id).where(RoundRow.session_id == sid, RoundRow.index == round_index)
+        )
+        stored = s.scalars(
+            select(SuggestionRow)
+            .where(SuggestionRow.round_id == round_id)
+            .order_by(SuggestionRow.rank)
+        ).all()
+    return [
+        (tuple(map(behaviour_index, q.left)), tuple(map(behaviour_index, q.right))) for q in stored
+    ]
+
+
 def _same_pool(published, pool) -> None:
     assert len(published) == len(pool)
     for ours, theirs in zip(pool.fragments, published, strict=True):
@@ -225,18 +241,7 @@ def test_a_continuous_app_round_and_a_headless_continuous_round_are_the_same_rou
     _same_pool(published, following.pool)
     recorded = {e.reset_seed for e in following.pool.episodes if e.source == 0}
     assert {f.reset_seed for f in published} <= recorded
-    with context.db.read() as s:
-        round_id = s.scalar(
-            select(RoundRow.id).where(RoundRow.session_id == sid, RoundRow.index == 1)
-        )
-        stored = s.scalars(
-            select(SuggestionRow)
-            .where(SuggestionRow.round_id == round_id)
-            .order_by(SuggestionRow.rank)
-        ).all()
-    assert [
-        (tuple(map(behaviour_index, q.left)), tuple(map(behaviour_index, q.right))) for q in stored
-    ] == [(q.left, q.right) for q in following.queries]
+    assert _suggestions(context, sid, 1) == [(q.left, q.right) for q in following.queries]
 
 
 def test_a_round_ended_by_its_budget_opens_the_pool_cut_during_its_last_comparison(
@@ -298,15 +303,4 @@ def test_a_round_ended_by_its_budget_opens_the_pool_cut_during_its_last_comparis
         assert run.agent.num_timesteps == slices * run.ppo.rollout_steps
     _same_pool(staged, following.offer.pool)
     _same_pool(load_fragments(context.data_dir / round_directory(sid, 1)), following.offer.pool)
-    with context.db.read() as s:
-        round_id = s.scalar(
-            select(RoundRow.id).where(RoundRow.session_id == sid, RoundRow.index == 1)
-        )
-        stored = s.scalars(
-            select(SuggestionRow)
-            .where(SuggestionRow.round_id == round_id)
-            .order_by(SuggestionRow.rank)
-        ).all()
-    assert [
-        (tuple(map(behaviour_index, q.left)), tuple(map(behaviour_index, q.right))) for q in stored
-    ] == [(q.left, q.right) for q in following.offer.queries]
+    assert _suggestions(context, sid, 1) == [(q.left, q.right) for q in following.offer.queries]
