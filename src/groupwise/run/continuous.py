@@ -72,7 +72,10 @@ def cut_next(
 ) -> NextRound:
     """Round `round_index`'s offer of `budget` comparisons (`n_queries` proposed, default
     `budget`), cut now from the run's latest rollouts (`pool.recent.fresh_sources`) while
-    round `round_index` − 1 is open (the app's `worker.jobs.cut_fresh` cuts it alike)."""
+    round `round_index` − 1 is open (the app's `worker.jobs.cut_fresh` cuts it alike: as
+    many comparisons before the round's end as its cut takes at the person's pace,
+    `worker.continuous_round.comparisons_ahead`; a cut here takes no virtual time, so at
+    the last answer)."""
     streams = round_streams(run.cfg.loop.seed, round_index)
     offer = begin_round(
         run,

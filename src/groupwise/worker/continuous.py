@@ -125,6 +125,7 @@ class ContinuousSessions:
             self._rounds[job.session_id] = resume_round(
                 following, self.db, self.data_dir, self.evaluator, run=training.run
             )
+            self._rounds[job.session_id].cut_s = training.cut_s  # how early to cut next
         except Exception:
             training.run.close()
             raise

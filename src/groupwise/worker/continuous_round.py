@@ -10,9 +10,10 @@ rollout in progress when the round ends stops there, untrained (`round_ended`, r
 `STOP_POLL_S` seconds): the round's training job, which opens the next round while the
 person waits, then waits for no more PPO (issue 39; it waited 1.3 s on Hopper).
 
-A round that ends at its comparison budget is seen coming: once the person has given all
-but the last comparison, a slice cuts and publishes the next round's pool from the latest
-rollouts (`stage_due`, `jobs.cut_fresh`) and PPO then waits for the last comparison
+A round that ends at its comparison budget is seen coming: a few comparisons before it
+(one, or as many as the person gives, at their pace, while a cut as long as the last one
+runs: `comparisons_ahead`), a slice cuts and publishes the next round's pool from the
+latest rollouts (`stage_due`, `jobs.cut_fresh`) and PPO then waits for the round's end
 (`holds`, at most `HOLD_S` seconds), so the pool is still the policy's when the round ends,
 and the round's training job opens it at once (`jobs.train`'s `staged`) instead of sampling
 while the person waits (issue 39: End round → next round ≤ 2 s). The next pool is chosen
@@ -31,13 +32,16 @@ checkpoints, ...).
 
 import dataclasses
 import logging
+import math
 import time
 from collections import defaultdict
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import Future
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
+
+import numpy as np
 
 from groupwise.run.continuous import ContinuousRound
 from groupwise.run.run import Run
@@ -61,6 +65,11 @@ STOP_POLL_S = 0.1
 """Least seconds between two reads, during a PPO rollout, of whether its round has ended
 (a read is about a millisecond; an ended round's rollout stops within this)."""
 HOLD_S = 60.0
+CUT_MARGIN_S = 1.0
+"""Seconds added to the last cut's length when choosing how early to cut (a slice's
+rollout in progress when the count rises, about a second on MuJoCo)."""
+PACE_WINDOW = 6
+"""The person's pace is the median gap between the round's last this many judgements."""
 """Most seconds PPO waits for a round's last comparison once the next round is cut
 (`holds`): a person who stops one short of the budget does not stop the agent for long."""
 PROGRESS_S = 1.0
@@ -99,6 +108,16 @@ class ContinuousTraining:
     while it is held (`holds`), and the round's training job opens it at once."""
     staged_at: float = 0.0
     """`time.monotonic()` when `staged` was cut."""
+    staged_from: int = 0
+    """The round's judgement count when `staged` was cut: PPO waits while it is not below."""
+    cut_s: float | None = None
+    """Seconds the session's last cut during a round took (carried into the next round):
+    how early to cut (`comparisons_ahead`)."""
+    judged_at: list[float] = dataclasses.field(default_factory=list)
+    """`time.monotonic()` of each rise of the round's judgement count seen by a slice: the
+    person's pace."""
+    counted: int = 0
+    """The round's judgement count at the last slice."""
     declined: int | None = None
     """The round's judgement count at which a held stage ran out (`HOLD_S`): not staged
     again at that count."""
@@ -151,21 +170,30 @@ def train_slice(
         training.spent.clear()  # waiting for them is no loss of PPO's: not accounted
         training.accounted = time.monotonic()
         return False
-    if stage is not None and stage_due(training, len(keyed), budget):
+    judged = len(keyed)
+    if judged > training.counted:
+        training.judged_at.append(time.monotonic())
+    training.counted = judged
+    ahead = comparisons_ahead(training.cut_s, training.judged_at)
+    if stage is not None and stage_due(training, judged, budget, ahead):
+        tick = time.perf_counter()
         with training.timed("staging"):
             training.staged = stage(training)
-        training.staged_at = time.monotonic()
+        training.cut_s = time.perf_counter() - tick
+        training.staged_at, training.staged_from = time.monotonic(), judged
         log.info(
-            "session %s: round %d cut during round %d's last comparison",
+            "session %s: round %d cut in %.1f s, %d comparison(s) before round %d's budget",
             training.session_id,
             training.round + 1,
+            training.cut_s,
+            budget - judged,
             training.round,
         )
     if training.staged is not None:
-        if holds(training, len(keyed), budget):
+        if holds(training, judged):
             return False
         if time.monotonic() - training.staged_at >= HOLD_S:
-            training.declined = len(keyed)
+            training.declined = judged
         training.staged = None  # PPO trains on; the round's end cuts the pool anew
     if refitted or training.evaluated_s is None:
         _point(training, db, evaluator, refit=refitted, evaluate=training.evaluated_s is None)
@@ -190,29 +218,42 @@ def train_slice(
     return True
 
 
-def stage_due(training: ContinuousTraining, judged: int, budget: int) -> bool:
-    """Whether to cut the next round now: `judged` is one short of the round's `budget`
-    (its end in sight: the person's next comparison closes it), nothing is staged, and no
+def comparisons_ahead(cut_s: float | None, judged_at: Sequence[float]) -> int:
+    """How many comparisons before the round's budget to cut its next round: enough that a
+    cut as long as the last one (`cut_s`, plus `CUT_MARGIN_S` for the slice in progress)
+    is done when the person, at their pace so far (the median gap between the round's last
+    `PACE_WINDOW` rises of its judgement count, `judged_at`), gives the last; 1 while
+    either is unknown."""
+    gaps = np.diff(np.asarray(judged_at[-PACE_WINDOW:], dtype=float))
+    if cut_s is None or not len(gaps):
+        return 1
+    pace = max(float(np.median(gaps)), 1e-3)
+    return max(1, math.ceil((cut_s + CUT_MARGIN_S) / pace))
+
+
+def stage_due(training: ContinuousTraining, judged: int, budget: int, ahead: int = 1) -> bool:
+    """Whether to cut the next round now: `judged` is within `ahead` comparisons of the
+    round's `budget` (its end in sight: `comparisons_ahead`), nothing is staged, and no
     stage ran out at this count (`declined`)."""
     if training.declined is not None and judged != training.declined:
         training.declined = None
     return (
         budget > 0
-        and judged == budget - 1
+        and budget - ahead <= judged < budget
         and training.staged is None
         and training.declined is None
     )
 
 
-def holds(training: ContinuousTraining, judged: int, budget: int) -> bool:
-    """Whether PPO keeps waiting for the round's last comparison, so that the staged pool
-    stays the policy's: the round is still one short of its budget (or the last came in
-    and its job is on the way), the stage is younger than `HOLD_S` and no PPO step ran
-    since it was cut."""
+def holds(training: ContinuousTraining, judged: int) -> bool:
+    """Whether PPO keeps waiting for the round's last comparisons, so that the staged pool
+    stays the policy's: no judgement was undone below the count it was cut at (or the
+    last came in and the round's job is on the way), the stage is younger than `HOLD_S`
+    and no PPO step ran since it was cut."""
     staged = training.staged
     return (
         staged is not None
-        and judged >= budget - 1
+        and judged >= training.staged_from
         and time.monotonic() - training.staged_at < HOLD_S
         and staged.steps == training.run.agent.num_timesteps
     )

@@ -3,6 +3,7 @@ PPO trains while the round is open, the reward refits on the stored judgements, 
 ends on the run that trained, and a restarted worker resumes from the mid-round checkpoint."""
 
 import json
+import time
 
 import pytest
 from tests.unit.server.conftest import context_of, new_session, post_judgement, run_worker_once
@@ -137,4 +138,32 @@ def test_ppo_waits_for_the_last_comparison_only_while_the_cut_pool_stays_the_pol
     opened = context_of(client).data_dir / round_directory(sid, 1)
     opening = json.loads((opened / OPENING_FILE).read_text())
     assert "staged_s" not in opening and "sample" in opening["parts_s"]
+    worker.continuous.close()
+
+
+def test_the_next_round_is_cut_as_many_comparisons_early_as_the_last_cut_took():
+    ahead = continuous_round.comparisons_ahead
+    assert ahead(None, [0.0, 5.0, 10.0]) == 1  # no cut measured yet
+    assert ahead(9.0, [3.0]) == 1  # no pace yet
+    assert ahead(9.0, [0.0, 5.0, 10.0]) == 2  # 9 s (+1) at 5 s a comparison
+    assert ahead(3.0, [0.0, 10.0, 21.0]) == 1
+    assert ahead(14.0, [0.0, 1.0, 100.0, 105.0, 110.0]) == 3  # the median gap: 5 s
+
+
+def test_a_slow_cut_starts_before_the_last_comparison(client):
+    sid = new_session(client, training="continuous", comparisons_per_round=5)["id"]
+    run_worker_once(client)  # round 0 ready
+    worker = _worker(client)
+    post_judgement(client, sid, ["b0", "b1"], ["b2"])
+    assert worker.train_continuous()
+    training = worker.continuous._rounds[sid]
+    now = time.monotonic()
+    training.cut_s = 100.0  # the last cut took 100 s, and the person takes 50 s a comparison
+    training.judged_at = [now - 100.0, now - 50.0]
+    post_judgement(client, sid, ["b3"], ["b4"])  # 3 short of the budget: (100 + 1) / 50 → 3
+    assert not worker.train_continuous()
+    assert training.staged is not None and training.staged_from == 2
+    post_judgement(client, sid, ["b5"], ["b6"])
+    assert not worker.train_continuous()  # PPO waits out the rest of the round
+    assert training.run.agent.num_timesteps == ROLLOUT
     worker.continuous.close()
