@@ -197,9 +197,10 @@ def main(argv: Sequence[str] | None = None) -> None:
                             "label": "left",
                             "source": "explored",
                         }
-                        if args.budget and given == args.budget - 1:
-                            time.sleep(args.pace)  # the last comparison, then its budget
-                            ended.append(time.time())  # ends the round: the wait begins
+                        if args.budget:  # compare, then answer; the last answer ends
+                            time.sleep(args.pace)  # the round at its budget: the wait begins
+                            if given == args.budget - 1:
+                                ended.append(time.time())
                         tick = time.perf_counter()
                         answer = http.post(f"/api/sessions/{session}/judgements", json=body)
                         latencies.append(time.perf_counter() - tick)
