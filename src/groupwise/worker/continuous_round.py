@@ -112,7 +112,8 @@ class ContinuousTraining:
     """The round's judgement count when `staged` was cut: PPO waits while it is not below."""
     cut_s: float | None = None
     """Seconds the session's last cut during a round took (carried into the next round):
-    how early to cut (`comparisons_ahead`)."""
+    how early to cut (`comparisons_ahead`); before the first, the round's own pool's
+    (its ``timings.json``, as `Offer.sample_s`)."""
     judged_at: list[float] = dataclasses.field(default_factory=list)
     """`time.monotonic()` of each rise of the round's judgement count seen by a slice: the
     person's pace."""
@@ -174,7 +175,10 @@ def train_slice(
     if judged > training.counted:
         training.judged_at.append(time.monotonic())
     training.counted = judged
-    ahead = comparisons_ahead(training.cut_s, training.judged_at)
+    cut_s = training.cut_s  # before the session's first cut: how long this round's pool took
+    if cut_s is None and math.isfinite(training.continuous.offer.sample_s):
+        cut_s = training.continuous.offer.sample_s
+    ahead = comparisons_ahead(cut_s, training.judged_at)
     if stage is not None and stage_due(training, judged, budget, ahead):
         tick = time.perf_counter()
         with training.timed("staging"):
