@@ -319,8 +319,9 @@ def cell_record(
 
 
 def figure(records: Sequence[dict], path: Path) -> None:
-    """Success rate against the teacher's minutes, a panel per target, a line per training
-    mode and seed (thin) with the modes' means (thick)."""
+    """Success rate against the teacher's minutes, a panel per target, a line per arm
+    (`arm`: training mode, research settings, round budget) and seed (thin) with the arms'
+    means (thick)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -328,10 +329,11 @@ def figure(records: Sequence[dict], path: Path) -> None:
 
     targets = list(dict.fromkeys(r["target"] for r in records))
     fig, axes = plt.subplots(1, len(targets), figsize=(4.2 * len(targets), 3.4), squeeze=False)
-    colours = {"continuous": "tab:blue", "rounds": "tab:orange"}
+    arms = sorted({arm(r) for r in records})
+    colours = dict(zip(arms, plt.get_cmap("tab10").colors, strict=False))
     for ax, target in zip(axes[0], targets, strict=True):
         for training, colour in colours.items():
-            runs = [r for r in records if r["target"] == target and r["training"] == training]
+            runs = [r for r in records if r["target"] == target and arm(r) == training]
             if not runs:
                 continue
             minutes = sorted({float(m) for r in runs for m in r["success"]})
