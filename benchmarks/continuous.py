@@ -36,7 +36,9 @@ per CPU-minute; judgement answers, median / p99.
 With fresh pools (issue 39: the next pool at most one rollout old, sampled when the round
 ends), the app's defaults (`teach`, 240 px), 10 rounds of 45 s (load 6–7): 11.4 / 12.4 s
 before, **7.6 / 9.2 s** once the slice in progress stops at End round and the pool variants
-are sampled side by side; 5.9 s of it sampling (docs/results/continuous/README.md).
+are sampled side by side; 5.9 s of it sampling (docs/results/continuous/README.md). With
+`--budget 9` (the round's budget ends it, 9 comparisons at 5 s; load 1.0) the worker cuts
+the next pool 2-3 comparisons before the end and PPO waits: **0.21 / 4.0 s**, PPO at 0.62×.
 
 The worker logs where its time goes every minute (`worker.continuous`, "the last 61 s: PPO 59.6 s
 (98%), refits 1.1 s (2%), ..."); before the evaluations moved out they took 9–10 % of it.
