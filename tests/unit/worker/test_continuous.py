@@ -10,6 +10,7 @@ from tests.unit.server.conftest import context_of, new_session, post_judgement, 
 
 from groupwise.storage.sessions import round_directory
 from groupwise.worker import continuous_round
+from groupwise.worker.continuous_round import ContinuousTraining
 from groupwise.worker.jobs import OPENING_FILE
 from groupwise.worker.process import Worker
 
@@ -19,6 +20,17 @@ ROLLOUT = 32  # TINY's PPO: 1 env × 32 steps
 def _worker(client) -> Worker:
     context = context_of(client)
     return Worker(context.db, context.data_dir, poll_s=0.1)
+
+
+def _trained_once(client, budget: int) -> tuple[str, Worker, ContinuousTraining]:
+    """A continuous session of `budget` comparisons a round, round 0 open with one
+    judgement and one PPO rollout trained on it."""
+    sid = new_session(client, training="continuous", comparisons_per_round=budget)["id"]
+    run_worker_once(client)  # round 0 ready
+    worker = _worker(client)
+    post_judgement(client, sid, ["b0", "b1"], ["b2"])
+    assert worker.train_continuous()
+    return sid, worker, worker.continuous._rounds[sid]
 
 
 def test_the_worker_trains_while_the_round_is_open_and_ends_it_on_that_run(client):
@@ -114,12 +126,7 @@ def test_ppo_waits_for_the_last_comparison_only_while_the_cut_pool_stays_the_pol
     """Issue 39: one short of the budget the next pool is cut and PPO waits; an undone
     judgement drops it (the end is no longer in sight), and so does a person who stops one
     short for `HOLD_S` (the agent trains on); the round's end then cuts the pool anew."""
-    sid = new_session(client, training="continuous", comparisons_per_round=3)["id"]
-    run_worker_once(client)  # round 0 ready
-    worker = _worker(client)
-    post_judgement(client, sid, ["b0", "b1"], ["b2"])
-    assert worker.train_continuous()
-    training = worker.continuous._rounds[sid]
+    sid, worker, training = _trained_once(client, budget=3)
     second = post_judgement(client, sid, ["b3"], ["b4"])
     assert not worker.train_continuous()  # cut, and PPO waits
     assert training.staged is not None and training.run.agent.num_timesteps == ROLLOUT
@@ -151,12 +158,7 @@ def test_the_next_round_is_cut_as_many_comparisons_early_as_the_last_cut_took():
 
 
 def test_a_slow_cut_starts_before_the_last_comparison(client):
-    sid = new_session(client, training="continuous", comparisons_per_round=5)["id"]
-    run_worker_once(client)  # round 0 ready
-    worker = _worker(client)
-    post_judgement(client, sid, ["b0", "b1"], ["b2"])
-    assert worker.train_continuous()
-    training = worker.continuous._rounds[sid]
+    sid, worker, training = _trained_once(client, budget=5)
     now = time.monotonic()
     training.cut_s = 100.0  # the last cut took 100 s, and the person takes 50 s a comparison
     training.judged_at = [now - 100.0, now - 50.0]

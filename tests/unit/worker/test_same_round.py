@@ -117,29 +117,16 @@ def test_an_app_round_and_a_headless_round_are_the_same_round(client, tmp_path):
                 n_queries=offered_queries(settings),
             )
             # the same pool …
-            pool_dir = data / round_directory(sid, r)
-            published = load_fragments(pool_dir)
-            assert len(published) == len(offer.pool)
-            for ours, theirs in zip(offer.pool.fragments, published, strict=True):
-                assert np.array_equal(ours.obs, theirs.obs)
-                assert np.array_equal(ours.acts, theirs.acts)
+            _same_pool(load_fragments(data / round_directory(sid, r)), offer.pool)
             # … and the same queries, stored as the page's suggestions in their order
-            with context_of(client).db.read() as s:
-                round_id = s.scalar(
-                    select(RoundRow.id).where(RoundRow.session_id == sid, RoundRow.index == r)
-                )
-                stored = s.scalars(
-                    select(SuggestionRow)
-                    .where(SuggestionRow.round_id == round_id)
-                    .order_by(SuggestionRow.rank)
-                ).all()
+            context = context_of(client)
+            assert _suggestions(context, sid, r) == [(q.left, q.right) for q in offer.queries]
+            with context.db.read() as s:
                 assert not s.scalars(
-                    select(PairQueueRow).where(PairQueueRow.round_id == round_id)
+                    select(PairQueueRow)
+                    .join(RoundRow, RoundRow.id == PairQueueRow.round_id)
+                    .where(RoundRow.session_id == sid, RoundRow.index == r)
                 ).first()
-            assert [
-                (tuple(map(behaviour_index, q.left)), tuple(map(behaviour_index, q.right)))
-                for q in stored
-            ] == [(q.left, q.right) for q in offer.queries]
             assert offer.queries, "the group strategy proposed nothing"
 
             judgements, keys = _kept(r)
