@@ -2,7 +2,7 @@
 # Issue 39 through the app's own path with the default recipe (teach: the reward over the
 # observation, 5 % random actions): the stand-up continuous at the app's own round length
 # (the New-session default, 20 comparisons a round) against rounds mode at 20 and at the
-# paper's 44, the splits continuous and the backflip continuous at 20; two live sessions
+# paper's 44, the splits continuous and the backflip in both modes at 20; two live sessions
 # side by side on the 2 cores.
 # Usage, from the repository root: bash docs/results/continuous/app-budget/run.sh OUT
 # then: python -m benchmarks.app_teacher --summary OUT/*/cells.jsonl
@@ -22,4 +22,5 @@ export -f cell; export out
   for seed in 0 1 2; do echo "halfcheetah-standup rounds $seed"; done
   for seed in 1 2; do echo "walker-splits continuous $seed"; done
   for seed in 0 3; do echo "hopper-backflip continuous $seed 20"; done
+  for seed in 0 3; do echo "hopper-backflip rounds $seed 20"; done
 } | xargs -P 2 -L 1 bash -c 'cell "$@"' _
