@@ -69,6 +69,7 @@ def cut_next(
     budget: int,
     round_index: int,
     n_queries: int | None = None,
+    callback: RunCallback | None = None,
 ) -> NextRound:
     """Round `round_index`'s offer of `budget` comparisons (`n_queries` proposed, default
     `budget`), cut now from the run's latest rollouts (`pool.recent.fresh_sources`) while
@@ -85,6 +86,7 @@ def cut_next(
         streams=streams,
         round_index=round_index,
         sources=fresh_sources(run.cfg.loop),
+        callback=callback,
     )
     return NextRound(offer, streams)
 
@@ -112,13 +114,9 @@ def continuous_round(
     if pace is None:
         raise ValueError("continuous training needs a timed teacher (TeacherConfig.pace_s)")
     rollout = run.ppo.rollout_steps
-    if staged is not None and staged.offer.round == run.next_round:
-        offer, streams = staged
-    else:
-        streams = round_streams(cfg.loop.seed, run.next_round)
-        offer = begin_round(
-            run, feedback.queries, budget, streams=streams, sources=fresh_sources(cfg.loop)
-        )
+    if staged is None or staged.offer.round != run.next_round:  # round 0, or a restart
+        staged = cut_next(run, feedback.queries, budget, run.next_round)
+    offer, streams = staged
     clock = clock_before(run)
     continuous = ContinuousRound(run, offer, streams, clock, callback)
     timer = continuous.timer

@@ -6,7 +6,7 @@ with ``training: "continuous"`` one slice (`continuous_round.train_slice`: the j
 the reward refitted when due, one PPO rollout), the sessions taking turns. A session whose
 timer is paused trains no PPO until it is resumed, so "Pause" pauses the agent too.
 
-A round's next pool is cut during its last comparison when its budget ends it
+A round's next pool is cut a few comparisons before its budget ends it
 (`continuous_round.stage_due`), and PPO waits for that comparison. The round's end (the
 person, its budget or its timer) queues its training job and stops
 the slice in progress (`continuous_round.round_ended`); the job takes
@@ -61,7 +61,7 @@ class ContinuousSessions:
         """Whether this worker serves a session (`process.Worker.serves`)."""
         self.render = render
         """The worker's render pool of a number of workers, to cut a round's next pool
-        during its last comparison (`continuous_round.stage_due`); None: cut at its end."""
+        before its budget ends it (`continuous_round.stage_due`); None: cut at its end."""
         self._rounds: dict[str, ContinuousTraining] = {}
         self._turns: dict[str, int] = {}
         self._turn = 0
@@ -131,7 +131,7 @@ class ContinuousSessions:
             raise
 
     def _stager(self, job: Job) -> "tuple[Callable[[ContinuousTraining], CutRound] | None, int]":
-        """How `train_slice` cuts `job`'s next round during its last comparison, and the
+        """How `train_slice` cuts `job`'s next round before its budget ends it, and the
         round's budget (none for the session's last round, or without a render pool)."""
         settings, render = job.settings, self.render
         if render is None or job.round + 1 >= settings.rounds:

@@ -17,7 +17,7 @@ latest rollouts (`stage_due`, `jobs.cut_fresh`) and PPO then waits for the round
 (`holds`, at most `HOLD_S` seconds), so the pool is still the policy's when the round ends,
 and the round's training job opens it at once (`jobs.train`'s `staged`) instead of sampling
 while the person waits (issue 39: End round → next round ≤ 2 s). The next pool is chosen
-and its suggestions made without the last comparison's pairs; a round the person ends
+and its suggestions made without the last few comparisons' pairs; a round the person ends
 early, or its timer, is cut when it ends.
 
 The page sees the agent learn (`worker.curve`): each refit stores a point of the session's
@@ -65,13 +65,13 @@ STOP_POLL_S = 0.1
 """Least seconds between two reads, during a PPO rollout, of whether its round has ended
 (a read is about a millisecond; an ended round's rollout stops within this)."""
 HOLD_S = 60.0
+"""Most seconds PPO waits for a round's end once the next round is cut (`holds`): a
+person who stops short of the budget does not stop the agent for long."""
 CUT_MARGIN_S = 1.0
 """Seconds added to the last cut's length when choosing how early to cut (a slice's
 rollout in progress when the count rises, about a second on MuJoCo)."""
 PACE_WINDOW = 6
 """The person's pace is the median gap between the round's last this many judgements."""
-"""Most seconds PPO waits for a round's last comparison once the next round is cut
-(`holds`): a person who stops one short of the budget does not stop the agent for long."""
 PROGRESS_S = 1.0
 """Least seconds between two points that only say how many PPO steps ran (one a rollout
 on a slow env; a tiny env's rollouts would write dozens a second)."""
@@ -104,7 +104,7 @@ class ContinuousTraining:
     loss, logged every `ACCOUNT_S` seconds."""
     accounted: float = dataclasses.field(default_factory=time.monotonic)
     staged: "CutRound | None" = None
-    """The next round, cut during this round's last comparison (`stage_due`); PPO waits
+    """The next round, cut before this round's budget ends it (`stage_due`); PPO waits
     while it is held (`holds`), and the round's training job opens it at once."""
     staged_at: float = 0.0
     """`time.monotonic()` when `staged` was cut."""
@@ -158,9 +158,9 @@ def train_slice(
     budget: int = 0,
 ) -> bool:
     """Refit when due and train one rollout (module docstring); False when the round has
-    no pairs yet, or PPO waits for the round's last comparison. `evaluator` gives the
+    no pairs yet, or PPO waits for the round's end. `evaluator` gives the
     process that evaluates the curve's points; `stage` cuts the next round
-    (`jobs.cut_fresh`) once `budget` − 1 of the round's `budget` comparisons are in
+    (`jobs.cut_fresh`) once the round is within `comparisons_ahead` of its `budget`
     (`stage_due`; `budget` 0: the round has no budget, or it is the last)."""
     with training.timed("reads"), db.read() as s:
         keyed = round_judgements(s, training.session_id, training.round)

@@ -33,10 +33,10 @@ import numpy as np
 from groupwise.behaviour import kernel_threads
 from groupwise.clips.render import RenderPool
 from groupwise.pool.dataset import dataset_sources
-from groupwise.pool.recent import fresh_sources, pool_ages
+from groupwise.pool.recent import pool_ages
 from groupwise.preferences.judgement import Judgement
 from groupwise.rl.batch_envs import free_cores
-from groupwise.run.continuous import ContinuousRound
+from groupwise.run.continuous import ContinuousRound, cut_next
 from groupwise.run.progress import RunCallback, as_callback
 from groupwise.run.records import RoundRecord
 from groupwise.run.round import begin_round, end_round, finish_round
@@ -126,7 +126,7 @@ def train(
     cut from that run's rollouts and opens *before* the round is committed (`open_fresh`):
     the person compares again while the
     worker evaluates and checkpoints (a worker killed meanwhile commits it when it resumes:
-    `worker.resume`). `staged`: the next round as cut during the round's last comparison
+    `worker.resume`). `staged`: the next round as cut before the round's end
     (`worker.continuous_round`), opened at once while no PPO step has run since."""
     r = job.round
     opened = False
@@ -177,15 +177,14 @@ def cut_fresh(
     tick = time.perf_counter()
     # PPO waits for this: the distances take the free cores
     with kernel_threads(free_cores(FREE_PROBE_S)):
-        offer = begin_round(
+        offer = cut_next(
             run,
             session_strategy(run.cfg, job.mode),
             settings.comparisons_per_round,
+            r + 1,
             n_queries=offered_queries(settings),
-            round_index=r + 1,
-            sources=fresh_sources(run.cfg.loop),
             callback=progress,
-        )
+        ).offer
     cut_s = time.perf_counter() - tick
     now = run.agent.num_timesteps
     ages = pool_ages(offer.pool, continuous.recorder, now)
@@ -235,7 +234,7 @@ def open_cut(
     pool's ages (PPO steps from the policy that played each behaviour to the policy now)
     and the wait since the round ended, and writes where that wait went (`clock`, started
     with the job) to the round's ``opening.json`` (`OpeningClock`); `staged`: the pool was
-    cut during the round's last comparison (`worker.continuous_round`), its parts no part
+    cut before the round ended (`worker.continuous_round`), its parts no part
     of the wait."""
     run, r = continuous.run, job.round
     oldest = cut.steps - int(cut.ages.max(initial=0))
@@ -263,7 +262,7 @@ def open_cut(
             waited,
             r,
             len(ages),
-            " cut during its last comparison" if staged else "",
+            " cut before the round ended" if staged else "",
             f"{int(ages.min()) if len(ages) else 0:,}–{int(ages.max(initial=0)):,}",
             f"{int(np.median(ages)) if len(ages) else 0:,}",
         )
