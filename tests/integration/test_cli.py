@@ -1,5 +1,6 @@
 """The `groupwise` command line: errors are one line and exit code 2; a real run works."""
 
+import argparse
 import json
 import os
 import subprocess
@@ -7,7 +8,7 @@ import sys
 
 import pytest
 
-from groupwise.cli import main
+from groupwise.cli import build_parser, main
 from groupwise.config import RunConfig
 
 
@@ -108,3 +109,16 @@ def test_train_takes_research_settings_from_a_partial_config(tmp_path, capsys):
                  "--out", str(tmp_path / "bad"), *args]) == 2  # fmt: skip
     err = capsys.readouterr().err.strip()
     assert "reward.ensemble_size" in err and len(err.splitlines()) == 1
+
+
+def test_every_command_prints_its_help(capsys):
+    # argparse %-formats help texts: a recipe's "5 % random actions" broke `train --help`
+    # and `case-study --help` with a traceback
+    parser = build_parser()
+    commands = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices
+    assert len(commands) > 5
+    for command in commands:
+        with pytest.raises(SystemExit) as exit_:
+            main([command, "--help"])
+        assert exit_.value.code == 0, command
+        assert f"usage: groupwise {command}" in capsys.readouterr().out

@@ -173,7 +173,7 @@ def add_recipe_arguments(parser: argparse.ArgumentParser) -> None:
         "--recipe",
         choices=sorted(RECIPES),
         help="how to teach (recipes.RECIPES): "
-        + "; ".join(f"{r.name}: {r.description}" for r in RECIPES.values())
+        + "; ".join(f"{r.name}: {r.description}" for r in RECIPES.values()).replace("%", "%%")
         + f" (default {DEFAULT_RECIPE}); --pretrain-steps, --pool-variants, --ppo and "
         "--config change its parts",
     )
