@@ -280,10 +280,6 @@ class TrainingConfig:
     """Continuous training refits the reward model once this many new pairs arrived ..."""
     refit_s: Annotated[float, Field(gt=0)] = 60.0
     """... or this many seconds after the last fit, whichever comes first (with new pairs)."""
-    ppo_from_round: Annotated[int, Field(ge=0)] = 0
-    """Continuous training: the first round during which PPO trains (0: from round 0's
-    first pairs; 1: once round 0's feedback is all in, as PEBBLE's agent waits for its
-    first feedback session). The reward model refits from the first pairs either way."""
     pretrain_steps: Annotated[int, Field(ge=0)] = 0
     """PPO steps of unsupervised pre-training before round 0, paid a state-entropy bonus
     instead of the learned reward (`groupwise.run.pretrain`, PEBBLE), so that the first

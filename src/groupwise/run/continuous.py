@@ -128,7 +128,7 @@ def continuous_round(
             # the round's end is in sight: its next pool is cut now, and PPO waits for the
             # last answer, so that the pool is the policy's when the round opens
             following_round = cut_next(run, feedback.queries, following, offer.round + 1)
-        elif offer.round >= cfg.training.ppo_from_round:
+        else:
             credit += pace * cfg.training.ppo_steps_per_s
             rollouts = int(credit // rollout)
             if rollouts:

@@ -199,10 +199,6 @@ def train_slice(
         if time.monotonic() - training.staged_at >= HOLD_S:
             training.declined = judged
         training.staged = None  # PPO trains on; the round's end cuts the pool anew
-    if training.round < run.cfg.training.ppo_from_round:  # PPO starts in a later round
-        if refitted:
-            _point(training, db, evaluator, refit=True, evaluate=False)
-        return False
     if refitted or training.evaluated_s is None:
         _point(training, db, evaluator, refit=refitted, evaluate=training.evaluated_s is None)
     tick = time.perf_counter()
