@@ -15,7 +15,7 @@ learning-curve points). It measures PPO's single-core throughput the same way as
 `ppo_throughput` (CPU time, learned reward) and prints a Markdown table.
 
     python -m benchmarks.continuous [--env Hopper] [--rounds 10] [--minutes 1.5] [--pace 5]
-                                    [--budget N]
+                                    [--budget N | --round-seconds S]
                                     [--recipe teach] [--pretrain-steps 0] [--frame-size 240]
                                     [--research JSON] [--stage-after 60] [--log FILE]
 
@@ -146,6 +146,14 @@ def main(argv: Sequence[str] | None = None) -> None:
         help="comparisons a round: the person's last one ends it at its budget, and the "
         "worker cuts the next pool during it (default 0: End round after --minutes)",
     )
+    parser.add_argument(
+        "--round-seconds",
+        type=float,
+        default=0.0,
+        help="the round's timer: the page shows each round as it opens, the person answers "
+        "until the timer ends the round, and the worker cuts the next pool that many seconds "
+        "before (default 0: End round after --minutes)",
+    )
     parser.add_argument("--log", type=Path, help="write the server's and worker's log here")
     args = parser.parse_args([] if argv is None else list(argv))
     rng = np.random.default_rng(0)
@@ -165,6 +173,7 @@ def main(argv: Sequence[str] | None = None) -> None:
                     **SETTINGS,
                     "rounds": args.rounds + 1,
                     "comparisons_per_round": args.budget,
+                    "round_seconds": args.round_seconds,
                     "recipe": args.recipe,
                     "pretrain_steps": args.pretrain_steps,
                     "frame_size": args.frame_size,
@@ -188,6 +197,9 @@ def main(argv: Sequence[str] | None = None) -> None:
                 watcher.start()
                 for round_index in range(args.rounds):
                     end = time.monotonic() + 60 * args.minutes
+                    if args.round_seconds:  # a page shows the round: its timer starts
+                        http.post(f"/api/sessions/{session}/rounds/{round_index}/shown")
+                        end = time.monotonic() + args.round_seconds - args.pace
                     given = 0
                     while time.monotonic() < end if not args.budget else given < args.budget:
                         a, b, c = (f"b{i}" for i in rng.choice(pool, size=3, replace=False))
@@ -210,7 +222,11 @@ def main(argv: Sequence[str] | None = None) -> None:
                         given += 1
                         if not args.budget:
                             time.sleep(args.pace)
-                    if not args.budget:
+                    if args.round_seconds:  # the timer ends the round
+                        time.sleep(max(0.0, end + args.pace - time.monotonic()))
+                        tick = time.perf_counter()
+                        ended.append(time.time())
+                    elif not args.budget:
                         tick = time.perf_counter()
                         ended.append(time.time())
                         http.post(f"/api/sessions/{session}/end-round").raise_for_status()
@@ -247,6 +263,9 @@ def main(argv: Sequence[str] | None = None) -> None:
             f"{args.budget} a round (its budget ends it), next pool cut from the latest "
             "rollouts during the last"
             if args.budget
+            else f"for {args.round_seconds:g} s a round (its timer ends it), next pool cut "
+            "from the latest rollouts before"
+            if args.round_seconds
             else f"for {args.minutes:g} min a round, next pool cut from the latest rollouts "
             "at its end"
         )

@@ -86,6 +86,16 @@ def shown_at(s: DbSession, session: SessionRow) -> datetime | None:
     ).one_or_none()
 
 
+def remaining(session: SessionRow, now: datetime | None = None) -> float | None:
+    """Seconds left of the open round's time budget while its timer runs; None when the
+    round has no budget or its timer is not running (paused, or no page showed it yet):
+    then it ends by no clock."""
+    budget = float(session.settings.get("round_seconds", 0))
+    if session.phase != READY or budget <= 0 or session.timer_started_at is None:
+        return None
+    return budget - elapsed(session, now)
+
+
 def round_due(session: SessionRow, now: datetime | None = None) -> bool:
     """Whether the open round's time budget is used up (never with a budget of 0)."""
     if session.phase != READY:

@@ -6,10 +6,10 @@ with ``training: "continuous"`` one slice (`continuous_round.train_slice`: the j
 the reward refitted when due, one PPO rollout), the sessions taking turns. A session whose
 timer is paused trains no PPO until it is resumed, so "Pause" pauses the agent too.
 
-A round's next pool is cut a few comparisons before its budget ends it
-(`continuous_round.stage_due`), and PPO waits for that comparison. The round's end (the
-person, its budget or its timer) queues its training job and stops
-the slice in progress (`continuous_round.round_ended`); the job takes
+A round's next pool is cut a few comparisons before its budget ends it, or a few seconds
+before its timer does (`continuous_round.stage_due`), and PPO waits for that end. The
+round's end (the person, its budget or its timer) queues its training job and stops the
+slice in progress (`continuous_round.round_ended`); the job takes
 the round's run from here (`take`): the next round's pool is cut from that run's latest
 rollouts and opened, then the round is committed (`jobs.train`, `jobs.open_fresh`), and the
 same run trains on into the next round (`keep`), its recorded rollouts kept. A round this
@@ -131,8 +131,9 @@ class ContinuousSessions:
             raise
 
     def _stager(self, job: Job) -> "tuple[Callable[[ContinuousTraining], CutRound] | None, int]":
-        """How `train_slice` cuts `job`'s next round before its budget ends it, and the
-        round's budget (none for the session's last round, or without a render pool)."""
+        """How `train_slice` cuts `job`'s next round before its budget or its timer ends it,
+        and the round's budget (none for the session's last round, or without a render
+        pool)."""
         settings, render = job.settings, self.render
         if render is None or job.round + 1 >= settings.rounds:
             return None, 0

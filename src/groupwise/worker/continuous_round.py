@@ -10,15 +10,16 @@ rollout in progress when the round ends stops there, untrained (`round_ended`, r
 `STOP_POLL_S` seconds): the round's training job, which opens the next round while the
 person waits, then waits for no more PPO (issue 39; it waited 1.3 s on Hopper).
 
-A round that ends at its comparison budget is seen coming: a few comparisons before it
-(one, or as many as the person gives, at their pace, while a cut as long as the last one
-runs: `comparisons_ahead`), a slice cuts and publishes the next round's pool from the
+A round that ends at its comparison budget, or by its timer, is seen coming: a few
+comparisons before its budget (one, or as many as the person gives, at their pace, while a
+cut as long as the last one runs: `comparisons_ahead`), or as many seconds before its timer
+runs out as that cut takes, a slice cuts and publishes the next round's pool from the
 latest rollouts (`stage_due`, `jobs.cut_fresh`) and PPO then waits for the round's end
 (`holds`, at most `HOLD_S` seconds), so the pool is still the policy's when the round ends,
 and the round's training job opens it at once (`jobs.train`'s `staged`) instead of sampling
 while the person waits (issue 39: End round → next round ≤ 2 s). The next pool is chosen
 and its suggestions made without the last few comparisons' pairs; a round the person ends
-early, or its timer, is cut when it ends.
+early ("End round") is cut when it ends.
 
 The page sees the agent learn (`worker.curve`): each refit stores a point of the session's
 learning curve (PPO steps, pairs, validation accuracy), and so does each evaluation of the
@@ -49,6 +50,7 @@ from groupwise.storage import Database
 from groupwise.storage.judgements import round_judgements
 from groupwise.storage.phases import READY
 from groupwise.storage.sessions import get_session
+from groupwise.storage.timer import remaining
 from groupwise.storage.training import add_point
 from groupwise.worker import curve
 
@@ -161,9 +163,11 @@ def train_slice(
     no pairs yet, or PPO waits for the round's end. `evaluator` gives the
     process that evaluates the curve's points; `stage` cuts the next round
     (`jobs.cut_fresh`) once the round is within `comparisons_ahead` of its `budget`
-    (`stage_due`; `budget` 0: the round has no budget, or it is the last)."""
+    (0: none), or within a cut's length of its timer's end (`stage_due`; `stage` None:
+    the round is the session's last)."""
     with training.timed("reads"), db.read() as s:
         keyed = round_judgements(s, training.session_id, training.round)
+        left_s = remaining(get_session(s, training.session_id))
     with training.timed("refits"):
         refitted = training.continuous.update(keyed, time.monotonic())
     run = training.run
@@ -179,19 +183,21 @@ def train_slice(
     if cut_s is None and math.isfinite(training.continuous.offer.sample_s):
         cut_s = training.continuous.offer.sample_s
     ahead = comparisons_ahead(cut_s, training.judged_at)
-    if stage is not None and stage_due(training, judged, budget, ahead):
+    lead_s = (cut_s or 0.0) + CUT_MARGIN_S
+    if stage is not None and stage_due(training, judged, budget, ahead, left_s, lead_s):
         tick = time.perf_counter()
         with training.timed("staging"):
             training.staged = stage(training)
         training.cut_s = time.perf_counter() - tick
         training.staged_at, training.staged_from = time.monotonic(), judged
         log.info(
-            "session %s: round %d cut in %.1f s, %d comparison(s) before round %d's budget",
+            "session %s: round %d cut in %.1f s, %s",
             training.session_id,
             training.round + 1,
             training.cut_s,
-            budget - judged,
-            training.round,
+            f"{left_s:.1f} s before round {training.round}'s timer ends"
+            if left_s is not None and left_s <= lead_s
+            else f"{budget - judged} comparison(s) before round {training.round}'s budget",
         )
     if training.staged is not None:
         if holds(training, judged):
@@ -235,18 +241,24 @@ def comparisons_ahead(cut_s: float | None, judged_at: Sequence[float]) -> int:
     return max(1, math.ceil((cut_s + CUT_MARGIN_S) / pace))
 
 
-def stage_due(training: ContinuousTraining, judged: int, budget: int, ahead: int = 1) -> bool:
-    """Whether to cut the next round now: `judged` is within `ahead` comparisons of the
-    round's `budget` (its end in sight: `comparisons_ahead`), nothing is staged, and no
-    stage ran out at this count (`declined`)."""
+def stage_due(
+    training: ContinuousTraining,
+    judged: int,
+    budget: int,
+    ahead: int = 1,
+    left_s: float | None = None,
+    lead_s: float = 0.0,
+) -> bool:
+    """Whether to cut the next round now: its end is in sight, `judged` within `ahead`
+    comparisons of the round's `budget` (0: none; `comparisons_ahead`) or its timer's
+    `left_s` seconds (None: not running) within `lead_s`, the seconds a cut takes; nothing
+    is staged, and no stage ran out at this count (`declined`)."""
     if training.declined is not None and judged != training.declined:
         training.declined = None
-    return (
-        budget > 0
-        and budget - ahead <= judged < budget
-        and training.staged is None
-        and training.declined is None
+    ending = (budget > 0 and budget - ahead <= judged < budget) or (
+        left_s is not None and left_s <= lead_s
     )
+    return ending and training.staged is None and training.declined is None
 
 
 def holds(training: ContinuousTraining, judged: int) -> bool:

@@ -4,10 +4,13 @@ ends on the run that trained, and a restarted worker resumes from the mid-round 
 
 import json
 import time
+from datetime import timedelta
 
 import pytest
 from tests.unit.server.conftest import context_of, new_session, post_judgement, run_worker_once
 
+from groupwise.storage.lifecycle import close_if_due
+from groupwise.storage.models import utcnow
 from groupwise.storage.sessions import round_directory
 from groupwise.worker import continuous_round
 from groupwise.worker.continuous_round import ContinuousTraining
@@ -168,4 +171,30 @@ def test_a_slow_cut_starts_before_the_last_comparison(client):
     post_judgement(client, sid, ["b5"], ["b6"])
     assert not worker.train_continuous()  # PPO waits out the rest of the round
     assert training.run.agent.num_timesteps == ROLLOUT
+    worker.continuous.close()
+
+
+def test_a_round_its_timer_ends_is_cut_as_many_seconds_early_as_a_cut_takes(client):
+    """Issue 39: a round with no comparison budget but a timer: a cut longer than the time
+    left starts at once, PPO waits, and the timer's end opens the cut pool."""
+    sid = new_session(client, training="continuous", comparisons_per_round=0, round_seconds=900)
+    sid = sid["id"]
+    run_worker_once(client)  # round 0 ready
+    assert client.post(f"/api/sessions/{sid}/rounds/0/shown").status_code == 200  # timer runs
+    worker = _worker(client)
+    post_judgement(client, sid, ["b0", "b1"], ["b2"])
+    assert worker.train_continuous()  # 900 s left, a cut of about a second: PPO trains
+    training = worker.continuous._rounds[sid]
+    assert training.staged is None and training.run.agent.num_timesteps == ROLLOUT
+    training.cut_s = 1000.0  # the last cut took longer than the 900 s left
+    assert not worker.train_continuous()  # cut now, and PPO waits for the timer
+    assert training.staged is not None and training.run.agent.num_timesteps == ROLLOUT
+    with context_of(client).db.write() as s:  # the timer runs out
+        assert close_if_due(s, sid, utcnow() + timedelta(seconds=1000))
+    assert worker.run_next()  # the round's job opens the cut pool
+    assert client.get(f"/api/sessions/{sid}").json()["phase"] == "ready"
+    opening = json.loads(
+        (context_of(client).data_dir / round_directory(sid, 1) / OPENING_FILE).read_text()
+    )
+    assert "staged_s" in opening and "sample" not in opening["parts_s"]
     worker.continuous.close()
