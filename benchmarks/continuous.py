@@ -3,7 +3,8 @@
 Starts a real server (`groupwise serve`: uvicorn, SQLite, the training worker process) with
 one session of `--env` whose settings say ``training: "continuous"``, and plays a person:
 one comparison every `--pace` seconds for `--minutes` minutes a round, then "End round",
-for `--rounds` rounds. Meanwhile it reads the worker's mid-round checkpoint
+for `--rounds` rounds (or: `--budget` comparisons end a round, or `--round-seconds` of its
+timer do). Meanwhile it reads the worker's mid-round checkpoint
 (``checkpoints/live/state.json``: PPO steps, written every 30 s) to measure PPO steps per
 minute of session time, and times each judgement's answer and each wait from "End round"
 until the next round is open (the person's wait: the worker cuts the next pool from PPO's
@@ -39,6 +40,9 @@ before, **7.6 / 9.2 s** once the slice in progress stops at End round and the po
 are sampled side by side; 5.9 s of it sampling (docs/results/continuous/README.md). With
 `--budget 9` (the round's budget ends it, 9 comparisons at 5 s; load 1.0) the worker cuts
 the next pool 2-3 comparisons before the end and PPO waits: **0.21 / 4.0 s**, PPO at 0.62×.
+With `--round-seconds 45` (the round's timer ends it; the page shows each round as it
+opens) the worker cuts a cut's length before the timer's end: **0.27 / 2.1 s** (max 3.0, a
+cut 2.7 s longer than the one before), PPO at 0.58× (load 1.1).
 
 The worker logs where its time goes every minute (`worker.continuous`, "the last 61 s: PPO 59.6 s
 (98%), refits 1.1 s (2%), ..."); before the evaluations moved out they took 9–10 % of it.
@@ -317,10 +321,10 @@ def _print_waits(waits: list[float], openings: list[dict | None]) -> None:
         for part, meaning in PARTS.items():
             values = [o["parts_s"].get(part, 0.0) for o in found]
             rows.append((f"· {part}: {meaning}", values))
-        for part in ("sample", "cut", "publish"):  # a pool cut during the last comparison
+        for part in ("sample", "cut", "publish"):  # a pool cut before the round's end
             staged = [o["staged_s"][part] for o in found if "staged_s" in o]
             if staged:
-                rows.append((f"cut during the last comparison, not waited for: {part}", staged))
+                rows.append((f"cut before the round's end, not waited for: {part}", staged))
         rows.append(("the job's CPU time (worker process)", [o["job_cpu_s"] for o in found]))
     for name, values in rows:
         p50, p95 = np.percentile(values, [50, 95])

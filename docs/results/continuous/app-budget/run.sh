@@ -3,7 +3,9 @@
 # observation, 5 % random actions): the stand-up continuous at the app's own round length
 # (the New-session default, 20 comparisons a round) against rounds mode at 20 and at the
 # paper's 44, the splits continuous and the backflip in both modes at 20; two live sessions
-# side by side on the 2 cores.
+# side by side on the 2 cores. (The experiment of commit 8aace11, PPO from round 1: the two
+# stand-up cells of ppo-from-round-1.jsonl, run at that commit with
+# --research '{"training": {"ppo_from_round": 1}}'.)
 # Usage, from the repository root: bash docs/results/continuous/app-budget/run.sh OUT
 # then: python -m benchmarks.app_teacher --summary OUT/*/cells.jsonl
 set -euo pipefail
@@ -18,9 +20,9 @@ cell() {  # TARGET TRAINING SEED [COMPARISONS]
 export -f cell; export out
 {
   for seed in 0 1 2 3 4; do echo "halfcheetah-standup continuous $seed 20"; done
-  for seed in 0 1 2; do echo "halfcheetah-standup rounds $seed 20"; done
+  for seed in 0 1 2 3 4; do echo "halfcheetah-standup rounds $seed 20"; done
   for seed in 0 1 2; do echo "halfcheetah-standup rounds $seed"; done
   for seed in 1 2; do echo "walker-splits continuous $seed"; done
-  for seed in 0 3; do echo "hopper-backflip continuous $seed 20"; done
-  for seed in 0 3; do echo "hopper-backflip rounds $seed 20"; done
+  for seed in 0 1 2 3 4; do echo "hopper-backflip continuous $seed 20"; done
+  for seed in 0 1 2 3 4; do echo "hopper-backflip rounds $seed 20"; done
 } | xargs -P 2 -L 1 bash -c 'cell "$@"' _
