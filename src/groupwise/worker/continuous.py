@@ -39,9 +39,6 @@ if TYPE_CHECKING:
 log = logging.getLogger(__name__)
 
 CONTINUOUS = "continuous"
-SLOW_SLICE_S = 1.5
-"""A slice longer than this is logged: another session's job waits for the slice in progress
-(its own round's end stops it, `continuous_round.round_ended`)."""
 
 
 class ContinuousSessions:
@@ -82,11 +79,10 @@ class ContinuousSessions:
         for job in sorted(jobs, key=lambda j: self._turns.get(j.session_id, -1)):
             self._turn += 1
             self._turns[job.session_id] = self._turn
-            tick = time.perf_counter()
             try:
-                trained = train_slice(
-                    self._training(job), self.db, self.evaluator, *self._stager(job)
-                )
+                training = self._training(job)
+                tick = time.perf_counter()
+                trained = train_slice(training, self.db, self.evaluator, *self._stager(job))
             except Exception:
                 log.exception(
                     "session %s: continuous training of round %d failed",
@@ -94,11 +90,10 @@ class ContinuousSessions:
                     job.round,
                 )
                 self._broken[job.session_id] = job.round
-                if (training := self._rounds.pop(job.session_id, None)) is not None:
-                    training.run.close()
+                if (broken := self._rounds.pop(job.session_id, None)) is not None:
+                    broken.run.close()
                 return True
-            if (took := time.perf_counter() - tick) > SLOW_SLICE_S:
-                log.info("session %s: a slice took %.1f s", job.session_id, took)
+            training.longest_slice_s = max(training.longest_slice_s, time.perf_counter() - tick)
             if trained:
                 return True
         return False

@@ -28,7 +28,8 @@ last one has finished and the slices have trained long enough (`curve.EVAL_MIN_S
 `curve.EVAL_COST`); between them a point at most every `PROGRESS_S` seconds says how far PPO
 is (issue 39: the page's step counter moved only on a refit or an evaluation). Every
 `ACCOUNT_S` seconds a log line says where the worker's time went (PPO, refits, reads,
-checkpoints, ...).
+checkpoints, ...) and how long its longest slice took (a slice each rollout was logged
+before: three quarters of a session's log lines).
 """
 
 import dataclasses
@@ -121,6 +122,9 @@ class ContinuousTraining:
     person's pace."""
     counted: int = 0
     """The round's judgement count at the last slice."""
+    longest_slice_s: float = 0.0
+    """The longest slice since `accounted`: how long another session's job may have waited
+    for one (its own round's end stops a slice, `round_ended`)."""
     declined: int | None = None
     """The round's judgement count at which a held stage ran out (`HOLD_S`): not staged
     again at that count."""
@@ -146,8 +150,14 @@ class ContinuousTraining:
             for name, seconds in sorted(self.spent.items(), key=lambda item: -item[1])
         )
         log.info(
-            "session %s round %d, the last %.0f s: %s", self.session_id, self.round, wall, parts
+            "session %s round %d, the last %.0f s: %s; the longest slice %.1f s",
+            self.session_id,
+            self.round,
+            wall,
+            parts,
+            self.longest_slice_s,
         )
+        self.longest_slice_s = 0.0
         self.spent.clear()
         self.accounted = time.monotonic()
 

@@ -198,3 +198,16 @@ def test_a_round_its_timer_ends_is_cut_as_many_seconds_early_as_a_cut_takes(clie
     )
     assert "staged_s" in opening and "sample" not in opening["parts_s"]
     worker.continuous.close()
+
+
+def test_the_minutes_log_line_says_where_the_time_went_and_the_longest_slice(client, caplog):
+    sid, worker, training = _trained_once(client, budget=0)
+    assert 0 < training.longest_slice_s < 60
+    training.longest_slice_s = 99.0  # as if a slice had taken 99 s
+    training.accounted -= continuous_round.ACCOUNT_S  # a minute has passed
+    with caplog.at_level("INFO", logger="groupwise.worker.continuous_round"):
+        assert worker.train_continuous()
+    [line] = [r.getMessage() for r in caplog.records if "the longest slice" in r.getMessage()]
+    assert f"session {sid} round 0" in line and "PPO" in line and "slice 99.0 s" in line
+    assert training.longest_slice_s < 60  # counted anew for the next line: this slice
+    worker.continuous.close()
