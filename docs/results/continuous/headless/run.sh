@@ -35,8 +35,12 @@ pace = paper_pace(\"$target\", pairwise=False)
 comparisons = round(1200 / pace)
 rounds = 2 * max(1, round(comparisons / 40))
 print(pace, comparisons, rounds)")
+  # rate.json, and rounds of equal size (round 0 too, as in the app)
+  python -c "import json, sys; c = json.load(open(sys.argv[1]))
+c[\"loop\"] = {\"initial_fraction\": 1 / $rounds}; json.dump(c, open(sys.argv[2], \"w\"))" \
+    '"$here"'/rate.json "$dir/research.json"
   groupwise case-study --target "$target" --training "$mode" --preferences "$comparisons" \
     --rounds "$rounds" --steps 20000 --pool-size 100 --teacher-error 0.12 \
     --teacher-pace "$pace" --eval-episodes 5 \
-    --no-video --seed "$seed" --config '"$here"'/rate.json --out "$dir" -q > "$dir.log" 2>&1 \
+    --no-video --seed "$seed" --config "$dir/research.json" --out "$dir" -q > "$dir.log" 2>&1 \
     && echo "done $dir" || echo "FAILED $dir"'

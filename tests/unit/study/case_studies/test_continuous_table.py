@@ -12,6 +12,7 @@ from groupwise.study.case_studies.continuous_table import (
     main,
     minutes_to_pass,
     read_run,
+    success_at,
     variants,
 )
 
@@ -113,3 +114,24 @@ def test_a_variant_is_what_a_run_changes_and_neither_its_seed_nor_its_mode(tmp_p
         read_run(_run(tmp_path, "g", "continuous", ["60"], [0.0], {"gamma": 0.9})),
     ]
     assert variants(runs) == ["as most", "as most", "ppo.gamma=0.9"]
+
+
+def test_success_at_a_mark_is_the_last_round_ended_by_it():
+    minutes, success = [3.3, 6.7, 10.1, 13.4], [1.0, 0.2, 0.8, 0.0]
+    assert success_at(minutes, success, 10) == 0.8  # 10.1 min: within the grace
+    assert success_at(minutes, success, 7) == 0.2
+    assert success_at(minutes, success, 3) is None  # no round had ended
+
+
+def test_the_marks_table_counts_runs_passing_at_and_passed_by_each_mark(tmp_path, capsys):
+    runs = [
+        _run(tmp_path, "a", "continuous", ["300", "606", "1200"], [1.0, 0.2, 0.8], seed=0),
+        _run(tmp_path, "b", "continuous", ["300", "606", "1200"], [0.0, 0.6, 0.4], seed=1),
+        _run(tmp_path, "r", "rounds", ["400", "800", "1300"], [0.0, 1.0, 1.0]),
+    ]
+    assert main([*map(str, runs), "--marks", "10", "20"]) == 0
+    out = capsys.readouterr().out
+    assert "| passing at 10 min | passed by 10 min | passing at 20 min | passed by 20 min |" in out
+    assert "| hopper-backflip | continuous | as most | 2 | 1/2 | 2/2 | 1/2 | 2/2 |" in out
+    # rounds: the round ending at 13.3 min is after 10; the one at 21.7 after 20
+    assert "| hopper-backflip | rounds | as most | 1 | 0/1 | 0/1 | 1/1 | 1/1 |" in out
