@@ -4,7 +4,7 @@
 # (the New-session default, 20 comparisons a round) against rounds mode at 20 and at the
 # paper's 44, the splits continuous and the backflip in both modes at 20; two live sessions
 # side by side on the 2 cores. (The experiment of commit 8aace11, PPO from round 1: the two
-# stand-up cells of ppo-from-round-1.jsonl, run at that commit with
+# stand-up cells in cells.jsonl with research ppo_from_round, run at that commit with
 # --research '{"training": {"ppo_from_round": 1}}'.)
 # Usage, from the repository root: bash docs/results/continuous/app-budget/run.sh OUT
 # then: python -m benchmarks.app_teacher --summary OUT/*/cells.jsonl

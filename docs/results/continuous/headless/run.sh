@@ -13,8 +13,8 @@
 # Usage, from the repository root: bash docs/results/continuous/headless/run.sh OUT [PARALLEL]
 # (CELLS="halfcheetah-standup:continuous:0 ..." runs only those; a finished cell is kept)
 # then: python -m groupwise.study.case_studies.continuous_table OUT/*/ --marks 10 20
-# The finished cells are in cells/ (each run's small files: its checkpoints, tb/ and
-# agent.zip left out); run more into OUT and copy theirs alike to extend the table.
+# rounds.csv holds every finished run's rounds (score, success, pool, ties); the run
+# folders themselves are artifacts, not kept.
 set -euo pipefail
 out=${1:?usage: run.sh OUT [PARALLEL]}; parallel=${2:-2}
 here=$(cd "$(dirname "$0")" && pwd)
