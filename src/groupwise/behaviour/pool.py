@@ -11,7 +11,7 @@ from groupwise.behaviour.features import pool_features
 from groupwise.behaviour.tree import BehaviourTree, build_tree
 from groupwise.config import TreeConfig
 from groupwise.episodes.fragments import Fragment, Trajectory
-from groupwise.types import FloatArray, ProgressFn
+from groupwise.types import FloatArray, IntArray, ProgressFn
 
 
 @dataclass(frozen=True)
@@ -32,6 +32,10 @@ class BehaviourPool:
     predicted_returns: FloatArray  # (N, K)
     step_variance: FloatArray | None = None  # (N,)
     episodes: tuple[Trajectory, ...] = field(default=(), repr=False)
+    sources: IntArray | None = field(default=None, repr=False)
+    """(N,) which source played each behaviour (its episode's `Trajectory.source`: 0 the
+    round's policy, then the other sources' tags); taken from `episodes` when not given,
+    None when neither is known."""
     _trees: dict[TreeConfig, BehaviourTree] = field(
         default_factory=dict, init=False, repr=False, compare=False
     )
@@ -40,6 +44,13 @@ class BehaviourPool:
     )
 
     def __post_init__(self) -> None:
+        if self.sources is None and self.episodes:
+            tags = {episode.episode: episode.source for episode in self.episodes}
+            sources = np.array([tags.get(f.episode, -1) for f in self.fragments], np.int64)
+            object.__setattr__(self, "sources", sources)
+        if self.sources is not None and np.shape(self.sources) != (len(self.fragments),):
+            shape = np.shape(self.sources)
+            raise ValueError(f"{shape} sources for {len(self.fragments)} fragments")
         if self.predicted_returns.shape[0] != len(self.fragments):
             raise ValueError(
                 f"{self.predicted_returns.shape[0]} predicted returns for "

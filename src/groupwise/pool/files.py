@@ -104,6 +104,7 @@ def write_pool(
         episode=np.array([f.episode for f in fragments]),
         start=np.array([f.start for f in fragments]),
         reset_seed=np.array([f.reset_seed for f in fragments]),
+        **({} if sampled.sources is None else {"source": sampled.sources}),  # type: ignore[arg-type]
     )
     predictions = {"predicted_returns": sampled.predicted_returns}
     if sampled.step_variance is not None:
@@ -182,7 +183,9 @@ def load_pool(directory: Path, round_index: int) -> BehaviourPool:
         with np.load(directory / "predictions.npz") as data:
             predicted = data["predicted_returns"]
             step_variance = data["step_variance"] if "step_variance" in data else None
-    return BehaviourPool(round_index, fragments, predicted, step_variance)
+    with np.load(directory / "behaviours.npz") as data:
+        sources = data["source"] if "source" in data else None
+    return BehaviourPool(round_index, fragments, predicted, step_variance, sources=sources)
 
 
 def _relative(path: Path, base: Path) -> str:

@@ -13,7 +13,7 @@ The pool variants of a fresh pool (`FreshVariants`) are stepped side by side, on
 call per step for all of them, since the person waits for them at End round.
 """
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -30,7 +30,7 @@ from groupwise.pool.sources import (
     sample_policy,
     shifted_progress,
 )
-from groupwise.rl.policy import BiasedPolicy
+from groupwise.rl.policy import BiasedPolicy, Policy
 from groupwise.rl.recording import RolloutRecorder, recorder_of_agent
 from groupwise.types import FloatArray, IntArray, ProgressFn
 
@@ -133,10 +133,31 @@ class VariantRows:
         return pushed
 
 
-def fresh_sources(loop: LoopConfig) -> tuple[PoolSource, ...]:
+@dataclass(frozen=True)
+class KeptShare(FixedSource):
+    """A share of a fresh pool from an older policy, the one the person's answers prefer so
+    far (`run.kept_policy`), beside what PPO does now: the person sees whether PPO is still
+    doing what they asked for (issue 39's tie trap)."""
+
+    share: float
+    policy: Policy
+    exploration: float = 0.0
+    tags: int = 1
+
+    def sample(
+        self,
+        ctx: SourceContext,
+        windows: int,
+        rng: np.random.Generator,
+        progress: ProgressFn | None = None,
+    ) -> list[Trajectory]:
+        return sample_policy(ctx, self.policy, windows, rng, self.exploration, progress)
+
+
+def fresh_sources(loop: LoopConfig, kept: KeptShare | None = None) -> tuple[PoolSource, ...]:
     """`pool_sources(loop)` with the policy's place taken by its latest rollouts: the
     variants, when `loop` asks for them, still give their share, stepped side by side
-    (`FreshVariants`)."""
+    (`FreshVariants`); then `kept`'s share, when given (its tag is `kept_tag(loop)`)."""
     _policy, *others = pool_sources(loop)
     fresh = [
         FreshVariants(o.count, o.share, o.scale, o.exploration)
@@ -144,13 +165,28 @@ def fresh_sources(loop: LoopConfig) -> tuple[PoolSource, ...]:
         else o
         for o in others
     ]
-    return (RecentRollouts(loop.exploration_fraction), *fresh)
+    sources = (RecentRollouts(loop.exploration_fraction), *fresh)
+    return sources if kept is None else (*sources, kept)
 
 
-def pool_ages(pool: BehaviourPool, recorder: RolloutRecorder | None, now: int) -> IntArray:
+def kept_tag(loop: LoopConfig) -> int:
+    """The `Trajectory.source` tag of a fresh pool's `KeptShare` episodes."""
+    return sum(source.tags for source in fresh_sources(loop))
+
+
+def pool_ages(
+    pool: BehaviourPool,
+    recorder: RolloutRecorder | None,
+    now: int,
+    sampled: Mapping[int, int] | None = None,
+) -> IntArray:
     """Each behaviour's age (N,): the PPO steps from the policy that played its window's
-    first step to the agent's step count `now`; 0 for a window sampled from the policy as
-    it is now (not recorded). Call it as the pool is cut: the recorder drops old episodes."""
+    first step to the agent's step count `now`; for a window sampled (not recorded), 0, or
+    `now` − `sampled[tag]` when an older policy of steps `sampled[tag]` played its episodes
+    of that `Trajectory.source` tag (`KeptShare`). Call it as the pool is cut: the recorder
+    drops old episodes."""
+    sampled = {} if sampled is None else sampled
+    tags: list[int] = [-1] * len(pool) if pool.sources is None else pool.sources.tolist()
     played: dict[int, np.ndarray] = {}
     if recorder is not None:
         for episode in recorder.recent(recorder.held_windows()):
@@ -158,6 +194,8 @@ def pool_ages(pool: BehaviourPool, recorder: RolloutRecorder | None, now: int) -
     ages = np.zeros(len(pool.fragments), dtype=np.int64)
     for i, fragment in enumerate(pool.fragments):
         steps = played.get(fragment.reset_seed)
-        if steps is not None and fragment.start < len(steps):
+        if tags[i] in sampled:
+            ages[i] = now - sampled[tags[i]]
+        elif steps is not None and fragment.start < len(steps):
             ages[i] = now - int(steps[fragment.start])
     return ages

@@ -5,6 +5,8 @@ inside this adapter, and every round reseeds it from the loop's generator, so a 
 repeats an uninterrupted one.
 """
 
+import copy
+import dataclasses
 import logging
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -154,24 +156,49 @@ class PPOAgent:
         assert isinstance(normalised, np.ndarray)  # Box observations
         return policy_actions(self.model.policy, normalised, rng, deterministic)
 
-    def snapshot(self, deterministic: bool = False) -> "PolicySnapshot":
-        """A frozen, picklable copy of this agent's policy as it acts now: another process
-        can act with it (the worker's curve evaluations) while this one trains on."""
+    def snapshot(
+        self, deterministic: bool = False, state: "PolicyState | None" = None
+    ) -> "PolicySnapshot":
+        """A frozen, picklable copy of this agent's policy as it acts now (or as it acted
+        in `state`): another process can act with it (the worker's curve evaluations) while
+        this one trains on."""
         norm = self._normaliser()
-        obs_rms, _ = self._running_stats()
+        state = self.policy_state() if state is None else state
         source = self.model.policy
         with torch.random.fork_rng(devices=[]):  # its initial weights draw from torch's RNG
             network = type(source)(**source._get_constructor_parameters())
-        network.load_state_dict(source.state_dict())
+        network.load_state_dict(state.network)
         network.set_training_mode(False)
         return PolicySnapshot(
             network,
-            obs_rms.mean.copy() if norm.norm_obs else None,
-            obs_rms.var.copy() if norm.norm_obs else None,
+            state.obs_mean.copy() if norm.norm_obs else None,
+            state.obs_var.copy() if norm.norm_obs else None,
             norm.epsilon,
             norm.clip_obs,
             deterministic,
         )
+
+    def policy_state(self) -> "PolicyState":
+        """A copy of what PPO acts and learns with now: its networks, their optimiser and
+        the observation statistics; not the step count, which goes on counting."""
+        obs_rms, _ = self._running_stats()
+        policy = self.model.policy
+        return PolicyState(
+            copy.deepcopy(policy.state_dict()),
+            copy.deepcopy(policy.optimizer.state_dict()),
+            obs_rms.mean.copy(),
+            obs_rms.var.copy(),
+            float(obs_rms.count),
+        )
+
+    def load_policy_state(self, state: "PolicyState") -> None:
+        """Act and learn from `state` (a `policy_state`) on."""
+        policy = self.model.policy
+        policy.load_state_dict(state.network)
+        policy.optimizer.load_state_dict(copy.deepcopy(state.optimizer))
+        obs_rms, _ = self._running_stats()
+        obs_rms.mean, obs_rms.var = state.obs_mean.copy(), state.obs_var.copy()
+        obs_rms.count = state.obs_count
 
     def policy(self, deterministic: bool = False) -> "AgentPolicy":
         """This agent as a `Policy` (stochastic for sampling behaviours, greedy for evaluation)."""
@@ -294,6 +321,31 @@ def policy_actions(
         assert isinstance(space, gym.spaces.Box)
         return np.clip(actions, space.low, space.high).astype(space.dtype)
     raise TypeError(f"unsupported policy distribution {type(dist).__name__}")
+
+
+@dataclass(frozen=True, eq=False)
+class PolicyState:
+    """What `PPOAgent.policy_state` copies: enough to act and to learn on from there."""
+
+    network: dict[str, Any]
+    """The policy and value networks' `state_dict`."""
+    optimizer: dict[str, Any]
+    obs_mean: np.ndarray
+    obs_var: np.ndarray
+    obs_count: float
+
+    def save(self, path: Path) -> None:
+        fields = dataclasses.asdict(self)
+        fields["obs_mean"] = torch.from_numpy(self.obs_mean)
+        fields["obs_var"] = torch.from_numpy(self.obs_var)
+        torch.save(fields, path)
+
+    @classmethod
+    def load(cls, path: Path) -> "PolicyState":
+        fields = torch.load(path, weights_only=True)
+        fields["obs_mean"] = fields["obs_mean"].numpy()
+        fields["obs_var"] = fields["obs_var"].numpy()
+        return cls(**fields)
 
 
 @dataclass(frozen=True)

@@ -32,13 +32,14 @@ import time
 from collections.abc import Callable, Sequence
 from typing import NamedTuple
 
+from groupwise.behaviour.pool import BehaviourPool
 from groupwise.clips.timing import clip_timing, step_seconds
-from groupwise.pool.recent import fresh_sources
+from groupwise.pool.recent import fresh_sources, kept_tag
 from groupwise.pool.sampling import windows_to_sample
 from groupwise.preferences.judgement import Judgement
 from groupwise.query.strategies import QueryStrategy
 from groupwise.reward import FitReport, fit
-from groupwise.rl.recording import RolloutRecorder, record_rollouts
+from groupwise.rl.recording import RolloutRecorder, record_rollouts, recorder_of_agent
 from groupwise.run.pairs import derive_pairs
 from groupwise.run.progress import RunCallback, as_callback
 from groupwise.run.records import PhaseTimer, RoundRecord
@@ -70,14 +71,24 @@ def cut_next(
     round_index: int,
     n_queries: int | None = None,
     callback: RunCallback | None = None,
+    judged: BehaviourPool | None = None,
 ) -> NextRound:
     """Round `round_index`'s offer of `budget` comparisons (`n_queries` proposed, default
-    `budget`), cut now from the run's latest rollouts (`pool.recent.fresh_sources`) while
+    `budget`), cut now from the run's latest rollouts (`pool.recent.fresh_sources`) and a
+    share from the kept policy, which PPO goes back to first when the answers on the `judged`
+    pool (the open round's) prefer it (`run.kept_policy`), while
     round `round_index` − 1 is open (the app's `worker.jobs.cut_fresh` cuts it alike: as
     many comparisons before the round's end as its cut takes at the person's pace,
     `worker.continuous_round.comparisons_ahead`; a cut here takes no virtual time, so at
     the last answer)."""
-    streams = round_streams(run.cfg.loop.seed, round_index)
+    loop = run.cfg.loop
+    streams = round_streams(loop.seed, round_index)
+    tag = kept_tag(loop)
+    if run.kept.choose(run.ppo, run.ensemble, judged, tag, round_index) == "back":
+        recorder = recorder_of_agent(run.agent)
+        if recorder is not None:  # what PPO played since is not the policy's any more
+            recorder.clear()
+    kept = run.kept.share(run.ppo, loop, run.cfg.training.kept_share)
     offer = begin_round(
         run,
         strategy,
@@ -85,7 +96,7 @@ def cut_next(
         n_queries=n_queries,
         streams=streams,
         round_index=round_index,
-        sources=fresh_sources(run.cfg.loop),
+        sources=fresh_sources(loop, kept),
         callback=callback,
     )
     return NextRound(offer, streams)
@@ -127,7 +138,9 @@ def continuous_round(
         if following and i == len(offer.queries) - 1:
             # the round's end is in sight: its next pool is cut now, and PPO waits for the
             # last answer, so that the pool is the policy's when the round opens
-            following_round = cut_next(run, feedback.queries, following, offer.round + 1)
+            following_round = cut_next(
+                run, feedback.queries, following, offer.round + 1, judged=offer.pool
+            )
         else:
             credit += pace * cfg.training.ppo_steps_per_s
             rollouts = int(credit // rollout)
@@ -184,6 +197,7 @@ class ContinuousRound:
         self.report: FitReport | None = None
         self.started = False
         self.recorder = recorder_for(run, offer.budget)
+        run.kept.begin(run.ppo, offer.round)
 
     def learn(self, steps: int, stop: Callable[[], bool] | None = None) -> bool:
         """`steps` more PPO steps: the round's first call seeds PPO from the round's stream

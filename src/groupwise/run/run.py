@@ -19,7 +19,7 @@ import json
 import logging
 import os
 import shutil
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -39,6 +39,7 @@ from groupwise.run.checkpoint import (
     latest_checkpoint,
     write_checkpoint,
 )
+from groupwise.run.kept_policy import KeptPolicy
 from groupwise.run.records import RoundRecord, read_record, write_records
 from groupwise.run.streams import init_rng
 
@@ -67,6 +68,8 @@ class Run:
     dataset: PreferenceDataset
     records: list[RoundRecord]
     out: Path | None = None
+    kept: KeptPolicy = field(default_factory=KeptPolicy)
+    """Continuous training's kept policy (`run.kept_policy`), saved with each checkpoint."""
 
     @classmethod
     def create(cls, cfg: RunConfig, out: Path | None = None, *, check: bool = False) -> "Run":
@@ -152,6 +155,7 @@ class Run:
             state = _read_state(directory)
         self.ppo.load(directory)
         self.ensemble.load_state(directory / REWARD_FILE)
+        self.kept.load(directory)
         self.dataset = PreferenceDataset.load(directory / DATASET_FILE)
         self.records = [read_record(row) for row in state["records"]]
         log.info("%s restored after round %d", self.directory, state["round"])
@@ -164,6 +168,7 @@ class Run:
         def files(directory: Path) -> None:
             self.ppo.save(directory)
             self.ensemble.save(directory / REWARD_FILE)
+            self.kept.save(directory)
             self.dataset.save(directory / DATASET_FILE)
 
         state = {
@@ -184,6 +189,7 @@ class Run:
         shutil.rmtree(tmp, ignore_errors=True)
         tmp.mkdir(parents=True)
         self.save_policy(tmp)
+        self.kept.save(tmp)
         state = {"round": round_index, "env_steps": self.agent.num_timesteps}
         (tmp / STATE_FILE).write_text(json.dumps(state))
         shutil.rmtree(final, ignore_errors=True)
@@ -212,6 +218,7 @@ class Run:
         if state.get("round") != round_index:
             return False
         self.load_policy(directory)
+        self.kept.load(directory)
         log.info(
             "%s resumed round %d at %d PPO steps", self.directory, round_index, state["env_steps"]
         )

@@ -33,7 +33,7 @@ import numpy as np
 from groupwise.behaviour import kernel_threads
 from groupwise.clips.render import RenderPool
 from groupwise.pool.dataset import dataset_sources
-from groupwise.pool.recent import pool_ages
+from groupwise.pool.recent import kept_tag, pool_ages
 from groupwise.preferences.judgement import Judgement
 from groupwise.rl.batch_envs import free_cores
 from groupwise.run.continuous import ContinuousRound, cut_next
@@ -184,10 +184,11 @@ def cut_fresh(
             r + 1,
             n_queries=offered_queries(settings),
             callback=progress,
+            judged=continuous.offer.pool,
         ).offer
     cut_s = time.perf_counter() - tick
     now = run.agent.num_timesteps
-    ages = pool_ages(offer.pool, continuous.recorder, now)
+    ages = pool_ages(offer.pool, continuous.recorder, now, run.kept.sampled(kept_tag(run.cfg.loop)))
     tick = time.perf_counter()
     prepared = published_round(
         data_dir, job.session_id, job.env, settings, offer.pool, offer.queries, render,

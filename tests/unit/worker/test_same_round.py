@@ -26,8 +26,8 @@ from tests.unit.server.conftest import (
 
 from groupwise.config import RunConfig
 from groupwise.episodes.ids import behaviour_index
-from groupwise.pool.files import load_fragments
-from groupwise.pool.recent import fresh_sources
+from groupwise.pool.files import load_fragments, load_pool
+from groupwise.pool.recent import fresh_sources, kept_tag
 from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.preferences.judgement import LEFT_BETTER, RIGHT_BETTER, Judgement
 from groupwise.run.continuous import ContinuousRound, cut_next
@@ -212,9 +212,7 @@ def test_a_continuous_app_round_and_a_headless_continuous_round_are_the_same_rou
         finish_round(
             run, offer, judgements, continuous.report, continuous.timer, RunCallback(), asked=None
         )
-        following = begin_round(
-            run, strategy, budget, n_queries=queries, sources=fresh_sources(cfg.loop)
-        )
+        following = cut_next(run, strategy, budget, 1, queries, judged=offer.pool).offer
         assert run.agent.num_timesteps == slices * run.ppo.rollout_steps
     # the same round 0: dataset and reward model …
     app_data, app_reward = _state(app_dir / "checkpoints" / "round-0000")
@@ -227,7 +225,14 @@ def test_a_continuous_app_round_and_a_headless_continuous_round_are_the_same_rou
     published = load_fragments(context.data_dir / round_directory(sid, 1))
     _same_pool(published, following.pool)
     recorded = {e.reset_seed for e in following.pool.episodes if e.source == 0}
-    assert {f.reset_seed for f in published} <= recorded
+    sources = load_pool(context.data_dir / round_directory(sid, 1), 1).sources
+    assert np.array_equal(sources, following.pool.sources)
+    # the windows come from the rollouts PPO played and from a share of the policy round 0
+    # was cut from (`run.kept_policy`), nothing else
+    kept = kept_tag(cfg.loop)
+    assert set(sources.tolist()) <= {0, kept} and np.any(sources == kept)
+    fresh = {f.reset_seed for f, source in zip(published, sources, strict=True) if source == 0}
+    assert fresh <= recorded
     assert _suggestions(context, sid, 1) == [(q.left, q.right) for q in following.queries]
 
 
@@ -284,7 +289,12 @@ def test_a_round_ended_by_its_budget_opens_the_pool_cut_during_its_last_comparis
             continuous.learn(run.ppo.rollout_steps)
         continuous.update(list(enumerate(judgements[:2])), 1.0)  # no refit due
         following = cut_next(
-            run, session_strategy(cfg, "groupwise"), budget, 1, offered_queries(settings)
+            run,
+            session_strategy(cfg, "groupwise"),
+            budget,
+            1,
+            offered_queries(settings),
+            judged=offer.pool,
         )
         continuous.update(list(enumerate(judgements)), 2.0, final=True)
         assert run.agent.num_timesteps == slices * run.ppo.rollout_steps

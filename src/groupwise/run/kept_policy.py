@@ -1,0 +1,185 @@
+"""The policy the person's answers prefer so far, kept beside the one PPO trains (issue 39).
+
+In continuous training PPO follows a reward fitted on the first few pairs. On the
+stand-up's seed 1 that reward pulled the pre-trained policy off standing in round 0, and
+from then on every fresh pool held only what the policy did then: behaviours that all
+score about 0, which the teacher could only call ties (the *tie trap*,
+docs/results/continuous). The reward overpaid states nobody had judged, and the fresh
+pools never showed them beside what the person had asked for.
+
+So each fresh pool (from round 1 on) holds a share (`TrainingConfig.kept_share`) sampled
+from the *kept* policy, the one the person's answers prefer so far, beside what PPO does
+now. When the next pool is cut, the reward refitted on those answers scores the round's
+two kinds of behaviour, each by its mean reward per step under each ensemble member:
+
+- every member pays the kept policy's behaviours more: PPO goes back to the kept policy
+  (its networks, optimiser and observation statistics; `PPOAgent.load_policy_state`);
+- the members' mean pays the fresh ones at least as much: the policy they were cut from
+  becomes the kept one;
+- else the kept policy stays.
+
+Both kinds were judged in the same round, so the comparison rests on pairs the person gave,
+not on the reward's guess about states nobody saw. The kept share is the one part of a fresh
+pool older than a rollout, by design; `pool.recent.pool_ages` reports its age.
+
+    went = run.kept.choose(run.ppo, run.ensemble, judged_pool, kept_tag(loop), round_index)
+    sources = fresh_sources(loop, run.kept.share(run.ppo, loop, cfg.training.kept_share))
+"""
+
+import json
+import logging
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Literal
+
+import numpy as np
+
+from groupwise.behaviour.pool import BehaviourPool
+from groupwise.config import LoopConfig
+from groupwise.pool.recent import KeptShare
+from groupwise.reward.ensemble import RewardEnsemble
+from groupwise.rl.ppo import PolicyState, PPOAgent
+from groupwise.types import FloatArray
+
+log = logging.getLogger(__name__)
+
+KEPT_FILE = "kept_policy.pt"
+CUT_FILE = "cut_policy.pt"
+STEPS_FILE = "kept_policy.json"
+
+Choice = Literal["first", "back", "latest", "kept", "none"]
+"""What `KeptPolicy.choose` did: kept the first policy, went back to the kept one, kept the
+latest judged one, kept the kept one, or had nothing to compare."""
+
+
+@dataclass(frozen=True, eq=False)
+class Played:
+    """A policy as it was (`PPOAgent.policy_state`) when PPO had taken `steps` steps."""
+
+    state: PolicyState
+    steps: int
+
+
+class KeptPolicy:
+    """The kept policy of a continuous run and the one the latest pool's fresh behaviours
+    were cut from (module docstring)."""
+
+    def __init__(self) -> None:
+        self.kept: Played | None = None
+        self.cut: Played | None = None
+        """The policy round `cut_round`'s fresh behaviours were cut from (the kept one itself
+        when that pool has no kept share)."""
+        self.cut_round = -1
+
+    def choose(
+        self,
+        agent: PPOAgent,
+        ensemble: RewardEnsemble,
+        judged: BehaviourPool | None,
+        tag: int,
+        round_index: int,
+    ) -> Choice:
+        """At round `round_index`'s cut, before its pool is sampled: compare what the
+        `judged` pool's fresh behaviours (tag 0) and kept ones (`tag`) are paid, go back or
+        keep (module docstring), and remember the policy the new pool is cut from. A cut
+        of the same round again (the app drops a cut made ahead when a judgement is undone)
+        decides nothing again."""
+        if self.begin(agent, round_index):
+            return "first"
+        went: Choice = "none"
+        again = round_index == self.cut_round
+        if judged is not None and not again and judged.round == self.cut_round:
+            went = self._decide(agent, ensemble, judged, tag)
+        if went == "back":
+            self.cut = self.kept
+        else:
+            self.cut = Played(agent.policy_state(), agent.num_timesteps)
+        self.cut_round = round_index
+        return went
+
+    def _decide(
+        self, agent: PPOAgent, ensemble: RewardEnsemble, judged: BehaviourPool, tag: int
+    ) -> Choice:
+        fresh = tag_rewards(ensemble, judged, 0)
+        kept = tag_rewards(ensemble, judged, tag)
+        # a pool cut from the kept policy itself has no kept share: nothing to compare
+        if fresh is None or kept is None or self.kept is None or self.cut is None:
+            return "none"
+        went: Choice
+        if bool(np.all(kept > fresh)):
+            agent.load_policy_state(self.kept.state)
+            went = "back"
+        elif float(fresh.mean()) >= float(kept.mean()):
+            self.kept = self.cut
+            went = "latest"
+        else:
+            went = "kept"
+        log.info(
+            "round %d's pool: its fresh behaviours paid %s a step, the kept policy's %s: %s "
+            "(the kept policy now: %d PPO steps)",
+            judged.round,
+            np.round(fresh, 3).tolist(),
+            np.round(kept, 3).tolist(),
+            went,
+            self.kept.steps,
+        )
+        return went
+
+    def begin(self, agent: PPOAgent, round_index: int) -> bool:
+        """Keep the policy PPO starts a run's first round (`round_index`) with, unless one
+        is kept: True when it was kept now. The headless round 0 keeps it at its cut, the
+        app's worker (whose round 0 is cut by a phase job) when its continuous round
+        begins; PPO has not stepped in between."""
+        if self.kept is not None:
+            return False
+        self.kept = self.cut = Played(agent.policy_state(), agent.num_timesteps)
+        self.cut_round = round_index
+        return True
+
+    def share(self, agent: PPOAgent, loop: LoopConfig, share: float) -> KeptShare | None:
+        """The kept policy's share of the pool cut now: none when the pool's fresh
+        behaviours come from the kept policy itself, or `share` is 0."""
+        if share <= 0 or self.kept is None or self.cut is self.kept:
+            return None
+        return KeptShare(share, agent.snapshot(state=self.kept.state), loop.exploration_fraction)
+
+    def sampled(self, tag: int) -> dict[int, int]:
+        """The PPO steps of the policy that played the kept share's episodes (`tag`), when the
+        pool cut last has one (`pool.recent.pool_ages`)."""
+        if self.kept is None or self.cut is self.kept:
+            return {}
+        return {tag: self.kept.steps}
+
+    def save(self, directory: Path) -> None:
+        """Write both policies into `directory` (a checkpoint's); nothing before the first cut."""
+        if self.kept is None or self.cut is None:
+            return
+        self.kept.state.save(directory / KEPT_FILE)
+        if self.cut is not self.kept:
+            self.cut.state.save(directory / CUT_FILE)
+        steps = {"kept": self.kept.steps, "cut": self.cut.steps, "cut_round": self.cut_round}
+        (directory / STEPS_FILE).write_text(json.dumps(steps))
+
+    def load(self, directory: Path) -> None:
+        """Read what `save` wrote (none there: nothing kept yet)."""
+        self.kept = self.cut = None
+        self.cut_round = -1
+        if not (directory / STEPS_FILE).is_file():
+            return
+        steps = json.loads((directory / STEPS_FILE).read_text())
+        self.kept = Played(PolicyState.load(directory / KEPT_FILE), steps["kept"])
+        cut = directory / CUT_FILE
+        self.cut = Played(PolicyState.load(cut), steps["cut"]) if cut.is_file() else self.kept
+        self.cut_round = steps["cut_round"]
+
+
+def tag_rewards(ensemble: RewardEnsemble, pool: BehaviourPool, tag: int) -> FloatArray | None:
+    """(K,) each member's mean reward per step over `pool`'s behaviours of source `tag`
+    (`BehaviourPool.sources`); None when it has none, or its sources are unknown."""
+    if pool.sources is None or not np.any(pool.sources == tag):
+        return None
+    chosen = [f for f, source in zip(pool.fragments, pool.sources, strict=True) if source == tag]
+    obs = np.stack([f.obs for f in chosen])
+    acts = np.stack([f.acts for f in chosen])
+    rewards: FloatArray = ensemble.step_rewards(obs, acts).mean(axis=(1, 2))
+    return rewards
