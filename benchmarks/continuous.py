@@ -66,6 +66,10 @@ import torch
 
 from benchmarks.ppo_throughput import steps_per_second
 from benchmarks.submit_latency import start_server, wait_for
+from groupwise.config import RunConfig
+from groupwise.pool.files import load_pool
+from groupwise.pool.recent import kept_tag
+from groupwise.run.run import CONFIG_FILE
 from groupwise.storage.sessions import round_directory
 from groupwise.worker.jobs import OPENING_FILE
 
@@ -289,9 +293,11 @@ def main(argv: Sequence[str] | None = None) -> None:
         f"| End round → next round open, median / p95 (s, n={len(waits)}) | {w50:.1f} / {w95:.1f} |"
     )
     print(f"| End round → next round open, max (s) | {max(waits):.1f} |")
-    fresh = np.concatenate([a for a in ages if len(a)]) if any(len(a) for a in ages) else []
+    fresh = np.concatenate([a for a, _ in ages])
+    kept = np.concatenate([k for _, k in ages])
     for name, values in (
         ("pool age at opening, fresh pools: min / median / p90 / max (PPO steps)", fresh),
+        ("the kept policy's share of them (`run.kept_policy`), the same", kept),
         (f"the same, a pool staged {args.stage_after:g} s into the round before", before),
     ):
         if len(values):
@@ -301,11 +307,12 @@ def main(argv: Sequence[str] | None = None) -> None:
         f"\n{len(samples)} mid-round checkpoints read; "
         f"{statistics.mean(latencies) * 1000:.0f} ms mean"
     )
-    for r, a in enumerate(ages, start=1):
-        if len(a):
+    for r, (own, kept_ages) in enumerate(ages, start=1):
+        if len(own):
             print(
-                f"round {r}: {len(a)} behaviours, ages {min(a):,}–{max(a):,} "
-                f"(median {int(np.median(a)):,})"
+                f"round {r}: {len(own)} behaviours, ages {min(own):,}–{max(own):,} "
+                f"(median {int(np.median(own)):,}); {len(kept_ages)} of the kept policy's"
+                + (f", {kept_ages[0]:,} steps old" if len(kept_ages) else "")
             )
 
 
@@ -341,14 +348,19 @@ def _opening(data: Path, session: str, round_index: int) -> dict | None:
         return None
 
 
-def _pool_ages(data: Path, session: str, round_index: int) -> np.ndarray:
+def _pool_ages(data: Path, session: str, round_index: int) -> tuple[np.ndarray, np.ndarray]:
     """The ages (PPO steps) of round `round_index`'s behaviours when it opened, from its
-    ``pool.json`` (empty when it does not say)."""
-    path = data / round_directory(session, round_index) / "pool.json"
+    ``pool.json`` (empty when it does not say): those from PPO's latest rollouts or sampled
+    from its policy, and those of the kept policy's share (`run.kept_policy`)."""
+    directory = data / round_directory(session, round_index)
     try:
-        return np.asarray(json.loads(path.read_text())["metadata"]["ages"], dtype=np.int64)
+        ages = np.asarray(json.loads((directory / "pool.json").read_text())["metadata"]["ages"])
     except (OSError, ValueError, KeyError):
-        return np.zeros(0, dtype=np.int64)
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    sources = load_pool(directory, round_index).sources
+    cfg = RunConfig.load(data / "sessions" / session / CONFIG_FILE)
+    kept = np.zeros(len(ages), bool) if sources is None else sources == kept_tag(cfg.loop)
+    return ages[~kept].astype(np.int64), ages[kept].astype(np.int64)
 
 
 def _steps_at(points: list[dict], when: float) -> float:

@@ -118,8 +118,8 @@ class KeptPolicy:
             "round %d's pool: its fresh behaviours paid %s a step, the kept policy's %s: %s "
             "(the kept policy now: %d PPO steps)",
             judged.round,
-            np.round(fresh, 3).tolist(),
-            np.round(kept, 3).tolist(),
+            [round(float(v), 3) for v in fresh],
+            [round(float(v), 3) for v in kept],
             went,
             self.kept.steps,
         )

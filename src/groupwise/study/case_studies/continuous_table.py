@@ -2,7 +2,7 @@
 ``docs/results/continuous`` (issue 24).
 
     python -m groupwise.study.case_studies.continuous_table RUN_DIR [RUN_DIR ...] [--figure PNG]
-                                                            [--marks 10 20]
+                                                            [--marks 10 20] [--table CSV]
 
 Each RUN_DIR is a ``groupwise case-study … --teacher-pace S`` run (`--training rounds` or
 `continuous`). Its rounds carry the teacher's virtual clock (``clock_s`` in ``rounds.csv``:
@@ -29,6 +29,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from groupwise.envs import TARGETS
 from groupwise.study.case_studies.table import Curve, target_curves_figure
 
 SUCCESS_SHARE = 0.6
@@ -109,6 +110,60 @@ def read_run(run: Path) -> TimedRun:
         success=tuple(float(r["success_rate"]) for r in scored),
         env_steps=int(summary["env_steps"]),
     )
+
+
+TABLE_COLUMNS = (
+    "target",
+    "training",
+    "variant",
+    "seed",
+    "round",
+    "minute",
+    "env_steps",
+    "target_score",
+    "success",
+)
+"""The columns of a tidy rounds table (`read_table`, `table_rows`) this module reads back."""
+
+
+def read_table(path: Path) -> list[TimedRun]:
+    """The runs of a tidy rounds table (`TABLE_COLUMNS`, more allowed; one row per round of a
+    run, e.g. ``docs/results/continuous/headless/rounds.csv``): the run folders themselves
+    are artifacts, not kept. A run's `config` is its ``variant`` alone.
+
+    Raises:
+        ValueError: a column is missing, or a target is unknown.
+    """
+    with path.open() as handle:
+        rows = list(csv.DictReader(handle))
+    missing = set(TABLE_COLUMNS) - set(rows[0] if rows else TABLE_COLUMNS)
+    if missing:
+        raise ValueError(f"{path}: no column {', '.join(sorted(missing))}")
+    runs: dict[tuple[str, str, str, int], list[dict[str, str]]] = {}
+    for row in rows:
+        key = (row["target"], row["training"], row["variant"], int(row["seed"]))
+        runs.setdefault(key, []).append(row)
+    read = []
+    for (name, mode, variant, seed), rounds in runs.items():
+        if name not in TARGETS:
+            raise ValueError(f"{path}: unknown target {name!r}")
+        target = TARGETS[name]
+        rounds.sort(key=lambda r: int(r["round"]))
+        read.append(
+            TimedRun(
+                target=name,
+                unit=target.unit,
+                threshold=target.threshold,
+                mode=mode,
+                config={"variant": variant},
+                seed=seed,
+                minutes=tuple(float(r["minute"]) for r in rounds),
+                scores=tuple(float(r["target_score"]) for r in rounds),
+                success=tuple(float(r["success"]) for r in rounds),
+                env_steps=int(rounds[-1]["env_steps"]),
+            )
+        )
+    return read
 
 
 SAME_ARM = frozenset({"loop.seed", "training.mode"})
@@ -229,7 +284,14 @@ def figure(runs: Sequence[TimedRun], path: Path) -> Path:
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0] if __doc__ else None)
-    parser.add_argument("runs", nargs="+", type=Path, help="timed case-study directories")
+    parser.add_argument("runs", nargs="*", type=Path, help="timed case-study directories")
+    parser.add_argument(
+        "--table",
+        type=Path,
+        help="also the runs of a tidy rounds table (CSV, one row per round: "
+        + ", ".join(TABLE_COLUMNS)
+        + ")",
+    )
     parser.add_argument("--figure", type=Path, help="also draw the curves into this PNG")
     parser.add_argument(
         "--marks",
@@ -240,13 +302,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         read = [read_run(run) for run in args.runs]
-    except ValueError as error:
+        read += [] if args.table is None else read_table(args.table)
+    except (ValueError, OSError) as error:
         parser.error(str(error))
+    if not read:
+        parser.error("no runs: give run directories or --table")
     rows = sorted(
         zip(read, variants(read), strict=True),
         key=lambda row: (row[0].target, row[0].mode, row[1], row[0].seed),
     )
-    runs, labels = [run for run, _ in rows], [label for _, label in rows]
+    runs = [run for run, _ in rows]
+    labels = [
+        run.config.get("variant", label) if len(run.config) == 1 else label for run, label in rows
+    ]
     if args.figure:
         figure(runs, args.figure)
     print("\n".join(summary_rows(runs, labels)))

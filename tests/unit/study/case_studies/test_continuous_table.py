@@ -135,3 +135,43 @@ def test_the_marks_table_counts_runs_passing_at_and_passed_by_each_mark(tmp_path
     assert "| hopper-backflip | continuous | as most | 2 | 1/2 | 2/2 | 1/2 | 2/2 |" in out
     # rounds: the round ending at 13.3 min is after 10; the one at 21.7 after 20
     assert "| hopper-backflip | rounds | as most | 1 | 0/1 | 0/1 | 1/1 | 1/1 |" in out
+
+
+def _table(path: Path, rows: list[dict[str, Any]]) -> Path:
+    with path.open("w", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=list(rows[0]))
+        writer.writeheader()
+        writer.writerows(rows)
+    return path
+
+
+def _row(variant: str, seed: int, round_index: int, minute: float, success: float) -> dict:
+    return {
+        "target": "hopper-backflip", "training": "continuous", "variant": variant,
+        "seed": seed, "round": round_index, "minute": minute, "env_steps": 1000 * (round_index + 1),
+        "target_score": 2 * success, "success": success, "tied_share_total": 0.1,
+    }  # fmt: skip
+
+
+def test_a_tidy_rounds_table_is_read_back_as_its_runs(tmp_path, capsys):
+    rows = [
+        _row("kept", 0, 1, 6.0, 1.0),  # rows in any order
+        _row("kept", 0, 0, 3.0, 0.4),
+        _row("kept", 1, 0, 3.0, 0.0),
+        _row("kept", 1, 1, 6.0, 0.0),
+        _row("before", 0, 0, 3.0, 0.0),
+    ]
+    table = _table(tmp_path / "rounds.csv", rows)
+    assert main(["--table", str(table), "--marks", "5", "10"]) == 0
+    out = capsys.readouterr().out
+    # the kept variant: seed 0 passes at 6 min (round 1), seed 1 never; by label, not "as most"
+    assert "| hopper-backflip | continuous | kept | 2 | 0/2 | 0/2 | 1/2 | 1/2 |" in out
+    assert "| hopper-backflip | continuous | before | 1 | 0/1 | 0/1 | 0/1 | 0/1 |" in out
+    assert "| 0 | 2,000 | 0.80 (3.0), 2.00 (6.0) | 6.0 min |" in out
+
+
+def test_a_table_without_a_column_is_one_line_of_error(tmp_path, capsys):
+    rows = [{k: v for k, v in _row("kept", 0, 0, 3.0, 1.0).items() if k != "minute"}]
+    with pytest.raises(SystemExit):
+        main(["--table", str(_table(tmp_path / "rounds.csv", rows))])
+    assert "no column minute" in capsys.readouterr().err
