@@ -188,11 +188,15 @@ def cut_fresh(
         ).offer
     cut_s = time.perf_counter() - tick
     now = run.agent.num_timesteps
-    ages = pool_ages(offer.pool, continuous.recorder, now, run.kept.sampled(kept_tag(run.cfg.loop)))
+    tag = kept_tag(run.cfg.loop)
+    ages = pool_ages(offer.pool, continuous.recorder, now, run.kept.sampled(tag))
+    # the pool's place on the curve is its fresh behaviours' policy, not the kept share's
+    sources = offer.pool.sources
+    own = ages if sources is None else ages[sources != tag]
     tick = time.perf_counter()
     prepared = published_round(
         data_dir, job.session_id, job.env, settings, offer.pool, offer.queries, render,
-        progress, offer.sample_s, now - int(ages.max(initial=0)), ages.tolist(),
+        progress, offer.sample_s, now - int(own.max(initial=0)), ages.tolist(),
     )  # fmt: skip
     seconds = {
         "sample": offer.sample_s,

@@ -67,9 +67,9 @@ def published_round(
 ) -> PreparedRound:
     """`pool` published as round `pool.round` (clips, tree, candidates in its directory)
     and what the database stores to open it; `ppo_steps`, the PPO steps of the policy that
-    sampled it (its oldest behaviour), goes into ``pool.json``'s metadata (`sampled_at`),
-    and so do `ages`, each behaviour's age in PPO steps when the round opens (fresh pools,
-    `pool.recent.pool_ages`)."""
+    sampled it (its oldest behaviour but the kept policy's share, `run.kept_policy`), goes
+    into ``pool.json``'s metadata (`sampled_at`), and so do `ages`, each behaviour's age in
+    PPO steps when the round opens (fresh pools, `pool.recent.pool_ages`)."""
     if progress is not None:
         progress.on_phase("clips", 0, len(pool))
     run_config = settings.run_config(env)

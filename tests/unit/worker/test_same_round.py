@@ -41,6 +41,7 @@ from groupwise.storage.settings import SessionSettings
 from groupwise.worker.job import offered_queries, session_strategy
 from groupwise.worker.jobs import OPENING_FILE
 from groupwise.worker.process import Worker
+from groupwise.worker.publishing import sampled_at
 
 # round → (left, right, label, undone) in the order given; the undone one keeps its key
 ANSWERS = {
@@ -233,6 +234,12 @@ def test_a_continuous_app_round_and_a_headless_continuous_round_are_the_same_rou
     assert set(sources.tolist()) <= {0, kept} and np.any(sources == kept)
     fresh = {f.reset_seed for f, source in zip(published, sources, strict=True) if source == 0}
     assert fresh <= recorded
+    # the kept share is as old as round 0's policy; the pool's place on the curve is not
+    directory = context.data_dir / round_directory(sid, 1)
+    ages = np.array(json.loads((directory / "pool.json").read_text())["metadata"]["ages"])
+    now = slices * 32  # TINY's rollouts: 1 env × 32 steps
+    assert (ages[sources == kept] == now).all()
+    assert sampled_at(directory) == now - ages[sources != kept].max(initial=0)
     assert _suggestions(context, sid, 1) == [(q.left, q.right) for q in following.queries]
 
 
