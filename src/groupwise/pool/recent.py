@@ -30,7 +30,7 @@ from groupwise.pool.sources import (
     sample_policy,
     shifted_progress,
 )
-from groupwise.rl.policy import BiasedPolicy, Policy
+from groupwise.rl.policy import BiasedPolicy
 from groupwise.rl.recording import RolloutRecorder, recorder_of_agent
 from groupwise.types import FloatArray, IntArray, ProgressFn
 
@@ -133,31 +133,11 @@ class VariantRows:
         return pushed
 
 
-@dataclass(frozen=True)
-class KeptShare(FixedSource):
-    """A share of a fresh pool from an older policy, the one the person's answers prefer so
-    far (`run.kept_policy`), beside what PPO does now: the person sees whether PPO is still
-    doing what they asked for (issue 39's tie trap)."""
-
-    share: float
-    policy: Policy
-    exploration: float = 0.0
-    tags: int = 1
-
-    def sample(
-        self,
-        ctx: SourceContext,
-        windows: int,
-        rng: np.random.Generator,
-        progress: ProgressFn | None = None,
-    ) -> list[Trajectory]:
-        return sample_policy(ctx, self.policy, windows, rng, self.exploration, progress)
-
-
-def fresh_sources(loop: LoopConfig, kept: KeptShare | None = None) -> tuple[PoolSource, ...]:
+def fresh_sources(loop: LoopConfig, kept: PoolSource | None = None) -> tuple[PoolSource, ...]:
     """`pool_sources(loop)` with the policy's place taken by its latest rollouts: the
     variants, when `loop` asks for them, still give their share, stepped side by side
-    (`FreshVariants`); then `kept`'s share, when given (its tag is `kept_tag(loop)`)."""
+    (`FreshVariants`); then `kept`'s share, when given (the kept policy's, `run.kept_policy`;
+    its tag is `kept_tag(loop)`)."""
     _policy, *others = pool_sources(loop)
     fresh = [
         FreshVariants(o.count, o.share, o.scale, o.exploration)
@@ -170,7 +150,8 @@ def fresh_sources(loop: LoopConfig, kept: KeptShare | None = None) -> tuple[Pool
 
 
 def kept_tag(loop: LoopConfig) -> int:
-    """The `Trajectory.source` tag of a fresh pool's `KeptShare` episodes."""
+    """The `Trajectory.source` tag of the kept policy's share of a fresh pool
+    (`run.kept_policy`)."""
     return sum(source.tags for source in fresh_sources(loop))
 
 
@@ -183,8 +164,8 @@ def pool_ages(
     """Each behaviour's age (N,): the PPO steps from the policy that played its window's
     first step to the agent's step count `now`; for a window sampled (not recorded), 0, or
     `now` − `sampled[tag]` when an older policy of steps `sampled[tag]` played its episodes
-    of that `Trajectory.source` tag (`KeptShare`). Call it as the pool is cut: the recorder
-    drops old episodes."""
+    of that `Trajectory.source` tag (the kept policy's share). Call it as the pool is cut:
+    the recorder drops old episodes."""
     sampled = {} if sampled is None else sampled
     tags: list[int] = [-1] * len(pool) if pool.sources is None else pool.sources.tolist()
     played: dict[int, np.ndarray] = {}

@@ -104,11 +104,14 @@ class FixedSource:
 @dataclass(frozen=True)
 class CurrentPolicy(FixedSource):
     """The round's policy, with random actions on a share `exploration` of the steps in
-    stretches (`rl.rollout.exploration_mask`; SPEC §3.1): the pool's own source."""
+    stretches (`rl.rollout.exploration_mask`; SPEC §3.1): the pool's own source. With a
+    `policy`, that one instead, for a `share` of the pool (the kept policy's beside a fresh
+    pool, `run.kept_policy`)."""
 
     exploration: float = 0.0
     share: float | None = None
     tags: int = 1
+    policy: Policy | None = None
 
     def sample(
         self,
@@ -117,7 +120,8 @@ class CurrentPolicy(FixedSource):
         rng: np.random.Generator,
         progress: ProgressFn | None = None,
     ) -> list[Trajectory]:
-        return sample_policy(ctx, ctx.policy, windows, rng, self.exploration, progress)
+        policy = ctx.policy if self.policy is None else self.policy
+        return sample_policy(ctx, policy, windows, rng, self.exploration, progress)
 
 
 @dataclass(frozen=True)

@@ -36,7 +36,7 @@ import numpy as np
 
 from groupwise.behaviour.pool import BehaviourPool
 from groupwise.config import LoopConfig
-from groupwise.pool.recent import KeptShare
+from groupwise.pool.sources import CurrentPolicy
 from groupwise.reward.ensemble import RewardEnsemble
 from groupwise.rl.ppo import PolicyState, PPOAgent
 from groupwise.types import FloatArray
@@ -136,12 +136,13 @@ class KeptPolicy:
         self.cut_round = round_index
         return True
 
-    def share(self, agent: PPOAgent, loop: LoopConfig, share: float) -> KeptShare | None:
+    def share(self, agent: PPOAgent, loop: LoopConfig, share: float) -> CurrentPolicy | None:
         """The kept policy's share of the pool cut now: none when the pool's fresh
         behaviours come from the kept policy itself, or `share` is 0."""
         if share <= 0 or self.kept is None or self.cut is self.kept:
             return None
-        return KeptShare(share, agent.snapshot(state=self.kept.state), loop.exploration_fraction)
+        policy = agent.snapshot(state=self.kept.state)
+        return CurrentPolicy(loop.exploration_fraction, share, policy=policy)
 
     def sampled(self, tag: int) -> dict[int, int]:
         """The PPO steps of the policy that played the kept share's episodes (`tag`), when the

@@ -8,7 +8,8 @@ from groupwise.behaviour.pool import BehaviourPool
 from groupwise.config import LoopConfig, PPOConfig, RewardConfig
 from groupwise.envs import make_env
 from groupwise.episodes.fragments import Fragment
-from groupwise.pool.recent import KeptShare, kept_tag, pool_ages
+from groupwise.pool.recent import kept_tag, pool_ages
+from groupwise.pool.sources import CurrentPolicy
 from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.preferences.pairs import Pair
 from groupwise.reward import RewardEnsemble, fit
@@ -148,7 +149,8 @@ def test_the_kept_share_is_sampled_from_the_kept_policy_and_aged_from_it(share):
     if share == 0:
         assert source is None
         return
-    assert isinstance(source, KeptShare) and source.share == share
+    assert isinstance(source, CurrentPolicy) and source.share == share
+    assert source.policy is not None
     kept = choice.kept
     assert kept is not None
     kept_policy = agent.snapshot(state=kept.state)  # stochastic, as pools are sampled
