@@ -275,10 +275,21 @@ def mark_rows(runs: Sequence[TimedRun], labels: Sequence[str], marks: Sequence[f
     return lines
 
 
-def figure(runs: Sequence[TimedRun], path: Path) -> Path:
+def figure(runs: Sequence[TimedRun], path: Path, labels: Sequence[str] | None = None) -> Path:
     """Target score against the teacher's minutes, one panel per target, one line per run
-    (colour: training mode), the success threshold dashed. Needs Matplotlib."""
-    curves = [Curve(r.target, r.threshold, r.mode, r.minutes, r.scores) for r in runs]
+    (colour: training mode, and variant when `labels` tell them apart), the success
+    threshold dashed. Needs Matplotlib."""
+    labels = ["as most"] * len(runs) if labels is None else labels
+    curves = [
+        Curve(
+            r.target,
+            r.threshold,
+            r.mode if label == "as most" else f"{r.mode}, {label}",
+            r.minutes,
+            r.scores,
+        )
+        for r, label in zip(runs, labels, strict=True)
+    ]
     return target_curves_figure(curves, path, "minutes of the teacher's time")
 
 
@@ -316,7 +327,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         run.config.get("variant", label) if len(run.config) == 1 else label for run, label in rows
     ]
     if args.figure:
-        figure(runs, args.figure)
+        figure(runs, args.figure, labels)
     print("\n".join(summary_rows(runs, labels)))
     print()
     if args.marks:
