@@ -328,10 +328,12 @@ def figure(records: Sequence[dict], path: Path) -> None:
     import matplotlib.pyplot as plt
 
     targets = list(dict.fromkeys(r["target"] for r in records))
-    fig, axes = plt.subplots(1, len(targets), figsize=(4.2 * len(targets), 3.4), squeeze=False)
+    fig, axes = plt.subplots(
+        len(targets), 1, figsize=(9.0, 3.2 * len(targets)), squeeze=False
+    )  # one panel a row: the arms' names are long, their legend sits beside the panel
     arms = sorted({arm(r) for r in records})
     colours = dict(zip(arms, plt.get_cmap("tab10").colors, strict=False))
-    for ax, target in zip(axes[0], targets, strict=True):
+    for ax, target in zip(axes[:, 0], targets, strict=True):
         for training, colour in colours.items():
             runs = [r for r in records if r["target"] == target and arm(r) == training]
             if not runs:
@@ -347,9 +349,9 @@ def figure(records: Sequence[dict], path: Path) -> None:
         ax.set_title(target)
         ax.set_xlabel("teacher's minutes")
         ax.set_ylabel("greedy episodes succeeding")
-        ax.legend(fontsize=8)
+        ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.02, 0.5), frameon=False)
     fig.tight_layout()
-    fig.savefig(path, dpi=110)
+    fig.savefig(path, dpi=110, bbox_inches="tight")
 
 
 def arm(record: dict) -> str:
