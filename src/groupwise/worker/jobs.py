@@ -71,6 +71,9 @@ class CutRound:
     """PPO steps of the policy when the pool was cut."""
     ages: IntArray
     """Each behaviour's age then, in PPO steps (`pool.recent.pool_ages`)."""
+    pool_steps: int
+    """The pool's place on the curve: PPO steps of the oldest policy its fresh behaviours
+    come from (the kept policy's share aside, `run.kept_policy`)."""
     seconds: dict[str, float]
     """Wall seconds of the cut's parts: "sample" (what the rollouts lack), "cut" (the
     distances, the tree and the queries), "publish" (clips, posters, pool files)."""
@@ -193,17 +196,18 @@ def cut_fresh(
     # the pool's place on the curve is its fresh behaviours' policy, not the kept share's
     sources = offer.pool.sources
     own = ages if sources is None else ages[sources != tag]
+    pool_steps = now - int(own.max(initial=0))
     tick = time.perf_counter()
     prepared = published_round(
         data_dir, job.session_id, job.env, settings, offer.pool, offer.queries, render,
-        progress, offer.sample_s, now - int(own.max(initial=0)), ages.tolist(),
+        progress, offer.sample_s, pool_steps, ages.tolist(),
     )  # fmt: skip
     seconds = {
         "sample": offer.sample_s,
         "cut": cut_s - offer.sample_s,
         "publish": time.perf_counter() - tick,
     }
-    return CutRound(r + 1, prepared, now, ages, seconds)
+    return CutRound(r + 1, prepared, now, ages, pool_steps, seconds)
 
 
 def open_fresh(
@@ -242,7 +246,6 @@ def open_cut(
     cut before the round ended (`worker.continuous_round`), its parts no part
     of the wait."""
     run, r = continuous.run, job.round
-    oldest = cut.steps - int(cut.ages.max(initial=0))
     accuracy = None if continuous.report is None else continuous.report.validation_accuracy
     with clock("store"), db.write() as s:
         ended = get_round(s, job.session_id, r).closed_at
@@ -252,7 +255,7 @@ def open_cut(
         if opened:
             add_point(
                 s, job.session_id, round_index=cut.round, ppo_steps=cut.steps, true_return=None,
-                pairs=len(run.dataset), reward_val_accuracy=accuracy, pool_steps=oldest,
+                pairs=len(run.dataset), reward_val_accuracy=accuracy, pool_steps=cut.pool_steps,
             )  # fmt: skip
     if opened:
         waited = (utcnow() - ended).total_seconds() if ended is not None else float("nan")
