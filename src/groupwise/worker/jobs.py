@@ -263,14 +263,16 @@ def open_cut(
         clock.write(path, waited, cut.seconds if staged else None)
         ages = cut.ages
         log.info(
-            "session %s: round %d opened %.1f s after round %d ended, %d behaviours of the "
-            "latest rollouts%s, %s PPO steps old (median %s)",
+            "session %s: round %d opened %.1f s after round %d ended, %d behaviours%s: "
+            "the latest rollouts' at most %s PPO steps old; with the kept policy's share, "
+            "%s (median %s)",
             job.session_id,
             cut.round,
             waited,
             r,
             len(ages),
             " cut before the round ended" if staged else "",
+            f"{cut.steps - cut.pool_steps:,}",
             f"{int(ages.min()) if len(ages) else 0:,}–{int(ages.max(initial=0)):,}",
             f"{int(np.median(ages)) if len(ages) else 0:,}",
         )
