@@ -67,7 +67,7 @@ import torch
 from benchmarks.ppo_throughput import steps_per_second
 from benchmarks.submit_latency import start_server, wait_for
 from groupwise.config import RunConfig
-from groupwise.pool.files import load_pool
+from groupwise.pool.files import load_sources
 from groupwise.pool.recent import kept_tag
 from groupwise.run.run import CONFIG_FILE
 from groupwise.storage.sessions import round_directory
@@ -357,7 +357,7 @@ def _pool_ages(data: Path, session: str, round_index: int) -> tuple[np.ndarray, 
         ages = np.asarray(json.loads((directory / "pool.json").read_text())["metadata"]["ages"])
     except (OSError, ValueError, KeyError):
         return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
-    sources = load_pool(directory, round_index).sources
+    sources = load_sources(directory)  # not the whole pool: its behaviours' steps too
     cfg = RunConfig.load(data / "sessions" / session / CONFIG_FILE)
     kept = np.zeros(len(ages), bool) if sources is None else sources == kept_tag(cfg.loop)
     return ages[~kept].astype(np.int64), ages[kept].astype(np.int64)

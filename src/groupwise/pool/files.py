@@ -40,7 +40,7 @@ from groupwise.clips.store import ClipStore
 from groupwise.clips.timing import ClipTiming
 from groupwise.episodes.fragments import Fragment
 from groupwise.episodes.ids import behaviour_id
-from groupwise.types import FloatArray
+from groupwise.types import FloatArray, IntArray
 
 FORMAT = "groupwise.behaviour.pool/1"
 
@@ -183,9 +183,16 @@ def load_pool(directory: Path, round_index: int) -> BehaviourPool:
         with np.load(directory / "predictions.npz") as data:
             predicted = data["predicted_returns"]
             step_variance = data["step_variance"] if "step_variance" in data else None
+    return BehaviourPool(
+        round_index, fragments, predicted, step_variance, sources=load_sources(directory)
+    )
+
+
+def load_sources(directory: Path) -> IntArray | None:
+    """Which source played each behaviour of a pool written by `prepare_pool`
+    (`BehaviourPool.sources`); None for a pool written before they were kept."""
     with np.load(directory / "behaviours.npz") as data:
-        sources = data["source"] if "source" in data else None
-    return BehaviourPool(round_index, fragments, predicted, step_variance, sources=sources)
+        return data["source"] if "source" in data else None
 
 
 def _relative(path: Path, base: Path) -> str:

@@ -36,6 +36,7 @@ import numpy as np
 
 from groupwise.behaviour.pool import BehaviourPool
 from groupwise.config import LoopConfig
+from groupwise.episodes.fragments import stack_fragments
 from groupwise.pool.sources import CurrentPolicy
 from groupwise.reward.ensemble import RewardEnsemble
 from groupwise.rl.ppo import PolicyState, PPOAgent
@@ -180,7 +181,6 @@ def tag_rewards(ensemble: RewardEnsemble, pool: BehaviourPool, tag: int) -> Floa
     if pool.sources is None or not np.any(pool.sources == tag):
         return None
     chosen = [f for f, source in zip(pool.fragments, pool.sources, strict=True) if source == tag]
-    obs = np.stack([f.obs for f in chosen])
-    acts = np.stack([f.acts for f in chosen])
+    obs, acts = stack_fragments(chosen)
     rewards: FloatArray = ensemble.step_rewards(obs, acts).mean(axis=(1, 2))
     return rewards
