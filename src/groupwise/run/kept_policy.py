@@ -33,6 +33,7 @@ from pathlib import Path
 from typing import Literal
 
 import numpy as np
+from scipy.stats import mannwhitneyu
 
 from groupwise.behaviour.pool import BehaviourPool
 from groupwise.config import LoopConfig
@@ -101,11 +102,17 @@ class KeptPolicy:
     def _decide(
         self, agent: PPOAgent, ensemble: RewardEnsemble, judged: BehaviourPool, tag: int
     ) -> Choice:
-        fresh = tag_rewards(ensemble, judged, 0)
-        kept = tag_rewards(ensemble, judged, tag)
+        fresh_paid = tag_rewards(ensemble, judged, 0)
+        kept_paid = tag_rewards(ensemble, judged, tag)
         # a pool cut from the kept policy itself has no kept share: nothing to compare
-        if fresh is None or kept is None or self.kept is None or self.cut is None:
+        if fresh_paid is None or kept_paid is None or self.kept is None or self.cut is None:
             return "none"
+        fresh, kept = fresh_paid.mean(axis=1), kept_paid.mean(axis=1)
+        # how sure the members' mean is that the kept behaviours are paid more, behaviour by
+        # behaviour (logged beside the decision, to weigh a margin for going back)
+        p_kept = mannwhitneyu(
+            kept_paid.mean(axis=0), fresh_paid.mean(axis=0), alternative="greater"
+        ).pvalue
         went: Choice
         if bool(np.all(kept > fresh)):
             agent.load_policy_state(self.kept.state)
@@ -116,11 +123,15 @@ class KeptPolicy:
         else:
             went = "kept"
         log.info(
-            "round %d's pool: its fresh behaviours paid %s a step, the kept policy's %s: %s "
+            "round %d's pool: its %d fresh behaviours paid %s a step, the kept policy's %d %s "
+            "(one-sided Mann-Whitney p = %.3g that the kept ones are paid more): %s "
             "(the kept policy now: %d PPO steps)",
             judged.round,
+            fresh_paid.shape[1],
             [round(float(v), 3) for v in fresh],
+            kept_paid.shape[1],
             [round(float(v), 3) for v in kept],
+            p_kept,
             went,
             self.kept.steps,
         )
@@ -176,11 +187,11 @@ class KeptPolicy:
 
 
 def tag_rewards(ensemble: RewardEnsemble, pool: BehaviourPool, tag: int) -> FloatArray | None:
-    """(K,) each member's mean reward per step over `pool`'s behaviours of source `tag`
-    (`BehaviourPool.sources`); None when it has none, or its sources are unknown."""
+    """(K, N) each member's mean reward per step on each of `pool`'s N behaviours of source
+    `tag` (`BehaviourPool.sources`); None when it has none, or its sources are unknown."""
     if pool.sources is None or not np.any(pool.sources == tag):
         return None
     chosen = [f for f, source in zip(pool.fragments, pool.sources, strict=True) if source == tag]
     obs, acts = stack_fragments(chosen)
-    rewards: FloatArray = ensemble.step_rewards(obs, acts).mean(axis=(1, 2))
+    rewards: FloatArray = ensemble.step_rewards(obs, acts).mean(axis=2)
     return rewards

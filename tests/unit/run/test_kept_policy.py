@@ -103,8 +103,10 @@ def test_a_policy_state_survives_its_file(tmp_path):
 def test_the_answers_pay_each_source_what_they_preferred():
     pool, ensemble = _judged(KEPT)
     fresh, kept = tag_rewards(ensemble, pool, 0), tag_rewards(ensemble, pool, KEPT)
-    assert fresh is not None and kept is not None and fresh.shape == (3,)
-    assert (kept > fresh).all()
+    assert fresh is not None and kept is not None
+    assert fresh.shape == (3, int(np.sum(pool.sources == 0)))
+    assert kept.shape == (3, int(np.sum(pool.sources == KEPT)))
+    assert (kept.mean(axis=1) > fresh.mean(axis=1)).all()
     assert tag_rewards(ensemble, pool, 5) is None
     unknown = BehaviourPool(1, pool.fragments, pool.predicted_returns)
     assert tag_rewards(ensemble, unknown, 0) is None
