@@ -14,9 +14,11 @@
 # (CELLS="halfcheetah-standup:continuous:0 ..." runs only those; a finished cell is kept)
 # then: python -m groupwise.study.case_studies.continuous_table OUT/*/ --marks 10 20
 # rounds.csv holds every finished run's rounds (score, success, pool, ties; `variant`: the
-# code it ran, "default (kept policy)" since the kept policy, run/kept_policy.py) and is read
-# back with: python -m groupwise.study.case_studies.continuous_table --table rounds.csv
-# --marks 10 20; the run folders themselves are artifacts, not kept.
+# code it ran, "default (kept policy)" since the kept policy, run/kept_policy.py), appended
+# with: python -m groupwise.study.case_studies.continuous_table OUT/*/ --append-to rounds.csv
+# --variant NAME, and read back with: ... continuous_table --table rounds.csv --marks 10 20;
+# the run folders themselves are artifacts, not kept. decisions.csv: the kept policy's
+# decisions, from the cells' logs: python decisions.py OUT/*.log (VARIANT=NAME).
 set -euo pipefail
 out=${1:?usage: run.sh OUT [PARALLEL]}; parallel=${2:-2}
 here=$(cd "$(dirname "$0")" && pwd)

@@ -3,6 +3,8 @@
 
     python -m groupwise.study.case_studies.continuous_table RUN_DIR [RUN_DIR ...] [--figure PNG]
                                                             [--marks 10 20] [--table CSV]
+    python -m groupwise.study.case_studies.continuous_table RUN_DIR ... --append-to CSV
+                                                            --variant NAME
 
 Each RUN_DIR is a ``groupwise case-study … --teacher-pace S`` run (`--training rounds` or
 `continuous`). Its rounds carry the teacher's virtual clock (``clock_s`` in ``rounds.csv``:
@@ -123,7 +125,51 @@ TABLE_COLUMNS = (
     "target_score",
     "success",
 )
-"""The columns of a tidy rounds table (`read_table`, `table_rows`) this module reads back."""
+"""The columns of a tidy rounds table this module reads back (`read_table`)."""
+TABLE_EXTRA = {
+    "comparisons": "comparisons_total",
+    "judgements": "judgements_total",
+    "env_steps": "env_steps",
+    "target_score": "target_score_mean",
+    "success": "success_rate",
+    "pool_score_max": "pool_score_max",
+    "tied_share_total": "tied_share_total",
+}
+"""The columns `write_table` copies from a run's ``case-study.csv`` (table's: run's)."""
+
+
+def write_table(runs: Sequence[Path], variant: str, path: Path) -> int:
+    """Append the rounds of finished timed case-study `runs` to the tidy rounds table at
+    `path` (written with its header when new), each run's rows named `variant` (the code it
+    ran, e.g. "default (kept policy)"): `TABLE_COLUMNS` and `TABLE_EXTRA`. Returns the rows
+    written.
+
+    Raises:
+        ValueError: a run has not finished, or had no timed teacher.
+    """
+    rows = []
+    for run in runs:
+        timed = read_run(run)
+        with (run / "case-study.csv").open() as handle:
+            scored = list(csv.DictReader(handle))
+        for index, (minute, row) in enumerate(zip(timed.minutes, scored, strict=True)):
+            rows.append({
+                "target": timed.target, "training": timed.mode, "variant": variant,
+                "seed": timed.seed, "round": index, "minute": round(minute, 2),
+                **{ours: row.get(theirs, "") for ours, theirs in TABLE_EXTRA.items()},
+            })  # fmt: skip
+    new = not path.is_file() or path.stat().st_size == 0
+    if new:
+        columns = [*TABLE_COLUMNS[: TABLE_COLUMNS.index("minute") + 1], *TABLE_EXTRA]
+    else:  # the table's own order
+        with path.open() as handle:
+            columns = next(csv.reader(handle))
+    with path.open("a", newline="") as handle:
+        writer = csv.DictWriter(handle, fieldnames=columns, extrasaction="ignore")
+        if new:
+            writer.writeheader()
+        writer.writerows(rows)
+    return len(rows)
 
 
 def read_table(path: Path) -> list[TimedRun]:
@@ -305,6 +351,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     parser.add_argument("--figure", type=Path, help="also draw the curves into this PNG")
     parser.add_argument(
+        "--append-to",
+        type=Path,
+        metavar="CSV",
+        help="append the rounds of the run directories given to this tidy rounds table "
+        "(--table reads it back), named --variant",
+    )
+    parser.add_argument(
+        "--variant", default="default", help="the name --append-to gives the runs' rows"
+    )
+    parser.add_argument(
         "--marks",
         type=float,
         nargs="+",
@@ -312,6 +368,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
     try:
+        if args.append_to is not None:
+            written = write_table(args.runs, args.variant, args.append_to)
+            print(f"{written} rounds of {len(args.runs)} runs appended to {args.append_to}")
+            return 0
         read = [read_run(run) for run in args.runs]
         read += [] if args.table is None else read_table(args.table)
     except (ValueError, OSError) as error:

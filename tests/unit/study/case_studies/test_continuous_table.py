@@ -12,6 +12,7 @@ from groupwise.study.case_studies.continuous_table import (
     main,
     minutes_to_pass,
     read_run,
+    read_table,
     success_at,
     variants,
 )
@@ -43,7 +44,12 @@ def _run(
         (
             "case-study.csv",
             [
-                {"round": i, "target_score_mean": 0.5 + i, "success_rate": s}
+                {
+                    "round": i,
+                    "env_steps": 2048 * (i + 1),
+                    "target_score_mean": 0.5 + i,
+                    "success_rate": s,
+                }
                 for i, s in enumerate(success)
             ],
         ),
@@ -175,3 +181,26 @@ def test_a_table_without_a_column_is_one_line_of_error(tmp_path, capsys):
     with pytest.raises(SystemExit):
         main(["--table", str(_table(tmp_path / "rounds.csv", rows))])
     assert "no column minute" in capsys.readouterr().err
+
+
+def test_runs_appended_to_a_tidy_table_read_back_as_they_were(tmp_path, capsys):
+    """`--append-to` writes the rows `--table` reads: the same runs, named by `--variant`,
+    appended in the table's own column order."""
+    runs = [
+        _run(tmp_path, "c", "continuous", ["60", "180"], [0.0, 0.8]),
+        _run(tmp_path, "r", "rounds", ["90", "300"], [0.2, 1.0], seed=4),
+    ]
+    table = tmp_path / "rounds.csv"
+    assert main([str(runs[0]), "--append-to", str(table), "--variant", "kept"]) == 0
+    assert main([str(runs[1]), "--append-to", str(table), "--variant", "rounds"]) == 0
+    assert "2 rounds of 1 runs appended" in capsys.readouterr().out
+    rows = list(csv.DictReader(table.open()))
+    assert [(r["training"], r["variant"], r["seed"], r["round"]) for r in rows] == [
+        ("continuous", "kept", "3", "0"),
+        ("continuous", "kept", "3", "1"),
+        ("rounds", "rounds", "4", "0"),
+        ("rounds", "rounds", "4", "1"),
+    ]
+    [read_c, read_r] = read_table(table)
+    assert read_c.minutes == read_run(runs[0]).minutes and read_c.config == {"variant": "kept"}
+    assert read_r.success == read_run(runs[1]).success and read_r.passed_at == 5.0
