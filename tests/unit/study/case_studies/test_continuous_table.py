@@ -204,3 +204,17 @@ def test_runs_appended_to_a_tidy_table_read_back_as_they_were(tmp_path, capsys):
     [read_c, read_r] = read_table(table)
     assert read_c.minutes == read_run(runs[0]).minutes and read_c.config == {"variant": "kept"}
     assert read_r.success == read_run(runs[1]).success and read_r.passed_at == 5.0
+
+
+def test_rows_appended_to_an_older_table_follow_its_column_order(tmp_path):
+    """A table written by hand in another order (the stand-up's first rows were) gets new
+    rows under its own header, not under `write_table`'s."""
+    run = _run(tmp_path, "c", "continuous", ["60"], [1.0])
+    table = tmp_path / "rounds.csv"
+    header = "success,minute,seed,round,variant,training,target,target_score,env_steps"
+    table.write_text(header + "\n0.0,1.0,0,0,old,rounds,hopper-backflip,0.1,100\n")
+    assert main([str(run), "--append-to", str(table), "--variant", "new"]) == 0
+    lines = table.read_text().splitlines()
+    assert lines[0] == header and len(lines) == 3
+    assert lines[2] == "1.0,1.0,3,0,new,continuous,hopper-backflip,0.5,2048"
+    assert [r.config["variant"] for r in read_table(table)] == ["old", "new"]
