@@ -283,8 +283,8 @@ class TrainingConfig:
     kept_share: Annotated[float, Field(ge=0, le=0.5)] = 0.2
     """Continuous training: the share of each fresh pool (from round 1 on) sampled from the
     policy the person's answers prefer so far, beside what PPO does now; PPO goes back to
-    that policy when every reward member pays its behaviours more (`run.kept_policy`). 0:
-    none, every behaviour from PPO's latest rollouts."""
+    that policy when every reward member pays its behaviours more, by more than chance
+    (`run.kept_policy`). 0: none, every behaviour from PPO's latest rollouts."""
     pretrain_steps: Annotated[int, Field(ge=0)] = 0
     """PPO steps of unsupervised pre-training before round 0, paid a state-entropy bonus
     instead of the learned reward (`groupwise.run.pretrain`, PEBBLE), so that the first

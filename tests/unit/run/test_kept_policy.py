@@ -14,7 +14,7 @@ from groupwise.preferences.dataset import PreferenceDataset
 from groupwise.preferences.pairs import Pair
 from groupwise.reward import RewardEnsemble, fit
 from groupwise.rl.ppo import PolicyState, PPOAgent
-from groupwise.run.kept_policy import KeptPolicy, tag_rewards
+from groupwise.run.kept_policy import GO_BACK_P, KeptPolicy, decide, tag_rewards
 
 ENV = "Pendulum-v1"
 PPO = PPOConfig(n_envs=2, n_steps=64, batch_size=64, n_epochs=1, tensorboard=False)
@@ -110,6 +110,26 @@ def test_the_answers_pay_each_source_what_they_preferred():
     assert tag_rewards(ensemble, pool, 5) is None
     unknown = BehaviourPool(1, pool.fragments, pool.predicted_returns)
     assert tag_rewards(ensemble, unknown, 0) is None
+
+
+def test_going_back_needs_every_member_and_more_than_chance():
+    rng = np.random.default_rng(0)
+    fresh = rng.normal(0.1, 0.05, (3, 30))
+    clearly = rng.normal(0.3, 0.05, (3, 20))
+    assert decide(fresh, clearly)[0] == "back" and decide(fresh, clearly)[1] < 1e-6
+    # every member pays the kept ones a hair more (the backflip's noise-sized margins), but
+    # over behaviours that is chance: the kept policy stays, PPO goes on
+    hair = fresh + 0.003
+    went, p = decide(fresh, hair)
+    assert bool((hair.mean(axis=1) > fresh.mean(axis=1)).all()) and p >= GO_BACK_P
+    assert went == "kept"
+    # a clear margin that one member disagrees with: no going back either
+    split = clearly.copy()
+    split[0] = rng.normal(0.0, 0.05, 20)
+    assert decide(fresh, split)[0] == "kept"
+    # one kept behaviour cannot show more than chance against a handful of fresh ones
+    assert decide(fresh[:, :10], clearly[:, :1])[0] == "kept"
+    assert decide(clearly, fresh)[0] == "latest"
 
 
 def test_when_every_member_pays_the_kept_policy_more_ppo_goes_back_to_it():
