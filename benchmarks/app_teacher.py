@@ -23,7 +23,7 @@ worker published (a person sees them in the clips); everything else goes through
     python -m benchmarks.app_teacher [--targets hopper-backflip ...] [--seeds 0 1 2]
                                      [--minutes 10 20] [--pace S] [--label-error 0.12]
                                      [--training continuous|rounds] [--research JSON]
-                                     [--comparisons N]
+                                     [--comparisons N] [--variant NAME]
                                      [--out DIR] [--log FILE]
     python -m benchmarks.app_teacher --figure curves.png OUT/*/cells.jsonl
     python -m benchmarks.app_teacher --summary OUT/*/cells.jsonl
@@ -299,14 +299,20 @@ def table(cells: Sequence[Cell], marks: Sequence[float]) -> str:
 
 
 def cell_record(
-    cell: Cell, training: str, research: dict | None = None, comparisons: int | None = None
+    cell: Cell,
+    training: str,
+    research: dict | None = None,
+    comparisons: int | None = None,
+    variant: str | None = None,
 ) -> dict:
     """One cell as a JSON line (`--figure` reads them back); `comparisons` is a round's
-    budget where `--comparisons` set it (None: the paper's pairs in `ROUNDS` rounds)."""
+    budget where `--comparisons` set it (None: the paper's pairs in `ROUNDS` rounds);
+    `variant` names the code the cell ran where `--variant` did (an earlier default)."""
     return {
         "target": cell.target,
         "seed": cell.seed,
         "training": training,
+        "variant": variant,
         "research": research,
         "comparisons_per_round": comparisons,
         "success": {f"{m:g}": rate for m, rate in cell.success.items()},
@@ -355,11 +361,13 @@ def figure(records: Sequence[dict], path: Path) -> None:
 
 
 def arm(record: dict) -> str:
-    """A cell's training mode, with its research settings and its rounds' comparison budget
-    when it had them."""
+    """A cell's training mode, with its variant, research settings and its rounds'
+    comparison budget when it had them."""
     research, budget = record.get("research"), record.get("comparisons_per_round")
+    variant = record.get("variant")
     return (
         record["training"]
+        + (f" [{variant}]" if variant else "")
         + (f" {json.dumps(research)}" if research else "")
         + (f", {budget} comparisons a round" if budget else "")
     )
@@ -448,6 +456,9 @@ def main(argv: Sequence[str] | None = None) -> None:
         type=json.loads,
         help='a partial run config for the sessions, e.g. \'{"reward": {"use_actions": false}}\'',
     )
+    parser.add_argument(
+        "--variant", help="name the code the cells run in their records, e.g. an earlier default"
+    )
     parser.add_argument("--out", type=Path, help="keep the copies here (default: a temp dir)")
     parser.add_argument("--log", type=Path, help="write the servers' and workers' logs here")
     parser.add_argument(
@@ -487,7 +498,9 @@ def main(argv: Sequence[str] | None = None) -> None:
                 with (out / "cells.jsonl").open("a") as handle:
                     handle.write(
                         json.dumps(
-                            cell_record(cell, args.training, args.research, args.comparisons)
+                            cell_record(
+                                cell, args.training, args.research, args.comparisons, args.variant
+                            )
                         )
                         + "\n"
                     )
