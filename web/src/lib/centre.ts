@@ -4,7 +4,7 @@
  * centre the chart instead of filling a group, and how many gestures a person needs to pick
  * one behaviour. Pure.
  */
-import { type LayoutOptions, radialLayout } from "./layout";
+import { type LayoutOptions, type RadialLayout, radialLayout } from "./layout";
 import { MAX_GROUP } from "./selection";
 import { type Tree, type TreeNode, ancestors } from "./tree";
 
@@ -70,9 +70,16 @@ export function arcPx(arc: { a0: number; a1: number; r0: number; r1: number }, s
  * whole round: each click centres the chart on the innermost enclosing cluster whose arc
  * is wide enough to click and too big to be a group; once no such click brings the leaf
  * wide enough, one wheel or pinch zoom magnifies it (up to `maxZoom`); then one click picks
- * it. Infinity when even that leaves it too narrow.
+ * it. Infinity when even that leaves it too narrow. `layouts` keeps the layout centred on
+ * each cluster between calls over the same tree and geometry (a count for every leaf of
+ * 1,000 lays out each centre once, not each leaf's).
  */
-export function gesturesToPick(tree: Tree, leaf: string, geometry: PickGeometry): number {
+export function gesturesToPick(
+  tree: Tree,
+  leaf: string,
+  geometry: PickGeometry,
+  layouts: Map<TreeNode, RadialLayout> = new Map(),
+): number {
   const minPx = geometry.minPx ?? 6;
   const maxZoom = geometry.maxZoom ?? 16;
   const target = tree.nodes.get(leaf);
@@ -80,7 +87,11 @@ export function gesturesToPick(tree: Tree, leaf: string, geometry: PickGeometry)
   let centre = tree.root;
   let gestures = 0;
   for (;;) {
-    const layout = radialLayout(tree, { ...geometry.layout, centre });
+    let layout = layouts.get(centre);
+    if (!layout) {
+      layout = radialLayout(tree, { ...geometry.layout, centre });
+      layouts.set(centre, layout);
+    }
     const width = arcPx(layout.byId.get(leaf)!, geometry.scale);
     if (width >= minPx) return gestures + 1;
     const next = ancestors(target).find((n) => {
