@@ -15,7 +15,10 @@ mark of `--minutes` the benchmark copies the session's run directory (its commit
 checkpoints and the mid-round checkpoint the worker writes every 30 s); after the session it
 loads each copy's policy and measures its greedy episodes' target score in the target env,
 as the case studies do (`study.case_studies.target_evaluation.evaluate_target`). A seed
-succeeds when its success rate reaches `SEED_SUCCESS`, as in the case studies' tables.
+succeeds when its success rate reaches `SEED_SUCCESS`, as in the case studies' tables. Each
+cell also records the same policy's success when it samples its actions (as in the PPO
+rollouts a fresh pool is cut from) and, per round, each pool source's mean true step score
+(`pool_score`): what the person was shown, beside what the person takes away.
 
 The teacher reads the true step scores of a round's behaviours from the pool files the
 worker published (a person sees them in the clips); everything else goes through HTTP.
@@ -56,6 +59,7 @@ import httpx
 import numpy as np
 
 from benchmarks.submit_latency import start_server
+from groupwise.behaviour.pool import BehaviourPool
 from groupwise.config import RunConfig, TeacherConfig
 from groupwise.envs import TARGETS, make_env
 from groupwise.episodes.ids import behaviour_id, behaviour_index
@@ -91,6 +95,13 @@ class Cell:
     """minute → the success rate of the copy's greedy episodes."""
     scores: dict[float, float] = field(default_factory=dict)
     """minute → the mean target score of the copy's greedy episodes (the target's unit)."""
+    sampled_success: dict[float, float] = field(default_factory=dict)
+    """minute → the success rate of the copy's policy acting as in PPO's rollouts (sampling
+    its actions), the behaviour a fresh pool shows the person."""
+    sampled_scores: dict[float, float] = field(default_factory=dict)
+    pool_scores: list[dict[str, float]] = field(default_factory=list)
+    """Per round, each source's mean true step score over its behaviours in the pool
+    (`pool_score`): what the person was shown."""
     pool_ages: list[int] = field(default_factory=list)
     waits: list[float] = field(default_factory=list)
     judgements: int = 0
@@ -124,6 +135,17 @@ def wait_open(http: httpx.Client, session: str, round_index: int, until: float) 
 def pool_age(http: httpx.Client, session: str) -> int | None:
     summary = http.get(f"/api/sessions/{session}/training").json().get("summary")
     return None if summary is None else int(summary["pool_age"])
+
+
+def pool_score(pool: BehaviourPool) -> dict[str, float]:
+    """Each source's mean true step score over its behaviours in `pool` (source "0" the
+    round's policy, the others the pool's other sources; "all" where sources are unknown)."""
+    means = np.array([f.true_rewards.mean() for f in pool.fragments])
+    sources = pool.sources if pool.sources is not None else np.zeros(len(means), np.int64)
+    return {
+        ("all" if pool.sources is None else str(s)): float(means[sources == s].mean())
+        for s in np.unique(sources)
+    }
 
 
 def teach(
@@ -167,6 +189,7 @@ def teach(
                     http.post(f"/api/sessions/{session}/rounds/{round_index}/shown")
                     run_dir = data / round_directory(session, round_index)
                     pool = load_pool(run_dir, round_index)
+                    cell.pool_scores.append(pool_score(pool))
                     closed = False
                     while not closed and pending:
                         reply = http.post(
@@ -254,7 +277,8 @@ def _pool_directories(session: Path):
 
 def evaluate_copy(cell: Cell, minute: float, copy: Path) -> None:
     """The success rate of the greedy policy in `copy` (the newest of its committed and
-    mid-round checkpoints), measured on the target env."""
+    mid-round checkpoints), measured on the target env; beside it, that of the same policy
+    sampling its actions, as it does in the rollouts a fresh pool is cut from."""
     cfg = RunConfig.load(copy / CONFIG_FILE)
     with Run.create(cfg, copy) as run:
         committed = run.restore()
@@ -268,11 +292,15 @@ def evaluate_copy(cell: Cell, minute: float, copy: Path) -> None:
         cell.ppo_steps[minute] = int(run.agent.num_timesteps)
         target = TARGETS[cell.target]
         rng = np.random.default_rng([cell.seed, int(minute)])
-        evaluation = evaluate_target(
-            lambda: make_env(target.env), run.agent.policy(deterministic=True), EPISODES, rng
-        )
-        cell.success[minute] = evaluation.success_rate(target)
-        cell.scores[minute] = float(evaluation.scores.mean())
+        for deterministic, success, scores in (
+            (True, cell.success, cell.scores),
+            (False, cell.sampled_success, cell.sampled_scores),
+        ):
+            evaluation = evaluate_target(
+                lambda: make_env(target.env), run.agent.policy(deterministic), EPISODES, rng
+            )
+            success[minute] = evaluation.success_rate(target)
+            scores[minute] = float(evaluation.scores.mean())
 
 
 def table(cells: Sequence[Cell], marks: Sequence[float]) -> str:
@@ -317,6 +345,9 @@ def cell_record(
         "comparisons_per_round": comparisons,
         "success": {f"{m:g}": rate for m, rate in cell.success.items()},
         "scores": {f"{m:g}": score for m, score in cell.scores.items()},
+        "sampled_success": {f"{m:g}": rate for m, rate in cell.sampled_success.items()},
+        "sampled_scores": {f"{m:g}": score for m, score in cell.sampled_scores.items()},
+        "pool_scores": cell.pool_scores,
         "ppo_steps": {f"{m:g}": steps for m, steps in cell.ppo_steps.items()},
         "comparisons": cell.judgements,
         "pool_ages": cell.pool_ages,
@@ -505,7 +536,8 @@ def main(argv: Sequence[str] | None = None) -> None:
                         + "\n"
                     )
                 print(
-                    f"{time.strftime('%H:%M:%S')} {target} seed {seed}: {cell.success}",
+                    f"{time.strftime('%H:%M:%S')} {target} seed {seed}: greedy {cell.success}, "
+                    f"sampled {cell.sampled_success}, pools {cell.pool_scores}",
                     file=sys.stderr,
                 )
     print(
