@@ -293,6 +293,13 @@ class TrainingConfig:
     """k of the pre-training's k-nearest-neighbour entropy estimate (PEBBLE's 5)."""
     pretrain_states: Annotated[int, Field(ge=10, le=1_000_000)] = 10_000
     """Recent states each state's nearest neighbours are looked for among in pre-training."""
+    teach_log_std: Annotated[float, Field(ge=-5.0, le=1.0)] | None = None
+    """log σ of PPO's action noise once pre-training ends (`rl.ppo.PPOAgent.pretrain`;
+    pre-training explores at SB3's initial 0, σ = 1 of a ±1 action range). The person judges
+    PPO's sampled behaviours (a fresh pool is cut from its rollouts) and takes away its greedy
+    policy; at σ = 1 the two differ (the stand-up's seed 1: 9 of 10 greedy episodes stand up
+    and sit down, 4 of 10 sampled ones). None: as pre-training leaves it. Needs continuous
+    actions."""
 
 
 @dataclass(frozen=True, config=_STRICT)

@@ -38,8 +38,9 @@ learned control cost, `RewardConfig.action_term`); `RewardConfig.use_actions`.""
 
 @dataclass(frozen=True, config=_STRICT)
 class RecipeParts:
-    """What a recipe sets in a run: pre-training, pool variants, the PPO preset, the reward's
-    inputs and the share of random actions in a pool."""
+    """What a recipe sets in a run: pre-training and the action noise after it, pool
+    variants, the PPO preset, the reward's inputs and the share of random actions in a
+    pool."""
 
     pretrain_steps: Annotated[int, Field(ge=0)]
     """`TrainingConfig.pretrain_steps`: state-entropy pre-training before round 0."""
@@ -52,6 +53,9 @@ class RecipeParts:
     exploration_fraction: ExplorationFraction
     """`LoopConfig.exploration_fraction`: the share of a pool's sampled steps with random
     actions."""
+    teach_log_std: float | None = None
+    """`TrainingConfig.teach_log_std`: log σ of PPO's action noise once pre-training ends
+    (None: as pre-training leaves it)."""
 
 
 _PAPER_PARTS = RecipeParts(
@@ -102,7 +106,11 @@ class Recipe:
         return dataclasses.replace(
             cfg,
             loop=loop,
-            training=dataclasses.replace(cfg.training, pretrain_steps=parts.pretrain_steps),
+            training=dataclasses.replace(
+                cfg.training,
+                pretrain_steps=parts.pretrain_steps,
+                teach_log_std=parts.teach_log_std,
+            ),
             ppo=PPO_PRESETS[parts.ppo],
             reward=dataclasses.replace(cfg.reward, use_actions=parts.reward_inputs == "obs-act"),
         )
@@ -117,15 +125,17 @@ RECIPES: dict[RecipeName, Recipe] = {
     for recipe in (
         Recipe(
             name="teach",
-            description="state-entropy pre-training (100,000 steps), 8 pool variants, PPO's "
-            "MuJoCo settings, a reward over the observation alone and 5 % random actions in a "
-            "pool on MuJoCo envs; the paper's parts elsewhere",
+            description="state-entropy pre-training (100,000 steps) handing over at action "
+            "noise σ = e^-2, 8 pool variants, PPO's MuJoCo settings, a reward over the "
+            "observation alone and 5 % random actions in a pool on MuJoCo envs; the paper's "
+            "parts elsewhere",
             mujoco=RecipeParts(
                 pretrain_steps=100_000,
                 pool_variants=8,
                 ppo="mujoco",
                 reward_inputs="obs",
                 exploration_fraction=0.05,
+                teach_log_std=-2.0,
             ),
             other=_PAPER_PARTS,
             measured="stand-up 5/5, backflip 4/5, splits 2/5 seeds",

@@ -76,6 +76,34 @@ def test_pretraining_is_the_same_for_a_seed():
     assert all(torch.equal(first[k], second[k]) for k in first)
 
 
+def test_pretraining_hands_over_at_the_action_noise_asked_its_mean_kept():
+    """`teach_log_std` sets the policy's σ once pre-training ends; its greedy actions, what
+    the person takes away, are those of the same pre-training without it."""
+    cfg = dataclasses.replace(
+        TINY,
+        loop=dataclasses.replace(TINY.loop, env="Pendulum-v1"),
+        training=TrainingConfig(pretrain_steps=256, teach_log_std=-2.0),
+    )
+    obs = np.random.default_rng(0).normal(size=(16, 3)).astype(np.float32)
+
+    def pretrained(cfg: RunConfig) -> tuple[torch.Tensor, np.ndarray]:
+        with Run.create(cfg) as run:
+            pretrain(run)
+            greedy = run.ppo.act(obs, np.random.default_rng(1), deterministic=True)
+            return run.ppo.model.policy.log_std.detach().clone(), greedy
+
+    noise, greedy = pretrained(cfg)
+    left, greedy_left = pretrained(
+        dataclasses.replace(cfg, training=TrainingConfig(pretrain_steps=256))
+    )
+    assert torch.equal(noise, torch.full_like(noise, -2.0))
+    assert not torch.allclose(left, noise)  # pre-training alone leaves σ near 1
+    np.testing.assert_array_equal(greedy, greedy_left)
+    with Run.create(dataclasses.replace(TINY, training=cfg.training)) as run:
+        with pytest.raises(ValueError, match="continuous actions"):
+            pretrain(run)  # GridWorld's actions are discrete
+
+
 def test_no_pretraining_by_default_and_none_after_round_0():
     with Run.create(WITHOUT) as run:
         assert pretrain(run) is None

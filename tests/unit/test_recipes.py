@@ -31,6 +31,7 @@ def test_teach_sets_the_measured_parts_on_mujoco_envs_and_the_papers_elsewhere()
     hopper = teach.apply(RunConfig(), "Hopper-backflip")
     assert _parts(hopper) == (100_000, 8, 3e-4) and hopper.ppo == PPO_PRESETS["mujoco"]
     assert not hopper.reward.use_actions  # the observation alone
+    assert hopper.training.teach_log_std == -2.0  # σ = e^-2 once pre-training ends
     assert paper.apply(hopper, "Hopper").reward.use_actions
     assert teach.apply(RunConfig(), "GridWorld") == RunConfig()
     assert teach.apply(RunConfig(), "Pendulum-v1") == RunConfig()
@@ -97,7 +98,13 @@ def test_the_apps_settings_reach_the_run_config():
         stored.ppo_preset,
         stored.reward_inputs,
         stored.exploration_fraction,
-    ) == (100_000, 8, "mujoco", "obs", 0.05)
+        stored.teach_log_std,
+    ) == (100_000, 8, "mujoco", "obs", 0.05, -2.0)
+    grid = SessionSettings().for_env("GridWorld")  # the paper's parts: no noise to set
+    assert (
+        grid.teach_log_std is None and grid.run_config("GridWorld").training.teach_log_std is None
+    )
+    assert SessionSettings(teach_log_std=-1).run_config("Hopper").training.teach_log_std == -1
 
 
 def test_a_session_stored_before_recipes_keeps_its_parts():

@@ -1297,9 +1297,9 @@ export interface components {
          * @description What a session does each round; every number is a default, not a constant.
          *
          *     `recipe` (`recipes.RECIPES`, default "teach") gives the parts `ppo_preset`,
-         *     `pretrain_steps`, `pool_variants`, `reward_inputs` and `exploration_fraction` left
-         *     empty; `for_env` stores them resolved. A session stored before recipes has none
-         *     (`stored`): it keeps the parts it stored.
+         *     `pretrain_steps`, `pool_variants`, `reward_inputs`, `exploration_fraction` and
+         *     `teach_log_std` left empty; `for_env` stores them resolved. A session stored before
+         *     recipes has none (`stored`): it keeps the parts it stored.
          */
         SessionSettings: {
             /**
@@ -1457,6 +1457,11 @@ export interface components {
              * @default 100
              */
             suggestions: number;
+            /**
+             * Teach Log Std
+             * @description log σ of the action noise after pre-training; lower: clips closer to the agent you take away (null: the recipe's)
+             */
+            teach_log_std?: number | null;
             /**
              * Training
              * @description continuous: the agent trains while you compare; rounds: it trains after each round ends

@@ -73,6 +73,7 @@ describe("settingFields", () => {
       "pool_variants",
       "reward_inputs",
       "exploration_fraction",
+      "teach_log_std",
       "seed",
       "eval_episodes",
     ]);

@@ -124,17 +124,27 @@ class PPOAgent:
             self.model.num_timesteps = before + callback.rollouts * self.rollout_steps
 
     def pretrain(
-        self, reward_fn: RewardFn, steps: int, seed: int, report: ProgressFn | None = None
+        self,
+        reward_fn: RewardFn,
+        steps: int,
+        seed: int,
+        report: ProgressFn | None = None,
+        then_log_std: float | None = None,
     ) -> None:
         """Train `steps` env steps (whole rollouts, seeded as `learn`) on `reward_fn` in
         place of the learned reward (unsupervised pre-training, `groupwise.run.pretrain`),
         then forget what only that reward taught: the running return sd and the value
         function, as PEBBLE resets its critic after pre-training (B-Pref, train_PEBBLE.py).
-        The policy and the observation statistics are kept.
+        The policy and the observation statistics are kept; with `then_log_std` its action
+        noise is set to σ = exp(`then_log_std`) (`TrainingConfig.teach_log_std`), its mean
+        action unchanged.
 
         Raises:
-            ValueError: the agent trains on the env's own reward (no learned reward to swap).
+            ValueError: the agent trains on the env's own reward (no learned reward to swap),
+                or `then_log_std` is given for a policy without a Gaussian action noise.
         """
+        if then_log_std is not None and not hasattr(self.model.policy, "log_std"):
+            raise ValueError("teach_log_std needs continuous actions (a Gaussian policy)")
         rewarded = self.venv.venv if isinstance(self.venv, VecNormalize) else None
         if not isinstance(rewarded, LearnedRewardVecEnv):
             raise ValueError("pre-training needs an agent on a learned reward")
@@ -149,6 +159,9 @@ class PPOAgent:
         heads = ((policy.mlp_extractor.value_net, np.sqrt(2)), (policy.value_net, 1.0))
         for module, gain in heads:  # SB3's own initialisation (seeded by `learn`)
             module.apply(partial(policy.init_weights, gain=gain))
+        if then_log_std is not None:
+            with torch.no_grad():
+                policy.log_std.fill_(then_log_std)
 
     def act(self, obs: FloatArray, rng: np.random.Generator, deterministic: bool) -> np.ndarray:
         """Actions for raw observations (B, *obs_shape) (`policy_actions`)."""

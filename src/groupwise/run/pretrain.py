@@ -62,11 +62,13 @@ class SetupHook(Protocol):
 class StateEntropyPretraining:
     """`steps` PPO steps on a state-entropy bonus before round 0 (module docstring): the
     k-nearest-neighbour entropy estimate with `k` neighbours among the `states` most recent
-    states (`TrainingConfig.pretrain_steps`, `.pretrain_k`, `.pretrain_states`)."""
+    states, then the policy's action noise set to log σ `teach_log_std` when given
+    (`TrainingConfig.pretrain_steps`, `.pretrain_k`, `.pretrain_states`, `.teach_log_std`)."""
 
     steps: int
     k: int = 5
     states: int = 10_000
+    teach_log_std: float | None = None
 
     def before_first_round(self, run: Run, callback: RunCallback) -> None:
         self.train(run, callback=callback)
@@ -100,6 +102,7 @@ class StateEntropyPretraining:
             self.steps,
             int(rng.integers(2**31 - 1)),
             report=lambda done, total: callback.on_phase("pretrain", done, total),
+            then_log_std=self.teach_log_std,
         )
         report = PretrainReport(
             steps=agent.num_timesteps - before,
@@ -107,9 +110,10 @@ class StateEntropyPretraining:
             bonus_means=tuple(bonus.bonus_means),
         )
         log.info(
-            "pre-trained %d steps on the state-entropy bonus in %.0f s",
+            "pre-trained %d steps on the state-entropy bonus in %.0f s%s",
             report.steps,
             report.seconds,
+            "" if self.teach_log_std is None else f"; teaching at log σ {self.teach_log_std:g}",
         )
         return report
 
@@ -153,5 +157,8 @@ def _pretraining(cfg: RunConfig) -> StateEntropyPretraining | None:
     if training.pretrain_steps == 0:
         return None
     return StateEntropyPretraining(
-        training.pretrain_steps, training.pretrain_k, training.pretrain_states
+        training.pretrain_steps,
+        training.pretrain_k,
+        training.pretrain_states,
+        training.teach_log_std,
     )

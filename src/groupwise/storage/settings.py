@@ -91,6 +91,7 @@ RECIPE_FIELDS: dict[str, str] = {
     "ppo_preset": "ppo",
     "reward_inputs": "reward_inputs",
     "exploration_fraction": "exploration_fraction",
+    "teach_log_std": "teach_log_std",
 }
 """The settings a recipe fills when left empty: setting → its `recipes.RecipeParts` field."""
 
@@ -108,9 +109,9 @@ class SessionSettings(BaseModel):
     """What a session does each round; every number is a default, not a constant.
 
     `recipe` (`recipes.RECIPES`, default "teach") gives the parts `ppo_preset`,
-    `pretrain_steps`, `pool_variants`, `reward_inputs` and `exploration_fraction` left
-    empty; `for_env` stores them resolved. A session stored before recipes has none
-    (`stored`): it keeps the parts it stored."""
+    `pretrain_steps`, `pool_variants`, `reward_inputs`, `exploration_fraction` and
+    `teach_log_std` left empty; `for_env` stores them resolved. A session stored before
+    recipes has none (`stored`): it keeps the parts it stored."""
 
     model_config = ConfigDict(frozen=True, extra="forbid")
 
@@ -195,6 +196,13 @@ class SessionSettings(BaseModel):
         description="what the learned reward sees: obs (what a clip shows) or obs-act (the "
         "action too, a control cost; null: the recipe's)",
     )
+    teach_log_std: float | None = Field(
+        default=None,
+        ge=-5.0,
+        le=1.0,
+        description="log σ of the action noise after pre-training; lower: clips closer to the "
+        "agent you take away (null: the recipe's)",
+    )
     # -- advanced knobs (the New-session page's "Advanced") ------------------------------
     driver: Literal["app", "library"] = Field(
         default="app",
@@ -276,6 +284,8 @@ class SessionSettings(BaseModel):
         none, so it keeps the parts it stored (and the paper's for those it did not store,
         the defaults then); one stored before `reward_inputs` keeps the observation and the
         action its reward was built on, one without `exploration_fraction` the 0.25 then.
+        One without `teach_log_std` takes the recipe's: it pre-trained before that part
+        existed (its pre-trained policy is kept, `worker.job`), unless it never opened.
 
         Raises:
             pydantic.ValidationError: a field fails validation.
@@ -289,9 +299,9 @@ class SessionSettings(BaseModel):
         return cls.model_validate(data)
 
     def recipe_parts(self, env: str) -> RecipeParts:
-        """The pre-training, pool variants, PPO preset, reward inputs and random actions of a
-        session on `env`: each set here, else the recipe's (`recipes.RECIPES`; none: the
-        paper's, the defaults before recipes)."""
+        """The pre-training, its action noise after, pool variants, PPO preset, reward inputs
+        and random actions of a session on `env`: each set here, else the recipe's
+        (`recipes.RECIPES`; none: the paper's, the defaults before recipes)."""
         given = {part: getattr(self, name) for name, part in RECIPE_FIELDS.items()}
         parts = RECIPES[self.recipe or "paper"].parts(env)
         return dataclasses.replace(parts, **{k: v for k, v in given.items() if v is not None})
@@ -352,9 +362,13 @@ class SessionSettings(BaseModel):
         """
         if self.final_steps is None:
             return self.model_copy(update={"final_steps": self.final_ppo_steps}).for_env(env)
-        if any(getattr(self, name) is None for name in RECIPE_FIELDS):
-            parts = self.recipe_parts(env)
-            resolved = {name: getattr(parts, part) for name, part in RECIPE_FIELDS.items()}
+        parts = self.recipe_parts(env)
+        resolved = {
+            name: getattr(parts, part)
+            for name, part in RECIPE_FIELDS.items()
+            if getattr(self, name) is None and getattr(parts, part) is not None
+        }  # a part the recipe leaves empty (the paper's action noise) stays empty
+        if resolved:
             return self.model_copy(update=resolved).for_env(env)
         timing = self.clip_timing(env)
         if self.fragment_length is None:
@@ -401,7 +415,11 @@ class SessionSettings(BaseModel):
             pool_variants=parts.pool_variants,
             seed=self.seed,
         )
-        training = TrainingConfig(mode=self.training, pretrain_steps=parts.pretrain_steps)
+        training = TrainingConfig(
+            mode=self.training,
+            pretrain_steps=parts.pretrain_steps,
+            teach_log_std=parts.teach_log_std,
+        )
         reward = RewardConfig(use_actions=parts.reward_inputs == "obs-act")
         cfg = RunConfig(loop=loop, ppo=PPO_PRESETS[parts.ppo], training=training, reward=reward)
         return cfg.merged(self.research) if self.research else cfg

@@ -82,6 +82,7 @@ export const GROUPS: Readonly<Record<Exclude<GroupId, "advanced">, readonly stri
     "pool_variants",
     "reward_inputs",
     "exploration_fraction",
+    "teach_log_std",
     "seed",
     "eval_episodes",
   ],
