@@ -168,7 +168,11 @@ values before), against 2 of 3 without the cost, 2 of 2 with 5 % random actions 
 3 with both (docs/results/continuous, "Why continuous lost the stand-up"). 5 % is SPEC §3's
 share for studies (0.25 its interactive one, the app's default before). Where a simulated
 decision-maker's reward charges for the action (Reacher's a², the session study), "obs-act"
-measured better: set `reward.use_actions` there. "paper": SPEC §8's protocol, the
+measured better: set `reward.use_actions` there. The action noise after pre-training,
+σ = e^-2, is rl-baselines3-zoo's tuned `log_std_init` for PPO on HalfCheetah and Hopper:
+pre-training explores at σ = 1, where the sampled behaviours a person judges differ from the
+greedy agent they take away (docs/results/continuous, section 7; the case studies' table
+predates it). "paper": SPEC §8's protocol, the
 `RunConfig` defaults, which the simulation study (`groupwise study`) keeps."""
 DEFAULT_RECIPE: RecipeName = "teach"
 """The recipe a run gets when none is named."""
