@@ -49,6 +49,7 @@ import shutil
 import statistics
 import sys
 import tempfile
+import textwrap
 import time
 import uuid
 from collections.abc import Sequence
@@ -366,8 +367,9 @@ def figure(records: Sequence[dict], path: Path) -> None:
 
     targets = list(dict.fromkeys(r["target"] for r in records))
     fig, axes = plt.subplots(
-        len(targets), 1, figsize=(9.0, 3.2 * len(targets)), squeeze=False
-    )  # one panel a row: the arms' names are long, their legend sits beside the panel
+        len(targets), 1, figsize=(12.0, 3.4 * len(targets)), squeeze=False
+    )  # one panel a row: the arms' names are long, their legend (wrapped) sits beside it
+    fig.subplots_adjust(left=0.07, right=0.5, hspace=0.45)
     arms = sorted({arm(r) for r in records})
     colours = dict(zip(arms, plt.get_cmap("tab10").colors, strict=False))
     for ax, target in zip(axes[:, 0], targets, strict=True):
@@ -380,6 +382,7 @@ def figure(records: Sequence[dict], path: Path) -> None:
             for row in rates:
                 ax.plot(minutes, row, color=colour, alpha=0.3, lw=1)
             label = f"{training} ({len(runs)} seed{'' if len(runs) == 1 else 's'})"
+            label = textwrap.fill(label, 70, subsequent_indent="  ")
             ax.plot(minutes, np.nanmean(rates, axis=0), color=colour, lw=2.5, label=label)
         ax.axhline(SEED_SUCCESS, color="grey", ls=":", lw=1)
         ax.set_ylim(-0.05, 1.05)
@@ -387,7 +390,6 @@ def figure(records: Sequence[dict], path: Path) -> None:
         ax.set_xlabel("teacher's minutes")
         ax.set_ylabel("greedy episodes succeeding")
         ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.02, 0.5), frameon=False)
-    fig.tight_layout()
     fig.savefig(path, dpi=110, bbox_inches="tight")
 
 
