@@ -11,6 +11,7 @@ session's team with their counters and agreement (`storage.team`, docs/teams.md)
 from collections.abc import Mapping, Sequence
 from datetime import datetime
 
+import gymnasium as gym
 import numpy as np
 from sqlalchemy.orm import Session as DbSession
 
@@ -148,8 +149,9 @@ def list_states(db: Database, viewer: Viewer | None = None) -> list[SessionState
 def check_env(env: str, settings: SessionSettings) -> SessionSettings:
     """The settings a new session of `env` stores (`SessionSettings.for_env`: its L in
     steps). Raises InvalidError unless `env` is known, can be made here, its horizon holds a
-    behaviour, and a random policy's episodes last long enough to hold one
-    (`envs.episodes.check_episode_length`)."""
+    behaviour, a random policy's episodes last long enough to hold one
+    (`envs.episodes.check_episode_length`), and its actions are a Box when pre-training
+    hands over at an action noise (`teach_log_std`)."""
     try:
         steps = horizon(env)
         resolved = settings.for_env(env)  # makes the env once, for its step duration
@@ -159,6 +161,18 @@ def check_env(env: str, settings: SessionSettings) -> SessionSettings:
         # A registered id runs its own constructor, which fails its own way (e.g. Gymnasium's
         # DependencyNotInstalled for CarRacing-v3 without Box2D): the id is the person's error.
         raise InvalidError(f"env {env!r} cannot be made here: {error}") from None
+    parts = resolved.recipe_parts(env)
+    if parts.teach_log_std is not None and parts.pretrain_steps > 0:
+        probe = make_env(env)
+        try:
+            actions = probe.action_space
+        finally:
+            probe.close()
+        if not isinstance(actions, gym.spaces.Box):
+            raise InvalidError(
+                f"teach_log_std sets a Gaussian action noise, and env {env} has {actions} "
+                "actions: leave it empty"
+            )
     length = resolved.fragment_length
     seconds = resolved.clip_timing(env).seconds
     if steps is None or length is None or steps < length:

@@ -89,6 +89,8 @@ def test_resolve_gives_the_chosen_recipes_parts_and_each_part_chosen_on_its_own(
         ("InvertedPendulum-v5", {}, "none long enough for one window of 25 steps"),
         ("Hopper", {"fragment_length": 30, "clip_seconds": 1}, "disagree"),
         ("Hopper", {"pool_size": 5000}, "settings.pool_size"),
+        # an action noise to hand over at, on an env of discrete actions
+        ("GridWorld", {"pretrain_steps": 1000, "teach_log_std": -2}, "has Discrete(5) actions"),
     ],
 )
 def test_what_the_server_would_refuse_is_one_sentence_and_creates_nothing(
