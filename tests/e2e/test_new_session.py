@@ -101,7 +101,8 @@ def test_a_target_env_with_chosen_settings_is_created_as_shown(
     # the recipe says what it measured; its parts follow it, each changeable on its own
     recipe_help = page.locator("#setting-recipe-help")
     expect(recipe_help).to_have_text(
-        "Teach (measured: stand-up 5/5, backflip 4/5, splits 2/5 seeds; docs/results/case-studies)"
+        "Teach (measured: stand-up 5/5, backflip 5/5 seeds at 10 and at 20 minutes of a "
+        "simulated person; the splits unmet; docs/results/continuous)"
     )
     expect(page.get_by_label("Pretrain steps")).to_have_value("100000")
     expect(page.get_by_label("Reward inputs")).to_have_value("obs")

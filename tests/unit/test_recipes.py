@@ -29,16 +29,19 @@ def test_teach_sets_the_measured_parts_on_mujoco_envs_and_the_papers_elsewhere()
     teach, paper = RECIPES["teach"], RECIPES["paper"]
     assert DEFAULT_RECIPE == "teach"
     hopper = teach.apply(RunConfig(), "Hopper-backflip")
-    assert _parts(hopper) == (100_000, 8, 3e-4) and hopper.ppo == PPO_PRESETS["mujoco"]
+    assert _parts(hopper) == (100_000, 8, 3e-4) and hopper.ppo == PPO_PRESETS["mujoco-entropy"]
     assert not hopper.reward.use_actions  # the observation alone
     assert hopper.training.teach_log_std == -2.0  # σ = e^-2 once pre-training ends
+    # PPO's MuJoCo settings, with only the entropy bonus that keeps that noise exploring
+    assert hopper.ppo.ent_coef > 0
+    assert dataclasses.replace(hopper.ppo, ent_coef=0.0) == PPO_PRESETS["mujoco"]
     assert paper.apply(hopper, "Hopper").reward.use_actions
     assert teach.apply(RunConfig(), "GridWorld") == RunConfig()
     assert teach.apply(RunConfig(), "Pendulum-v1") == RunConfig()
     assert paper.apply(RunConfig(), "Walker2d") == RunConfig()  # the defaults: SPEC §8's
     summary = teach.summary()
-    assert "stand-up 5/5, backflip 4/5, splits 2/5" in summary
-    assert summary.endswith("docs/results/case-studies)") and "\n" not in summary
+    assert "stand-up 5/5, backflip 5/5 seeds at 10 and at 20 minutes" in summary
+    assert summary.endswith("docs/results/continuous)") and "\n" not in summary
     other = dataclasses.replace(RunConfig(), reward=dataclasses.replace(RunConfig().reward, lr=1))
     assert teach.apply(other, "Hopper").reward.lr == 1  # only its parts change
 
@@ -62,7 +65,7 @@ def test_case_study_defaults_to_teach_and_each_part_changes_on_its_own():
         return case_config(args, {})
 
     assert _parts(config()) == (100_000, 8, 3e-4)
-    assert config().ppo == PPO_PRESETS["mujoco"]
+    assert config().ppo == PPO_PRESETS["mujoco-entropy"]
     paper = config("--recipe", "paper")
     assert _parts(paper) == (0, 0, 2e-3) and paper.ppo == PPO_PRESETS["study"]
     assert _parts(config("--pretrain-steps", "0")) == (0, 8, 3e-4)
@@ -99,7 +102,7 @@ def test_the_apps_settings_reach_the_run_config():
         stored.reward_inputs,
         stored.exploration_fraction,
         stored.teach_log_std,
-    ) == (100_000, 8, "mujoco", "obs", 0.05, -2.0)
+    ) == (100_000, 8, "mujoco-entropy", "obs", 0.05, -2.0)
     grid = SessionSettings().for_env("GridWorld")  # the paper's parts: no noise to set
     assert (
         grid.teach_log_std is None and grid.run_config("GridWorld").training.teach_log_std is None

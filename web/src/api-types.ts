@@ -1395,9 +1395,9 @@ export interface components {
             pool_variants?: number | null;
             /**
              * Ppo Preset
-             * @description PPO settings: study (small, fast nets) or mujoco (PPO's own, for long walking and jumping; null: the recipe's)
+             * @description PPO settings: study (small nets), mujoco (PPO's own) or mujoco-entropy (with an entropy bonus; null: the recipe's)
              */
-            ppo_preset?: ("study" | "mujoco") | null;
+            ppo_preset?: ("study" | "mujoco" | "mujoco-entropy") | null;
             /**
              * Ppo Steps Per Round
              * @description PPO env steps after each round

@@ -181,8 +181,8 @@ class SessionSettings(BaseModel):
     )
     ppo_preset: PPOPreset | None = Field(
         default=None,
-        description="PPO settings: study (small, fast nets) or mujoco (PPO's own, for long "
-        "walking and jumping; null: the recipe's)",
+        description="PPO settings: study (small nets), mujoco (PPO's own) or "
+        "mujoco-entropy (with an entropy bonus; null: the recipe's)",
     )
     pretrain_steps: int | None = Field(
         default=None,

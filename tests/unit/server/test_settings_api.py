@@ -44,7 +44,7 @@ def test_resolve_gives_the_envs_defaults_with_l_in_steps(client):
     assert hopper["pool_size"] == 100 and hopper["recipe"] == "teach"
     # the teach recipe's parts on a MuJoCo env (recipes.RECIPES)
     assert (hopper["ppo_preset"], hopper["pretrain_steps"], hopper["pool_variants"]) == (
-        "mujoco",
+        "mujoco-entropy",
         100_000,
         8,
     )
@@ -74,7 +74,7 @@ def test_resolve_gives_the_chosen_recipes_parts_and_each_part_chosen_on_its_own(
         return got["recipe"], got["ppo_preset"], got["pretrain_steps"], got["pool_variants"]
 
     assert resolve({"recipe": "paper"}) == ("paper", "study", 0, 0)
-    assert resolve({"pretrain_steps": 5000}) == ("teach", "mujoco", 5000, 8)
+    assert resolve({"pretrain_steps": 5000}) == ("teach", "mujoco-entropy", 5000, 8)
     assert resolve({"recipe": "paper", "ppo_preset": "mujoco"}) == ("paper", "mujoco", 0, 0)
 
 
