@@ -106,7 +106,7 @@ describe("settingFields", () => {
     expect(field("final_steps")).toMatchObject({ kind: "integer", min: 0, max: 10_000_000, nullable: true });
     expect(field("frame_size").step).toBe(2);
     expect(field("pair_derivation")).toMatchObject({ kind: "choice", choices: ["cover", "cartesian"] });
-    expect(field("ppo_preset")).toMatchObject({ kind: "choice", choices: ["study", "mujoco"], nullable: true });
+    expect(field("ppo_preset")).toMatchObject({ kind: "choice", choices: ["study", "mujoco", "mujoco-entropy"], nullable: true });
     expect(field("pool_variants")).toMatchObject({ kind: "integer", min: 0, max: 32, nullable: true });
     expect(field("reward_inputs")).toMatchObject({ kind: "choice", choices: ["obs", "obs-act"], nullable: true });
     expect(field("recipe")).toMatchObject({ kind: "choice", choices: ["teach", "paper"] });
@@ -241,7 +241,7 @@ describe("the recipe shows its measured success in one line (issue 39)", () => {
   it("tells the chosen recipe's success, from the server's schema", () => {
     const f = field("recipe");
     expect(helpIn(f, "continuous", "teach")).toBe(
-      "Teach (measured: stand-up 5/5, backflip 4/5, splits 2/5 seeds; docs/results/case-studies)",
+      "Teach (measured: stand-up 5/5, backflip 5/5 seeds at 10 and at 20 minutes of a simulated person; the splits unmet; docs/results/continuous)",
     );
     expect(helpIn(f, "rounds", "paper")).toMatch(/^Paper \(measured: /);
     expect(helpIn(f, "rounds", "")).toBe(f.help); // nothing chosen yet: the field's own help
