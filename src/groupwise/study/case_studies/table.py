@@ -184,23 +184,29 @@ def target_curves_figure(curves: Sequence[Curve], path: Path, xlabel: str) -> Pa
     to `path`. Needs Matplotlib (the ``study`` extra), imported here."""
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
+    from matplotlib.lines import Line2D
 
     targets = {curve.target: curve.threshold for curve in curves}
     keys = list(dict.fromkeys(curve.key for curve in curves))
-    figure = Figure(figsize=(4.2 * len(targets), 3.4), dpi=120, layout="constrained")
+    columns = 1 if len(keys) <= 2 else 2  # one legend below the panels, whatever its length
+    height = 3.4 + 0.2 * -(-len(keys) // columns)
+    figure = Figure(figsize=(max(4.2 * len(targets), 8.4), height), dpi=120, layout="constrained")
     FigureCanvasAgg(figure)
     axes = figure.subplots(1, len(targets), squeeze=False)[0]
     for ax, (target, threshold) in zip(axes, targets.items(), strict=True):
-        shown: set[str] = set()
         for curve in (c for c in curves if c.target == target):
-            ax.plot(curve.x, curve.scores, marker="o", ms=3, color=f"C{keys.index(curve.key)}",
-                    label=None if curve.key in shown else curve.key)  # fmt: skip
-            shown.add(curve.key)
+            ax.plot(curve.x, curve.scores, marker="o", ms=3, color=f"C{keys.index(curve.key) % 10}",
+                    ls="-" if keys.index(curve.key) < 10 else "--")  # fmt: skip
         ax.axhline(threshold, color="0.4", ls="--", lw=0.8)
         ax.set_title(target)
         ax.set_xlabel(xlabel)
         ax.set_ylabel("target score (greedy policy)")
-        ax.legend(frameon=False, fontsize=8)
+    handles = [
+        Line2D([], [], marker="o", ms=3, color=f"C{i % 10}", ls="-" if i < 10 else "--")
+        for i in range(len(keys))
+    ]
+    figure.legend(handles, keys, loc="outside lower center", ncols=columns, frameon=False,
+                  fontsize=8)  # fmt: skip
     figure.savefig(path)
     return path
 

@@ -5,6 +5,8 @@ import csv
 import json
 from pathlib import Path
 
+import numpy as np
+
 from groupwise.study.case_studies.table import setup_label, summary_rows
 
 
@@ -82,3 +84,27 @@ def test_the_summary_averages_the_pools_of_each_setup_over_its_seeds(tmp_path):
     assert cells[1] == "groupwise · 8 pool variants" and cells[2] == "2"
     assert cells[8] == "0.20 / 0.30 / 0.30" and cells[9].rstrip(" |") == "0.40 / 0.60 / 0.60"
     assert second.split(" | ")[1] == "groupwise" and "– / – / –" in second
+
+
+def test_the_curves_legend_grows_below_the_panels_and_never_over_them(tmp_path):
+    from PIL import Image
+
+    from groupwise.study.case_studies.table import Curve, target_curves_figure
+
+    def drawn(keys: int) -> np.ndarray:
+        curves = [
+            Curve(target, 1.0, f"variant {k}", [1.0, 2.0, 3.0], [0.0, 1.0 + k, 2.0])
+            for target in ("stand-up", "backflip")
+            for k in range(keys)
+        ]
+        path = target_curves_figure(curves, tmp_path / f"{keys}.png", "minutes")
+        return np.asarray(Image.open(path).convert("L"))
+
+    few, many = drawn(2), drawn(12)
+    assert many.shape[1] == few.shape[1] and many.shape[0] > few.shape[0]  # rows of legend
+    # the panels keep their height: the plotted area is as tall with 12 keys as with 2
+    assert abs(_inked_rows(many[: few.shape[0] // 2]) - _inked_rows(few[: few.shape[0] // 2])) < 5
+
+
+def _inked_rows(image: np.ndarray) -> int:
+    return int((image < 128).any(axis=1).sum())
