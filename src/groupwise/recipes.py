@@ -12,14 +12,14 @@ from pydantic.dataclasses import dataclass
 
 from groupwise.config import _STRICT, ExplorationFraction, PPOConfig, RunConfig
 
+_MUJOCO_PPO = PPOConfig(
+    learning_rate=3e-4, clip_range=0.2, gamma=0.99, ent_coef=0.0, net_arch=(64, 64)
+)
+
 PPO_PRESETS: dict[str, PPOConfig] = {
     "study": PPOConfig(),
-    "mujoco": PPOConfig(
-        learning_rate=3e-4, clip_range=0.2, gamma=0.99, ent_coef=0.0, net_arch=(64, 64)
-    ),
-    "mujoco-entropy": PPOConfig(
-        learning_rate=3e-4, clip_range=0.2, gamma=0.99, ent_coef=0.0023, net_arch=(64, 64)
-    ),
+    "mujoco": _MUJOCO_PPO,
+    "mujoco-entropy": dataclasses.replace(_MUJOCO_PPO, ent_coef=0.0023),
 }
 """Named PPO settings. "study": SPEC §3's, from the paper's simulation study (short
 behaviours, small nets). "mujoco": PPO's own MuJoCo settings (Schulman et al. 2017, also

@@ -161,8 +161,8 @@ def check_env(env: str, settings: SessionSettings) -> SessionSettings:
         # A registered id runs its own constructor, which fails its own way (e.g. Gymnasium's
         # DependencyNotInstalled for CarRacing-v3 without Box2D): the id is the person's error.
         raise InvalidError(f"env {env!r} cannot be made here: {error}") from None
-    parts = resolved.recipe_parts(env)
-    if parts.teach_log_std is not None and parts.pretrain_steps > 0:
+    # a recipe sets the noise only on MuJoCo envs (Box actions): check only one set by hand
+    if settings.teach_log_std is not None and resolved.recipe_parts(env).pretrain_steps > 0:
         probe = make_env(env)
         try:
             actions = probe.action_space

@@ -186,6 +186,9 @@ def target_curves_figure(curves: Sequence[Curve], path: Path, xlabel: str) -> Pa
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
 
+    def style(i: int) -> dict[str, Any]:  # ten colours, then dashed
+        return {"marker": "o", "ms": 3, "color": f"C{i % 10}", "ls": "-" if i < 10 else "--"}
+
     targets = {curve.target: curve.threshold for curve in curves}
     keys = list(dict.fromkeys(curve.key for curve in curves))
     columns = 1 if len(keys) <= 2 else 2  # one legend below the panels, whatever its length
@@ -195,16 +198,12 @@ def target_curves_figure(curves: Sequence[Curve], path: Path, xlabel: str) -> Pa
     axes = figure.subplots(1, len(targets), squeeze=False)[0]
     for ax, (target, threshold) in zip(axes, targets.items(), strict=True):
         for curve in (c for c in curves if c.target == target):
-            ax.plot(curve.x, curve.scores, marker="o", ms=3, color=f"C{keys.index(curve.key) % 10}",
-                    ls="-" if keys.index(curve.key) < 10 else "--")  # fmt: skip
+            ax.plot(curve.x, curve.scores, **style(keys.index(curve.key)))
         ax.axhline(threshold, color="0.4", ls="--", lw=0.8)
         ax.set_title(target)
         ax.set_xlabel(xlabel)
         ax.set_ylabel("target score (greedy policy)")
-    handles = [
-        Line2D([], [], marker="o", ms=3, color=f"C{i % 10}", ls="-" if i < 10 else "--")
-        for i in range(len(keys))
-    ]
+    handles = [Line2D([], [], **style(i)) for i in range(len(keys))]
     figure.legend(handles, keys, loc="outside lower center", ncols=columns, frameon=False,
                   fontsize=8)  # fmt: skip
     figure.savefig(path)
